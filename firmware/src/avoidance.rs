@@ -1,0 +1,1 @@
+//! On-board collision-avoidance step (Ch. 5 of the thesis). Filled by the avoidance issue.

@@ -1,0 +1,1 @@
+//! Stateful `embedded-hal` fakes driven by the plant simulation.
