@@ -4,3 +4,4 @@
 //! `solver` integrates; `sim` assembles a scene into a plant and runs it; `report` prints, plots and
 //! writes what a run produced; `hil` runs the firmware in the loop; `avoid` is collision avoidance.
 pub mod avoid;
+pub mod scene;

@@ -1,0 +1,275 @@
+//! The validated scene: plain Rust values in SI units, built by [`super::load`] from a TOML file.
+//!
+//! The names follow `shared/SCENES.md` (the public contract) and the thesis's symbols. Everything
+//! here has already been checked: a `Scene` that exists is physically meaningful, so the plant never
+//! re-validates. Optional elements are `Option`s: a scene models only what it needs.
+
+/// A whole scene: the motion law, the robot, the tool and its decoupler, the target, the sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// Human-readable name, echoed in the summary.
+    pub name: String,
+    /// Simulated time from the start of the motion (t = 0), s.
+    pub duration_s: f64,
+    /// Commanded flange motion (trapezoid, then braking).
+    pub motion: Motion,
+    /// Robot compliance; `None` is a rigid robot (x_r = x_c).
+    pub robot: Option<Robot>,
+    /// The tool (end-effector) carried by the decoupler.
+    pub tool: Tool,
+    /// What holds the tool on the flange.
+    pub decoupler: Decoupler,
+    /// What the tool runs into.
+    pub target: Target,
+    /// What detects the collision; `None` means nothing does and the robot never brakes.
+    pub sensor: Option<Sensor>,
+    /// How to integrate (the `[solver]` table; defaults documented in `scene::load`).
+    pub solver: SolverSettings,
+    /// The robot controller for firmware-in-the-loop runs (`[controller]`); `None` in plain runs.
+    pub controller: Option<Controller>,
+}
+
+/// Motion law, MODEL.md element 1: accelerate at `accel` to `speed`, cruise; braking at `decel`
+/// starts `dead_time` after detection and ends at standstill.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    /// V_c, m/s, > 0.
+    pub speed: f64,
+    /// a_c, m/s^2, > 0.
+    pub accel: f64,
+    /// d_c, m/s^2, > 0.
+    pub decel: f64,
+    /// DT, s, >= 0, from detection to the start of braking.
+    pub dead_time: f64,
+    /// m/s^2 along the approach direction (9.81 for a tool moving down), acts on the tool.
+    pub gravity: f64,
+}
+
+/// Compliant robot, a base-excited mass (eq 33): Table 7 gives the Viper s650 values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Robot {
+    /// m_r, kg, > 0.
+    pub mass: f64,
+    /// k_r, N/m, > 0.
+    pub stiffness: f64,
+    /// c_r, N s/m, >= 0.
+    pub damping: f64,
+}
+
+/// The tool (end-effector).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tool {
+    /// m_t, kg, > 0.
+    pub mass: f64,
+}
+
+/// The decoupler between flange and tool (MODEL.md element 3).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Decoupler {
+    /// No decoupler: the tool is fastened to the flange, its mass added to the robot's.
+    Rigid,
+    /// Linear spring-damper (eq 17, 23), no end-stops.
+    Linear(LinearDecoupler),
+    /// Bi-stable spring mechanism (eq 24-42).
+    Bistable(Bistable),
+    /// Hydraulic cylinder with orifice and gas spring (eq 46-56).
+    Hydraulic(Hydraulic),
+}
+
+/// Linear decoupler parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearDecoupler {
+    /// k_t, N/m, > 0.
+    pub stiffness: f64,
+    /// zeta = c_t / (2 sqrt(k_t m_t)), >= 0 (eq 23).
+    pub damping_ratio: f64,
+}
+
+/// Bi-stable mechanism parameters (Tables 2, 4, 5, 8, 13, 15).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bistable {
+    /// N, number of springs, >= 1.
+    pub springs: u32,
+    /// k_b, N/m, > 0.
+    pub spring_rate: f64,
+    /// L0, m, > 0.
+    pub free_length: f64,
+    /// H, m, > 0.
+    pub height: f64,
+    /// C1, m, > 0: the front end-stop is at s = +C1.
+    pub front_stroke: f64,
+    /// C2, m, > 0: the back end-stop (flange) is at s = -C2.
+    pub back_stroke: f64,
+    /// Linear front end-stop (eq 28/38).
+    pub front_stop: LinearStop,
+    /// Nonlinear back end-stop (eq 29/37).
+    pub back_stop: NonlinearStop,
+    /// Slide friction (eq 41-42); `None` is frictionless.
+    pub friction: Option<TanhFriction>,
+}
+
+/// Hydraulic decoupler parameters (Tables 12, 14). Travel u >= 0 is measured back from the front stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hydraulic {
+    /// L, piston stroke, m, > 0.
+    pub stroke: f64,
+    /// R_p, main cylinder radius, m, > 0.
+    pub piston_radius: f64,
+    /// R_o, orifice radius, m, > 0 and < R_p.
+    pub orifice_radius: f64,
+    /// p10, gas preload pressure, Pa, > 0.
+    pub gas_pressure: f64,
+    /// V_g0, gas volume at the front stop, m^3, > A_p * L.
+    pub gas_volume: f64,
+    /// c0, orifice discharge coefficient, > 0.
+    pub discharge_coefficient: f64,
+    /// rho_L, kg/m^3, > 0.
+    pub liquid_density: f64,
+    /// d, dry friction, N, >= 0.
+    pub dry_friction: f64,
+    /// b, viscous friction, N s/m, >= 0.
+    pub viscous_friction: f64,
+    /// kappa, adiabatic exponent (1.4 for air).
+    pub adiabatic_exponent: f64,
+    /// Velocity that regularises sgn() in the dry friction (m/s, > 0).
+    pub friction_v0: f64,
+    /// Linear front end-stop.
+    pub front_stop: LinearStop,
+    /// Nonlinear back end-stop.
+    pub back_stop: NonlinearStop,
+}
+
+/// Linear end-stop law `F = -k (s - C1) - c s'`, pushing only (eq 28/38).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearStop {
+    /// k_fe, N/m, > 0.
+    pub stiffness: f64,
+    /// c_fe, N s/m, >= 0.
+    pub damping: f64,
+}
+
+/// Nonlinear end-stop law `F = k d^1.5 + chi d^1.5 d'`, pushing only (eq 29/37).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NonlinearStop {
+    /// k_be, N/m^1.5, > 0.
+    pub stiffness: f64,
+    /// How chi is set (restitution and law, or chi directly).
+    pub damping: ContactDamping,
+}
+
+/// Friction `F = mu F_n tanh(v_rel / v0)` (eq 41-42).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TanhFriction {
+    /// mu, >= 0.
+    pub mu: f64,
+    /// v0, m/s, >= 0; 0 is the Coulomb limit and is regularised (see `plant::friction`).
+    pub v0: f64,
+}
+
+/// How the damping constant chi of a nonlinear contact is obtained.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactDamping {
+    /// chi from a restitution e in [0, 1] and a law, times k / v_in.
+    Restitution {
+        /// Requested coefficient of restitution e.
+        restitution: f64,
+        /// The law that maps e to chi.
+        law: DampingLaw,
+    },
+    /// A fixed chi, N s / m^2.5 (Table 12).
+    FixedChi(f64),
+}
+
+/// Laws mapping restitution e to chi = factor(e) * k / v_in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DampingLaw {
+    /// 3 (1 - e) / 2 (eq 7, as the thesis).
+    HuntCrossley,
+    /// 3 (1 - e^2) / 4.
+    LankaraniNikravesh,
+    /// 8 (1 - e) / (5 e).
+    Flores,
+    /// (1 - e^2) / e.
+    Gonthier,
+    /// chi solved so that the achieved restitution equals e.
+    Exact,
+}
+
+/// The target of the collision.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Target {
+    /// Fixed obstacle or free object.
+    pub kind: TargetKind,
+    /// Gap between the tool and the target at t = 0, m, > 0.
+    pub gap: f64,
+    /// k_c, N/m^1.5, > 0.
+    pub stiffness: f64,
+    /// How chi is set.
+    pub damping: ContactDamping,
+}
+
+/// Fixed obstacle or free object.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TargetKind {
+    /// A fixed obstacle surface.
+    Obstacle,
+    /// A free object of mass m_p, optionally with floor friction.
+    Object {
+        /// m_p, kg, > 0.
+        mass: f64,
+        /// Coulomb floor friction coefficient (regularised), `None` for none.
+        floor_friction: Option<f64>,
+    },
+}
+
+/// Collision detector (MODEL.md element 5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Sensor {
+    /// Travel switch: fires once the tool has moved `threshold` m back from its rest position.
+    Travel {
+        /// d_sw, m, > 0.
+        threshold: f64,
+    },
+    /// Force threshold on the contact force, N, > 0.
+    Force {
+        /// N.
+        threshold: f64,
+    },
+}
+
+/// Integration method and accuracy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    /// The method.
+    pub method: Method,
+    /// Relative tolerance for adaptive methods.
+    pub rtol: f64,
+    /// Absolute tolerance for adaptive methods (on positions in m and velocities in m/s).
+    pub atol: f64,
+    /// Fixed step for fixed-step methods, and the largest step for adaptive ones, s.
+    pub max_step: f64,
+    /// Interval between recorded samples of the time history, s (0 = every step).
+    pub output_interval: f64,
+}
+
+/// Integration methods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Dormand-Prince 5(4), adaptive, events located on the dense output.
+    Dopri5,
+    /// Classical Runge-Kutta 4, fixed step `max_step`.
+    Rk4,
+    /// Semi-implicit (symplectic) Euler, fixed step `max_step`.
+    SemiImplicitEuler,
+}
+
+/// The robot controller model for firmware-in-the-loop runs (`flinch hil`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Controller {
+    /// Scan cycle, s, > 0: inputs are sampled once per cycle.
+    pub scan_cycle: f64,
+    /// Phase of the first sample in [0, 1) of a cycle.
+    pub phase: f64,
+    /// Firmware tick period, s, > 0.
+    pub firmware_tick: f64,
+}
