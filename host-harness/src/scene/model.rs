@@ -43,6 +43,9 @@ pub struct Motion {
     pub dead_time: f64,
     /// m/s^2 along the approach direction (9.81 for a tool moving down), acts on the tool.
     pub gravity: f64,
+    /// `motion.start_at_speed`: at t = 0 flange, robot and tool already cruise at V_c (the
+    /// Ch. 2 set-ups, where v_t = 1 m/s at impact); `accel` is then unused.
+    pub start_at_speed: bool,
 }
 
 /// Compliant robot, a base-excited mass (eq 33): Table 7 gives the Viper s650 values.
@@ -76,10 +79,10 @@ pub enum Decoupler {
     Hydraulic(Hydraulic),
 }
 
-/// Linear decoupler parameters.
+/// Linear decoupler parameters. k_t = 0 with zeta = 0 is the free tool of Fig. 1b / 4b.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LinearDecoupler {
-    /// k_t, N/m, > 0.
+    /// k_t, N/m, >= 0.
     pub stiffness: f64,
     /// zeta = c_t / (2 sqrt(k_t m_t)), >= 0 (eq 23).
     pub damping_ratio: f64,
