@@ -1,0 +1,263 @@
+//! Event log: a fixed-size ring of trips and faults, readable by the host.
+//!
+//! Every stop the firmware commands is recorded with its timestamp, the travel at detection and
+//! flags. The ring is a `heapless::Deque` sized at compile time; when it is full the oldest entry is
+//! overwritten and [`EventLog::overwritten`] counts the loss, so the host can tell that a gap exists.
+//!
+//! Serialisation (all little-endian) is what a debugger, a UART dump or `flinch hil` reads:
+//!
+//! ```text
+//! header, 8 bytes: b'F' b'L' version(1) count(u8) overwritten(u32)
+//! event, 16 bytes: seq(u16) cause(u8) flags(u8) at_us(u32) first_seen_us(u32) travel_um(i32)
+//! ```
+//! events oldest first.
+
+use crate::clock::Micros;
+use heapless::Deque;
+
+/// Why the firmware stopped.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Cause {
+    /// The sensor showed a collision (confirmed by the filter).
+    Trip = 1,
+    /// Start-up self-test: the input did not follow the sensor supply (stuck input).
+    StuckInput = 2,
+    /// The input changed level too often (chatter guard).
+    Chatter = 3,
+    /// The clock did not advance between ticks.
+    ClockStall = 4,
+    /// A tick came later than its deadline (or the clock jumped).
+    MissedDeadline = 5,
+    /// The sensor reading was implausible (ADC window, read error).
+    SensorFault = 6,
+    /// An output pin reported an error when driven.
+    OutputFault = 7,
+}
+
+impl Cause {
+    /// Decode a serialised cause.
+    pub const fn from_u8(v: u8) -> Option<Cause> {
+        Some(match v {
+            1 => Cause::Trip,
+            2 => Cause::StuckInput,
+            3 => Cause::Chatter,
+            4 => Cause::ClockStall,
+            5 => Cause::MissedDeadline,
+            6 => Cause::SensorFault,
+            7 => Cause::OutputFault,
+            _ => return None,
+        })
+    }
+
+    /// A short name, for reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Cause::Trip => "trip",
+            Cause::StuckInput => "stuck-input",
+            Cause::Chatter => "chatter",
+            Cause::ClockStall => "clock-stall",
+            Cause::MissedDeadline => "missed-deadline",
+            Cause::SensorFault => "sensor-fault",
+            Cause::OutputFault => "output-fault",
+        }
+    }
+}
+
+/// Flag: the stop was commanded from the edge interrupt (not from a tick).
+pub const FLAG_EDGE: u8 = 1 << 0;
+/// Flag: the stroke budget was short and the escalation (category 0) output was dropped too.
+pub const FLAG_ESCALATED: u8 = 1 << 1;
+/// Flag: the glitch filter delayed this trip (`first_seen` before `at`).
+pub const FLAG_FILTERED: u8 = 1 << 2;
+
+/// One entry of the log.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct TripEvent {
+    /// Sequence number, counting every event since start-up (wraps at 2^16).
+    pub seq: u16,
+    /// Why.
+    pub cause: Cause,
+    /// `FLAG_*` bits.
+    pub flags: u8,
+    /// When the stop output was dropped.
+    pub at: Micros,
+    /// When the sensor was first seen tripped (equal to `at` without a filter).
+    pub first_seen: Micros,
+    /// Travel at detection, micrometres (d_sw for the digital switch).
+    pub travel_um: i32,
+}
+
+/// Bytes of a serialised [`TripEvent`].
+pub const EVENT_LEN: usize = 16;
+/// Bytes of the serialised log header.
+pub const HEADER_LEN: usize = 8;
+/// Serialisation format version.
+pub const FORMAT_VERSION: u8 = 1;
+
+impl TripEvent {
+    /// Serialise to the 16-byte wire form.
+    pub fn to_bytes(&self) -> [u8; EVENT_LEN] {
+        let [s0, s1] = self.seq.to_le_bytes();
+        let [a0, a1, a2, a3] = self.at.0.to_le_bytes();
+        let [f0, f1, f2, f3] = self.first_seen.0.to_le_bytes();
+        let [t0, t1, t2, t3] = self.travel_um.to_le_bytes();
+        [s0, s1, self.cause as u8, self.flags, a0, a1, a2, a3, f0, f1, f2, f3, t0, t1, t2, t3]
+    }
+
+    /// Parse the 16-byte wire form; `None` for a short slice or an unknown cause.
+    pub fn from_bytes(b: &[u8]) -> Option<TripEvent> {
+        let b: &[u8; EVENT_LEN] = b.get(..EVENT_LEN)?.try_into().ok()?;
+        let [s0, s1, c, flags, a0, a1, a2, a3, f0, f1, f2, f3, t0, t1, t2, t3] = *b;
+        Some(TripEvent {
+            seq: u16::from_le_bytes([s0, s1]),
+            cause: Cause::from_u8(c)?,
+            flags,
+            at: Micros(u32::from_le_bytes([a0, a1, a2, a3])),
+            first_seen: Micros(u32::from_le_bytes([f0, f1, f2, f3])),
+            travel_um: i32::from_le_bytes([t0, t1, t2, t3]),
+        })
+    }
+}
+
+/// The serialised buffer was too small; `needed` bytes are required.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct BufferTooSmall {
+    /// Bytes required.
+    pub needed: usize,
+}
+
+/// A ring of the last `N` events.
+#[derive(Clone, Debug)]
+pub struct EventLog<const N: usize> {
+    ring: Deque<TripEvent, N>,
+    next_seq: u16,
+    overwritten: u32,
+}
+
+impl<const N: usize> Default for EventLog<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> EventLog<N> {
+    /// An empty log.
+    pub const fn new() -> Self {
+        EventLog { ring: Deque::new(), next_seq: 0, overwritten: 0 }
+    }
+
+    /// Append an event, assigning its sequence number; overwrites the oldest when full.
+    pub fn push(&mut self, cause: Cause, flags: u8, at: Micros, first_seen: Micros, travel_um: i32) {
+        let ev = TripEvent { seq: self.next_seq, cause, flags, at, first_seen, travel_um };
+        self.next_seq = self.next_seq.wrapping_add(1);
+        if self.ring.is_full() {
+            let _ = self.ring.pop_front();
+            self.overwritten = self.overwritten.saturating_add(1);
+        }
+        // Cannot fail: there is room now (N == 0 simply drops the event).
+        if self.ring.push_back(ev).is_err() {
+            self.overwritten = self.overwritten.saturating_add(1);
+        }
+    }
+
+    /// Events oldest first.
+    pub fn iter(&self) -> impl Iterator<Item = &TripEvent> {
+        self.ring.iter()
+    }
+
+    /// The newest event.
+    pub fn last(&self) -> Option<&TripEvent> {
+        self.ring.back()
+    }
+
+    /// Number of events held.
+    pub fn len(&self) -> usize {
+        self.ring.len()
+    }
+
+    /// No events held.
+    pub fn is_empty(&self) -> bool {
+        self.ring.is_empty()
+    }
+
+    /// Events lost to overwriting since start-up.
+    pub const fn overwritten(&self) -> u32 {
+        self.overwritten
+    }
+
+    /// Bytes [`Self::serialize`] writes for the current content.
+    pub fn serialized_len(&self) -> usize {
+        HEADER_LEN + EVENT_LEN * self.ring.len()
+    }
+
+    /// Write header and events into `out`; returns the number of bytes written.
+    pub fn serialize(&self, out: &mut [u8]) -> Result<usize, BufferTooSmall> {
+        let needed = self.serialized_len();
+        let Some(dst) = out.get_mut(..needed) else { return Err(BufferTooSmall { needed }) };
+        let count = u8::try_from(self.ring.len()).unwrap_or(u8::MAX);
+        let [o0, o1, o2, o3] = self.overwritten.to_le_bytes();
+        let (head, body) = dst.split_at_mut(HEADER_LEN);
+        head.copy_from_slice(&[b'F', b'L', FORMAT_VERSION, count, o0, o1, o2, o3]);
+        for (chunk, ev) in body.chunks_exact_mut(EVENT_LEN).zip(self.ring.iter()) {
+            chunk.copy_from_slice(&ev.to_bytes());
+        }
+        Ok(needed)
+    }
+}
+
+/// Decoded header of a serialised log.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct LogHeader {
+    /// Events that follow.
+    pub count: u8,
+    /// Events lost to overwriting.
+    pub overwritten: u32,
+}
+
+/// Parse a serialised log: its header and an iterator over its events (a corrupt event ends it).
+pub fn decode(bytes: &[u8]) -> Option<(LogHeader, impl Iterator<Item = TripEvent> + '_)> {
+    let [m0, m1, ver, count, o0, o1, o2, o3] = *<&[u8; HEADER_LEN]>::try_from(bytes.get(..HEADER_LEN)?).ok()?;
+    if [m0, m1] != *b"FL" || ver != FORMAT_VERSION {
+        return None;
+    }
+    let header = LogHeader { count, overwritten: u32::from_le_bytes([o0, o1, o2, o3]) };
+    let body = bytes.get(HEADER_LEN..)?;
+    let events = body.chunks_exact(EVENT_LEN).take(usize::from(count)).map_while(TripEvent::from_bytes);
+    Some((header, events))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wraps_keeping_the_newest_and_counting_the_loss() {
+        let mut log: EventLog<4> = EventLog::new();
+        for k in 0..10u32 {
+            log.push(Cause::Trip, 0, Micros(k * 10), Micros(k * 10), 5000);
+        }
+        assert_eq!(log.len(), 4);
+        assert_eq!(log.overwritten(), 6);
+        let seqs: heapless::Vec<u16, 4> = log.iter().map(|e| e.seq).collect();
+        assert_eq!(&seqs[..], &[6, 7, 8, 9]);
+        assert_eq!(log.last().map(|e| e.at), Some(Micros(90)));
+    }
+
+    #[test]
+    fn serialisation_round_trips() {
+        let mut log: EventLog<3> = EventLog::new();
+        log.push(Cause::Trip, FLAG_EDGE | FLAG_ESCALATED, Micros(u32::MAX), Micros(u32::MAX - 5), -12);
+        log.push(Cause::ClockStall, 0, Micros(7), Micros(7), 0);
+        let mut buf = [0u8; 64];
+        let n = log.serialize(&mut buf).unwrap();
+        assert_eq!(n, HEADER_LEN + 2 * EVENT_LEN);
+        let (h, evs) = decode(&buf[..n]).unwrap();
+        assert_eq!(h, LogHeader { count: 2, overwritten: 0 });
+        let got: heapless::Vec<TripEvent, 3> = evs.collect();
+        let want: heapless::Vec<TripEvent, 3> = log.iter().copied().collect();
+        assert_eq!(got, want);
+        assert_eq!(log.serialize(&mut buf[..10]), Err(BufferTooSmall { needed: n }));
+        assert!(decode(b"XX").is_none());
+    }
+}

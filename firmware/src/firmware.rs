@@ -1,0 +1,383 @@
+//! [`Firmware`]: the sensor, filter, detector, watchdog, outputs, log and budget tied together.
+//!
+//! Two entry points, both cheap and non-blocking:
+//!
+//! * [`Firmware::tick`], from a periodic interrupt every [`Config::tick_period_us`]: watchdog, sensor
+//!   sample, glitch filter, self-test, reset policy. It also detects trips on its own (polling), so a
+//!   lost edge interrupt costs at most one tick.
+//! * [`Firmware::on_edge`], from the switch's edge interrupt (both edges). With [`Filter::None`] and the
+//!   detector armed it reads the pin and, on a trip, writes the stop pin before anything else: that is
+//!   the detect-to-stop path whose length the QEMU build measures (README of `firmware/`). With a filter
+//!   it only timestamps the edge for the filter and the chatter guard.
+
+use crate::clock::{Clock, Micros};
+use crate::debounce::{ChatterGuard, ChatterState, Debouncer, Filter};
+use crate::detector::{ResetPolicy, ResetTracker, State};
+use crate::event_log::{Cause, EventLog, FLAG_EDGE, FLAG_ESCALATED, FLAG_FILTERED};
+use crate::selftest::{self, Phase, SelfTestConfig, Step};
+use crate::sensor::{Sample, Sensor};
+use crate::stop_output::StopOutputs;
+use crate::stroke_budget::{BudgetConfig, Verdict};
+use embedded_hal::digital::{InputPin, OutputPin};
+
+/// Everything the firmware is configured with. Build one with [`Config::new`] and adjust fields.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// Period of [`Firmware::tick`], microseconds (> 0).
+    pub tick_period_us: u32,
+    /// Lateness tolerated on a tick before it counts as a missed deadline, microseconds. Below
+    /// `tick_period_us` so that one missed tick is caught.
+    pub deadline_slack_us: u32,
+    /// Consecutive ticks reading the same instant that make a clock stall (>= 1).
+    pub stall_ticks: u8,
+    /// Glitch filter on the sensor.
+    pub filter: Filter,
+    /// Chatter guard, applied while armed or in the self-test; `None` disables it.
+    pub chatter: Option<ChatterGuard>,
+    /// How a trip is cleared.
+    pub reset: ResetPolicy,
+    /// Robot motion and stroke for the escalation decision.
+    pub budget: BudgetConfig,
+    /// Start-up self-test timing.
+    pub selftest: SelfTestConfig,
+}
+
+impl Config {
+    /// Defaults around a tick period and a budget: no glitch filter (the edge stops directly), slack
+    /// half a tick, stall after one repeated instant, chatter guard of 6 changes in 20 ms, reset by
+    /// input, self-test 1 ms supply-off settle and 2 ms at rest.
+    pub const fn new(tick_period_us: u32, budget: BudgetConfig) -> Config {
+        Config {
+            tick_period_us,
+            deadline_slack_us: tick_period_us / 2,
+            stall_ticks: 1,
+            filter: Filter::None,
+            chatter: Some(ChatterGuard { max_transitions: 6, window_us: 20_000 }),
+            reset: ResetPolicy::Input,
+            budget,
+            selftest: SelfTestConfig { supply_off_settle_us: 1_000, rest_quiet_us: 2_000 },
+        }
+    }
+
+    /// Check the values a user can get wrong; the error names the field.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if self.tick_period_us == 0 {
+            return Err(ConfigError::TickPeriodZero);
+        }
+        if self.deadline_slack_us >= self.tick_period_us {
+            return Err(ConfigError::SlackNotBelowPeriod);
+        }
+        if self.stall_ticks == 0 {
+            return Err(ConfigError::StallTicksZero);
+        }
+        if self.filter == Filter::Consecutive(0) {
+            return Err(ConfigError::FilterCountZero);
+        }
+        if self.budget.decel_um_per_s2 == 0 {
+            return Err(ConfigError::DecelerationZero);
+        }
+        if self.budget.stroke_um <= 0 {
+            return Err(ConfigError::StrokeNotPositive);
+        }
+        if matches!(self.chatter, Some(ChatterGuard { max_transitions: 0, .. })) {
+            return Err(ConfigError::ChatterLimitZero);
+        }
+        Ok(())
+    }
+}
+
+/// A configuration value that cannot work.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum ConfigError {
+    /// `tick_period_us` is 0.
+    TickPeriodZero,
+    /// `deadline_slack_us` is not below `tick_period_us`.
+    SlackNotBelowPeriod,
+    /// `stall_ticks` is 0.
+    StallTicksZero,
+    /// `filter` is `Consecutive(0)`.
+    FilterCountZero,
+    /// `budget.decel_um_per_s2` is 0.
+    DecelerationZero,
+    /// `budget.stroke_um` is not positive.
+    StrokeNotPositive,
+    /// `chatter.max_transitions` is 0.
+    ChatterLimitZero,
+}
+
+impl ConfigError {
+    /// A message naming the offending input.
+    pub const fn message(self) -> &'static str {
+        match self {
+            ConfigError::TickPeriodZero => "tick_period_us must be > 0",
+            ConfigError::SlackNotBelowPeriod => {
+                "deadline_slack_us must be below tick_period_us, or a missed tick goes unnoticed"
+            }
+            ConfigError::StallTicksZero => "stall_ticks must be >= 1",
+            ConfigError::FilterCountZero => "filter Consecutive(n) needs n >= 1",
+            ConfigError::DecelerationZero => "budget.decel_um_per_s2 must be > 0",
+            ConfigError::StrokeNotPositive => "budget.stroke_um must be > 0",
+            ConfigError::ChatterLimitZero => "chatter.max_transitions must be >= 1",
+        }
+    }
+}
+
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.message())
+    }
+}
+
+/// The collision module's firmware.
+///
+/// Type parameters: `C` the clock, `S` the sensor, `STOP` and `ESC` the stop and escalation outputs,
+/// `RST` the reset input ([`Unconnected`](crate::Unconnected) if there is none), `LOG` the event-log
+/// capacity.
+pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16> {
+    cfg: Config,
+    clock: C,
+    sensor: S,
+    out: StopOutputs<STOP, ESC>,
+    reset: RST,
+    state: State,
+    fast_edge: bool,
+    debounce: Debouncer,
+    chatter: ChatterState,
+    watchdog: crate::watchdog::Watchdog,
+    resetter: ResetTracker,
+    detected_at: Option<Micros>,
+    verdict: Option<Verdict>,
+    last_sample: Sample,
+    log: EventLog<LOG>,
+}
+
+impl<C, S, STOP, ESC, RST, const LOG: usize> Firmware<C, S, STOP, ESC, RST, LOG>
+where
+    C: Clock,
+    S: Sensor,
+    STOP: OutputPin,
+    ESC: OutputPin,
+    RST: InputPin,
+{
+    /// Take the peripherals, de-energise both outputs and start the self-test (it runs on the ticks).
+    pub fn new(cfg: Config, clock: C, sensor: S, stop: STOP, escalation: ESC, reset: RST) -> Result<Self, ConfigError> {
+        cfg.validate()?;
+        let (out, ok) = StopOutputs::new(stop, escalation);
+        let mut fw = Firmware {
+            cfg,
+            clock,
+            sensor,
+            out,
+            reset,
+            state: State::SelfTest(Phase::Start),
+            fast_edge: cfg.filter == Filter::None,
+            debounce: Debouncer::new(cfg.filter),
+            chatter: ChatterState::new(cfg.chatter),
+            watchdog: crate::watchdog::Watchdog::new(cfg.tick_period_us, cfg.deadline_slack_us, cfg.stall_ticks),
+            resetter: ResetTracker::default(),
+            detected_at: None,
+            verdict: None,
+            last_sample: Sample::default(),
+            log: EventLog::new(),
+        };
+        if !ok {
+            let now = fw.clock.now();
+            fw.fault(Cause::OutputFault, now);
+        }
+        Ok(fw)
+    }
+
+    /// The edge interrupt's entry point (call it on both edges of the switch input).
+    ///
+    /// Armed and unfiltered: read the pin; on a trip write the stop pin at once, then do the
+    /// bookkeeping (timestamp, budget, log) out of line. Otherwise record the edge for the filter.
+    #[inline(always)]
+    pub fn on_edge(&mut self) {
+        if self.fast_edge && self.state == State::Armed && self.sensor.fast_trip() {
+            let ok = self.out.drop_stop();
+            self.after_edge_stop(ok);
+        } else {
+            self.edge_slow();
+        }
+    }
+
+    #[inline(never)]
+    fn after_edge_stop(&mut self, ok: bool) {
+        let now = self.clock.now();
+        let travel = self.sensor.trip_travel_um();
+        self.commit_trip(now, now, travel, 0, FLAG_EDGE);
+        if !ok {
+            self.fault(Cause::OutputFault, now);
+        }
+    }
+
+    #[inline(never)]
+    fn edge_slow(&mut self) {
+        let now = self.clock.now();
+        let trip = self.sensor.fast_trip();
+        if self.state == State::Armed {
+            self.debounce.note_edge(now, trip);
+            if self.chatter.observe(now, trip) {
+                self.fault(Cause::Chatter, now);
+            }
+        }
+    }
+
+    /// The periodic entry point: call every [`Config::tick_period_us`].
+    pub fn tick(&mut self) {
+        let now = self.clock.now();
+        if let Err(cause) = self.watchdog.check(now) {
+            self.fault(cause, now);
+        }
+        let sample = self.sensor.sample(now);
+        self.last_sample = sample;
+        let reset_level = self.reset.is_high().unwrap_or(false);
+        match self.state {
+            State::SelfTest(mut phase) => {
+                if self.chatter.observe(now, sample.trip) {
+                    self.resetter.idle_tick(reset_level);
+                    return self.fault(Cause::Chatter, now);
+                }
+                self.resetter.idle_tick(reset_level);
+                match selftest::step(&mut phase, &self.cfg.selftest, now, sample.trip, self.sensor.has_supply()) {
+                    Step::Continue(supply) => {
+                        if let Some(on) = supply {
+                            self.sensor.set_supply(on);
+                        }
+                        self.state = State::SelfTest(phase);
+                    }
+                    Step::Arm => self.arm(now),
+                    Step::Fail(cause) => self.fault(cause, now),
+                }
+            }
+            State::Armed => {
+                self.resetter.idle_tick(reset_level);
+                if sample.fault {
+                    return self.fault(Cause::SensorFault, now);
+                }
+                if self.chatter.observe(now, sample.trip) {
+                    return self.fault(Cause::Chatter, now);
+                }
+                if self.debounce.update(now, sample.trip) {
+                    let first = self.debounce.first_seen().unwrap_or(now);
+                    let flags = if first == now { 0 } else { FLAG_FILTERED };
+                    self.out.drop_stop();
+                    let v = u32::try_from(sample.velocity_um_per_s).unwrap_or(0);
+                    let travel = if sample.travel_um > 0 { sample.travel_um } else { self.sensor.trip_travel_um() };
+                    self.commit_trip(now, first, travel, v, flags);
+                }
+            }
+            State::Tripped => {
+                if self.resetter.tripped_tick(self.cfg.reset, now, sample.trip, reset_level) {
+                    self.arm(now);
+                }
+            }
+            State::Fault(_) => {
+                if self.resetter.fault_tick(reset_level) {
+                    info!("fault cleared by the reset input: self-test again");
+                    self.watchdog.restart();
+                    self.watchdog.check(now).ok();
+                    self.chatter = ChatterState::new(self.cfg.chatter);
+                    self.state = State::SelfTest(Phase::Start);
+                }
+            }
+        }
+    }
+
+    /// Record a trip whose stop write has already happened.
+    fn commit_trip(&mut self, now: Micros, first_seen: Micros, travel_um: i32, closing_um_per_s: u32, flags: u8) {
+        let verdict = self.cfg.budget.check_at(travel_um, closing_um_per_s);
+        let mut flags = flags;
+        if verdict.escalate {
+            flags |= FLAG_ESCALATED;
+            if !self.out.escalate() {
+                self.fault(Cause::OutputFault, now);
+            }
+        }
+        self.state = State::Tripped;
+        self.detected_at = Some(now);
+        self.verdict = Some(verdict);
+        self.debounce.clear();
+        self.resetter.begin_trip();
+        self.log.push(Cause::Trip, flags, now, first_seen, travel_um);
+        warn!("trip at {=u32} us, travel {=i32} um, escalate {=bool}", now.0, travel_um, verdict.escalate);
+    }
+
+    fn arm(&mut self, now: Micros) {
+        self.debounce.clear();
+        if self.out.energise() {
+            self.state = State::Armed;
+            info!("armed at {=u32} us", now.0);
+        } else {
+            self.fault(Cause::OutputFault, now);
+        }
+    }
+
+    /// Latch a fault: both outputs de-energised; logged once per fault episode.
+    fn fault(&mut self, cause: Cause, now: Micros) {
+        self.out.drop_all();
+        if let State::Fault(_) = self.state {
+            return;
+        }
+        self.sensor.set_supply(true);
+        self.state = State::Fault(cause);
+        self.log.push(cause, FLAG_ESCALATED, now, now, self.last_sample.travel_um);
+        warn!("fault {=str} at {=u32} us", cause.name(), now.0);
+    }
+
+    /// The current state.
+    pub const fn state(&self) -> State {
+        self.state
+    }
+
+    /// Armed and watching.
+    pub fn is_armed(&self) -> bool {
+        self.state == State::Armed
+    }
+
+    /// Not in a fault: the board feeds its hardware watchdog only while this holds... and while the
+    /// main loop runs at all.
+    pub fn is_healthy(&self) -> bool {
+        !matches!(self.state, State::Fault(_))
+    }
+
+    /// The stop output is commanded low (stop requested).
+    pub const fn stop_requested(&self) -> bool {
+        self.out.stop_requested()
+    }
+
+    /// The escalation output is commanded low (category 0 requested).
+    pub const fn category0_requested(&self) -> bool {
+        self.out.category0_requested()
+    }
+
+    /// Instant of the last trip's stop write (the detection timestamp).
+    pub const fn detected_at(&self) -> Option<Micros> {
+        self.detected_at
+    }
+
+    /// The stroke-budget verdict of the last trip.
+    pub const fn last_verdict(&self) -> Option<Verdict> {
+        self.verdict
+    }
+
+    /// The latest tick's sensor sample.
+    pub const fn last_sample(&self) -> Sample {
+        self.last_sample
+    }
+
+    /// The event log.
+    pub const fn log(&self) -> &EventLog<LOG> {
+        &self.log
+    }
+
+    /// The configuration in force.
+    pub const fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// The sensor (for a harness that needs to reach its calibration).
+    pub const fn sensor(&self) -> &S {
+        &self.sensor
+    }
+}
