@@ -1,1 +1,408 @@
-//! Stateful `embedded-hal` fakes driven by the plant simulation.
+//! Stateful `embedded-hal` 1.0 fakes driven by the plant simulation, and [`SimRig`], the firmware
+//! wired to them for `flinch hil`.
+//!
+//! These are not expectation mocks (embedded-hal-mock): nothing is scripted in advance. A [`SimPin`]
+//! holds a level that whoever holds a handle can set or read, a [`SimClock`] holds the simulation time,
+//! a [`SimAdc`] holds the raw value the plant's travel maps to. Handles are `Clone` and share state
+//! (`Arc` + atomics, so they are `Send + Sync` and a rig can move to a worker thread), so the harness
+//! and the firmware see the same pin. Each fake can be given a fault: a pin stuck low or high, a cut
+//! wire, a read error; a clock that stalls; an ADC that reads its rail or fails.
+//!
+//! # `flinch hil` in five calls
+//!
+//! ```
+//! use flinch_firmware::{BudgetConfig, Config, ResetPolicy, SwitchKind, Cause};
+//! use flinch_hal_sim::SimRig;
+//!
+//! // Tables 5-7: V_c = 0.05 m/s, DT = 16 ms; d = 1 m/s^2 and C = 10 mm chosen for the example.
+//! let budget = BudgetConfig { robot_speed_um_per_s: 50_000, dead_time_us: 16_000,
+//!                             decel_um_per_s2: 1_000_000, stroke_um: 10_000 };
+//! let mut cfg = Config::new(1_000, budget); // 1 kHz tick
+//! cfg.reset = ResetPolicy::Auto { hold_us: 100_000 };
+//! let mut rig = SimRig::digital(cfg, SwitchKind::Inductive, 5_000).unwrap(); // d_sw = 5 mm
+//! rig.boot(100_000).unwrap();             // self-test passes, armed; sim time 0 starts here
+//!
+//! // Plant loop: advance the firmware to the plant's time, then hand it the plant's travel.
+//! let dt = 1e-5;
+//! for k in 0..6_000 {
+//!     let t = k as f64 * dt;
+//!     rig.advance_to(t);
+//!     let travel_m = if t < 0.003 { 0.0 } else { (t - 0.003) * 0.05 * 2.0 }; // contact at 3 ms
+//!     rig.set_travel_m(travel_m);
+//!     // A robot controller model samples these once per scan cycle:
+//!     let _ = (rig.stop_requested(), rig.category0_requested());
+//! }
+//! // 5 mm at 0.1 m/s after 3 ms: the edge at 53 ms, stop written in the same call.
+//! let t_detect = rig.detected_at_s().unwrap();
+//! assert!((t_detect - 0.053).abs() < 2e-5, "{t_detect}");
+//! assert!(rig.stop_requested() && !rig.category0_requested());
+//! assert_eq!(rig.events()[0].cause, Cause::Trip);
+//! ```
+
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering::SeqCst};
+use std::sync::Arc;
+
+use embedded_hal::digital::{ErrorKind, ErrorType, InputPin, OutputPin, StatefulOutputPin};
+use flinch_firmware::{Adc, Clock, Micros};
+
+mod rig;
+pub use rig::{SimRig, SIM_LOG};
+
+/// A fault injected into a [`SimPin`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum PinFault {
+    /// Healthy.
+    None = 0,
+    /// Reads low whatever is driven.
+    StuckLow = 1,
+    /// Reads high whatever is driven.
+    StuckHigh = 2,
+    /// The wire is cut: reads the input's pull level (set at construction, low by default).
+    CutWire = 3,
+    /// Every read and write returns an error.
+    Broken = 4,
+}
+
+impl PinFault {
+    fn from_u8(v: u8) -> PinFault {
+        match v {
+            1 => PinFault::StuckLow,
+            2 => PinFault::StuckHigh,
+            3 => PinFault::CutWire,
+            4 => PinFault::Broken,
+            _ => PinFault::None,
+        }
+    }
+}
+
+/// The error a [`PinFault::Broken`] pin returns.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct SimPinError;
+
+impl embedded_hal::digital::Error for SimPinError {
+    fn kind(&self) -> ErrorKind {
+        ErrorKind::Other
+    }
+}
+
+#[derive(Debug)]
+struct PinInner {
+    driven: AtomicBool,
+    fault: AtomicU8,
+    pull_high: bool,
+    /// Supply pin and the level the input reads while that supply is off.
+    supply: Option<(SimPin, bool)>,
+}
+
+/// A digital pin with a shared level. Clones are handles to the same pin.
+///
+/// The *driven* level is what was last set (by the plant for an input, by the firmware for an output);
+/// the *observed* level ([`SimPin::level`], and `is_high` through `InputPin`) is the driven level
+/// after faults and, for a sensor input, after its supply.
+#[derive(Clone, Debug)]
+pub struct SimPin(Arc<PinInner>);
+
+impl SimPin {
+    /// A healthy pin driven to `level`, pulled low when cut.
+    pub fn new(level: bool) -> SimPin {
+        SimPin::build(level, false, None)
+    }
+
+    /// A pin with a pull-up: a cut wire reads high.
+    pub fn new_pulled_up(level: bool) -> SimPin {
+        SimPin::build(level, true, None)
+    }
+
+    /// A sensor input powered by `supply` (an output the firmware drives: high = powered): while the
+    /// supply is low it reads `unpowered_level`, pulled low when cut.
+    pub fn powered_by(level: bool, supply: SimPin, unpowered_level: bool) -> SimPin {
+        SimPin::build(level, false, Some((supply, unpowered_level)))
+    }
+
+    fn build(level: bool, pull_high: bool, supply: Option<(SimPin, bool)>) -> SimPin {
+        SimPin(Arc::new(PinInner { driven: AtomicBool::new(level), fault: AtomicU8::new(0), pull_high, supply }))
+    }
+
+    /// Drive the pin (the plant sets a sensor level with this).
+    pub fn set(&self, level: bool) {
+        self.0.driven.store(level, SeqCst);
+    }
+
+    /// The level last driven, ignoring faults.
+    pub fn driven(&self) -> bool {
+        self.0.driven.load(SeqCst)
+    }
+
+    /// The level a reader sees: driven level after faults and supply.
+    pub fn level(&self) -> bool {
+        match self.fault() {
+            PinFault::StuckLow | PinFault::Broken => false,
+            PinFault::StuckHigh => true,
+            PinFault::CutWire => self.0.pull_high,
+            PinFault::None => match &self.0.supply {
+                Some((supply, unpowered)) if !supply.level() => *unpowered,
+                _ => self.driven(),
+            },
+        }
+    }
+
+    /// Inject a fault (or clear it with [`PinFault::None`]).
+    pub fn set_fault(&self, fault: PinFault) {
+        self.0.fault.store(fault as u8, SeqCst);
+    }
+
+    /// The injected fault.
+    pub fn fault(&self) -> PinFault {
+        PinFault::from_u8(self.0.fault.load(SeqCst))
+    }
+
+    fn check(&self) -> Result<(), SimPinError> {
+        if self.fault() == PinFault::Broken {
+            Err(SimPinError)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+impl ErrorType for SimPin {
+    type Error = SimPinError;
+}
+
+impl InputPin for SimPin {
+    fn is_high(&mut self) -> Result<bool, SimPinError> {
+        self.check()?;
+        Ok(self.level())
+    }
+    fn is_low(&mut self) -> Result<bool, SimPinError> {
+        self.is_high().map(|h| !h)
+    }
+}
+
+impl OutputPin for SimPin {
+    fn set_low(&mut self) -> Result<(), SimPinError> {
+        self.check()?;
+        self.set(false);
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), SimPinError> {
+        self.check()?;
+        self.set(true);
+        Ok(())
+    }
+}
+
+impl StatefulOutputPin for SimPin {
+    fn is_set_high(&mut self) -> Result<bool, SimPinError> {
+        self.check()?;
+        Ok(self.driven())
+    }
+    fn is_set_low(&mut self) -> Result<bool, SimPinError> {
+        self.is_set_high().map(|h| !h)
+    }
+}
+
+#[derive(Debug, Default)]
+struct ClockInner {
+    now: AtomicU32,
+    stalled: AtomicBool,
+    frozen: AtomicU32,
+}
+
+/// Simulation time as the firmware's [`Clock`]: microseconds the harness sets. Clones share it.
+#[derive(Clone, Debug, Default)]
+pub struct SimClock(Arc<ClockInner>);
+
+impl SimClock {
+    /// A clock reading `start`.
+    pub fn new(start: Micros) -> SimClock {
+        let c = SimClock::default();
+        c.set(start);
+        c
+    }
+
+    /// Set the time (wrapping microseconds).
+    pub fn set(&self, t: Micros) {
+        self.0.now.store(t.0, SeqCst);
+    }
+
+    /// Advance by `us`, wrapping.
+    pub fn advance(&self, us: u32) {
+        let t = self.true_now().plus(us);
+        self.set(t);
+    }
+
+    /// The simulation's time, ignoring a stall.
+    pub fn true_now(&self) -> Micros {
+        Micros(self.0.now.load(SeqCst))
+    }
+
+    /// Stall (`true`: the firmware keeps reading the instant of the stall) or resume.
+    pub fn set_stalled(&self, stalled: bool) {
+        if stalled && !self.0.stalled.load(SeqCst) {
+            self.0.frozen.store(self.0.now.load(SeqCst), SeqCst);
+        }
+        self.0.stalled.store(stalled, SeqCst);
+    }
+}
+
+impl Clock for SimClock {
+    fn now(&mut self) -> Micros {
+        if self.0.stalled.load(SeqCst) {
+            Micros(self.0.frozen.load(SeqCst))
+        } else {
+            self.true_now()
+        }
+    }
+}
+
+/// A fault injected into a [`SimAdc`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum AdcFault {
+    /// Healthy.
+    None,
+    /// The signal wire is cut: the input is pulled to ground and reads 0.
+    CutWire,
+    /// Reads this raw value whatever the plant does.
+    Stuck(u16),
+    /// Every conversion fails.
+    Error,
+}
+
+#[derive(Debug, Default)]
+struct AdcInner {
+    raw: AtomicU32,
+    // 0 none, 1 cut, 2 stuck (value in `stuck`), 3 error
+    fault: AtomicU8,
+    stuck: AtomicU32,
+}
+
+/// An ADC channel whose raw value the plant sets. Clones share it.
+#[derive(Clone, Debug, Default)]
+pub struct SimAdc(Arc<AdcInner>);
+
+/// The error of a failing [`SimAdc`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct SimAdcError;
+
+impl SimAdc {
+    /// A channel reading `raw`.
+    pub fn new(raw: u16) -> SimAdc {
+        let a = SimAdc::default();
+        a.set(raw);
+        a
+    }
+
+    /// Set the raw value the plant produces.
+    pub fn set(&self, raw: u16) {
+        self.0.raw.store(u32::from(raw), SeqCst);
+    }
+
+    /// Inject a fault.
+    pub fn set_fault(&self, fault: AdcFault) {
+        let code = match fault {
+            AdcFault::None => 0,
+            AdcFault::CutWire => 1,
+            AdcFault::Stuck(v) => {
+                self.0.stuck.store(u32::from(v), SeqCst);
+                2
+            }
+            AdcFault::Error => 3,
+        };
+        self.0.fault.store(code, SeqCst);
+    }
+}
+
+impl Adc for SimAdc {
+    type Error = SimAdcError;
+    fn read(&mut self) -> Result<u16, SimAdcError> {
+        let v = match self.0.fault.load(SeqCst) {
+            1 => 0,
+            2 => self.0.stuck.load(SeqCst),
+            3 => return Err(SimAdcError),
+            _ => self.0.raw.load(SeqCst),
+        };
+        Ok(u16::try_from(v).unwrap_or(u16::MAX))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clones_share_the_level_and_faults_override_it() {
+        let plant = SimPin::new(true);
+        let mut firmware_side = plant.clone();
+        assert!(firmware_side.is_high().unwrap());
+        plant.set(false);
+        assert!(firmware_side.is_low().unwrap());
+        plant.set_fault(PinFault::StuckHigh);
+        assert!(firmware_side.is_high().unwrap());
+        plant.set_fault(PinFault::CutWire);
+        assert!(firmware_side.is_low().unwrap(), "pulled down");
+        let up = SimPin::new_pulled_up(false);
+        up.set_fault(PinFault::CutWire);
+        assert!(up.level());
+        plant.set_fault(PinFault::Broken);
+        assert_eq!(firmware_side.is_high(), Err(SimPinError));
+        assert_eq!(firmware_side.set_high(), Err(SimPinError));
+    }
+
+    #[test]
+    fn output_pin_is_stateful() {
+        let mut out = SimPin::new(false);
+        let observer = out.clone();
+        out.set_high().unwrap();
+        assert!(observer.level());
+        assert!(out.is_set_high().unwrap());
+        out.toggle().unwrap();
+        assert!(!observer.level());
+        observer.set_fault(PinFault::StuckHigh); // a welded relay contact
+        out.set_low().unwrap();
+        assert!(out.is_set_low().unwrap(), "driven low");
+        assert!(observer.level(), "but observed high");
+    }
+
+    #[test]
+    fn powered_input_reads_its_unpowered_level_without_supply() {
+        let supply = SimPin::new(true);
+        let input = SimPin::powered_by(true, supply.clone(), false);
+        assert!(input.level());
+        supply.set(false);
+        assert!(!input.level());
+        input.set_fault(PinFault::StuckHigh);
+        assert!(input.level(), "a stuck input ignores its supply");
+    }
+
+    #[test]
+    fn clock_is_shared_settable_and_stalls() {
+        let harness = SimClock::new(Micros(u32::MAX - 1));
+        let mut fw = harness.clone();
+        harness.advance(3);
+        assert_eq!(fw.now(), Micros(1), "wraps");
+        harness.set_stalled(true);
+        harness.advance(100);
+        assert_eq!(fw.now(), Micros(1));
+        assert_eq!(harness.true_now(), Micros(101));
+        harness.set_stalled(false);
+        assert_eq!(fw.now(), Micros(101));
+    }
+
+    #[test]
+    fn adc_faults() {
+        let plant = SimAdc::new(1234);
+        let mut fw = plant.clone();
+        assert_eq!(fw.read(), Ok(1234));
+        plant.set_fault(AdcFault::CutWire);
+        assert_eq!(fw.read(), Ok(0));
+        plant.set_fault(AdcFault::Stuck(77));
+        plant.set(2000);
+        assert_eq!(fw.read(), Ok(77));
+        plant.set_fault(AdcFault::Error);
+        assert_eq!(fw.read(), Err(SimAdcError));
+        plant.set_fault(AdcFault::None);
+        assert_eq!(fw.read(), Ok(2000));
+    }
+}

@@ -1,0 +1,282 @@
+//! [`SimRig`]: the firmware wired to simulated pins, a simulated clock and (optionally) a simulated
+//! ADC, stepped by the plant. This is the API `flinch hil` uses.
+//!
+//! Time: the rig maps simulation seconds to the firmware's wrapping microseconds through an epoch
+//! fixed by [`SimRig::boot`] (sim time 0 is the end of the self-test). Ticks fall at sim times
+//! `phase + k * T` (T = `Config::tick_period_us`, phase set by [`SimRig::set_tick_phase_us`]), so the
+//! firmware's tick is not synchronised with the plant's steps or the robot's scan cycle unless asked.
+//!
+//! Sensor: [`SimRig::set_travel_m`] turns the plant's decoupler travel (back from the front stop,
+//! metres) into a switch level (through [`SwitchKind::level_for`] and d_sw) or an ADC value (through
+//! [`AnalogConfig::counts_for`]). When the switch input's observed level changes, the rig calls the
+//! firmware's edge interrupt at once, as the EXTI line on both edges does on the board.
+
+use super::{PinFault, SimAdc, SimClock, SimPin};
+use flinch_firmware::{
+    AnalogConfig, AnalogTravel, Config, ConfigError, DigitalSwitch, Firmware, Micros, Mm, Sensor, State, SwitchKind,
+    TripEvent,
+};
+
+/// Event-log capacity of the simulated firmware.
+pub const SIM_LOG: usize = 32;
+
+#[derive(Clone, Debug)]
+enum PlantInput {
+    Switch { pin: SimPin, kind: SwitchKind, switch_travel_um: i32 },
+    Analog { adc: SimAdc, cfg: AnalogConfig },
+}
+
+/// Firmware plus its simulated peripherals.
+pub struct SimRig<S> {
+    /// The firmware under test (read its state, log, verdicts directly if needed).
+    pub fw: Firmware<SimClock, S, SimPin, SimPin, SimPin, SIM_LOG>,
+    /// The clock handle (stall it with [`SimClock::set_stalled`]).
+    pub clock: SimClock,
+    /// The stop output (low = stop requested).
+    pub stop: SimPin,
+    /// The escalation output (low = category 0 requested).
+    pub escalation: SimPin,
+    /// The reset input (drive high for a reset press).
+    pub reset: SimPin,
+    /// The sensor supply output, digital sensors only.
+    pub supply: Option<SimPin>,
+    input: PlantInput,
+    epoch: Micros,
+    next_tick_us: i64,
+    now_us: i64,
+    tick_us: i64,
+    phase_us: i64,
+    edge_irq: bool,
+}
+
+impl SimRig<DigitalSwitch<SimPin, SimPin>> {
+    /// A rig with a digital travel switch of `kind` firing at `switch_travel_um` (d_sw), its supply
+    /// switchable by the firmware (so the start-up stuck-input test runs), wired so that the unpowered
+    /// switch reads as a trip. The plant starts with the tool on the front stop.
+    pub fn digital(cfg: Config, kind: SwitchKind, switch_travel_um: i32) -> Result<Self, ConfigError> {
+        let supply = SimPin::new(false);
+        let pin = SimPin::powered_by(kind.level_for(false), supply.clone(), kind.level_for(true));
+        let sensor = DigitalSwitch::with_supply(pin.clone(), supply.clone(), kind, switch_travel_um);
+        let mut rig = SimRig::with_sensor(cfg, sensor, PlantInput::Switch { pin, kind, switch_travel_um })?;
+        rig.supply = Some(supply);
+        Ok(rig)
+    }
+
+    /// The switch input's pin handle (inject faults with [`SimRig::inject_switch_fault`]).
+    pub fn switch_pin(&self) -> Option<&SimPin> {
+        match &self.input {
+            PlantInput::Switch { pin, .. } => Some(pin),
+            PlantInput::Analog { .. } => None,
+        }
+    }
+}
+
+impl SimRig<AnalogTravel<SimAdc>> {
+    /// A rig with an analog displacement sensor calibrated by `acfg`; the plant starts at travel 0.
+    pub fn analog(cfg: Config, acfg: AnalogConfig) -> Result<Self, ConfigError> {
+        let adc = SimAdc::new(acfg.counts_for(Mm::ZERO));
+        let sensor = AnalogTravel::new(adc.clone(), acfg);
+        SimRig::with_sensor(cfg, sensor, PlantInput::Analog { adc, cfg: acfg })
+    }
+
+    /// The ADC handle (inject faults with [`SimAdc::set_fault`]).
+    pub fn adc(&self) -> Option<&SimAdc> {
+        match &self.input {
+            PlantInput::Analog { adc, .. } => Some(adc),
+            PlantInput::Switch { .. } => None,
+        }
+    }
+}
+
+impl<S: Sensor> SimRig<S> {
+    fn with_sensor(cfg: Config, sensor: S, input: PlantInput) -> Result<Self, ConfigError> {
+        let clock = SimClock::new(Micros(0));
+        let stop = SimPin::new(true); // whatever the pin was: the firmware must drop it at once
+        let escalation = SimPin::new(true);
+        let reset = SimPin::new(false);
+        let fw = Firmware::new(cfg, clock.clone(), sensor, stop.clone(), escalation.clone(), reset.clone())?;
+        let tick_us = i64::from(cfg.tick_period_us);
+        Ok(SimRig {
+            fw,
+            clock,
+            stop,
+            escalation,
+            reset,
+            supply: None,
+            input,
+            epoch: Micros(0),
+            next_tick_us: 0,
+            now_us: 0,
+            tick_us,
+            phase_us: 0,
+            edge_irq: true,
+        })
+    }
+
+    /// Start the firmware's clock at `start` (before [`SimRig::boot`]); e.g. just before the u32 wrap.
+    pub fn start_clock_at(&mut self, start: Micros) {
+        self.clock.set(start);
+    }
+
+    /// Offset of the firmware's ticks within its period, microseconds in `0..T` (default 0). Set it
+    /// before [`SimRig::boot`] returns control to the plant loop, i.e. right after `boot`.
+    pub fn set_tick_phase_us(&mut self, phase_us: u32) {
+        let phase = i64::from(phase_us).rem_euclid(self.tick_us.max(1));
+        // Keep the tick cadence: move the epoch so that the next tick lands at sim time `phase`.
+        let next_clock = self.epoch.plus(self.next_tick_us as u32);
+        self.phase_us = phase;
+        self.epoch = Micros(next_clock.0.wrapping_sub(phase as u32));
+        self.next_tick_us = phase;
+        self.now_us = 0;
+    }
+
+    /// Enable or disable the edge interrupt (disabled: the firmware only polls on its ticks).
+    pub fn set_edge_interrupt(&mut self, enabled: bool) {
+        self.edge_irq = enabled;
+    }
+
+    /// Tick the firmware from the clock's current value until it arms, at most `max_us`. Returns the
+    /// boot time in microseconds, or the state it got stuck in. Sim time 0 is one tick after the last
+    /// boot tick, so the firmware's tick cadence carries on into the plant run.
+    pub fn boot(&mut self, max_us: u32) -> Result<u32, State> {
+        let start = self.clock.true_now();
+        let mut t = start;
+        let limit = u64::from(max_us) / self.tick_us.max(1) as u64 + 1;
+        for _ in 0..limit {
+            self.clock.set(t);
+            self.fw.tick();
+            if self.fw.is_armed() {
+                self.epoch = t.plus(self.tick_us as u32);
+                self.next_tick_us = 0;
+                self.now_us = 0;
+                self.set_tick_phase_us(self.phase_us as u32);
+                return Ok(t.since(start));
+            }
+            t = t.plus(self.tick_us as u32);
+        }
+        Err(self.fw.state())
+    }
+
+    /// Convert simulation seconds to the firmware's clock.
+    pub fn micros_at(&self, t_s: f64) -> Micros {
+        self.epoch.plus((t_s * 1e6).round() as i64 as u32)
+    }
+
+    /// Convert a firmware instant to simulation seconds (exact within +-35 min of sim time 0).
+    pub fn seconds_at(&self, m: Micros) -> f64 {
+        f64::from(self.sim_us_at(m)) / 1e6
+    }
+
+    /// Convert a firmware instant to integer microseconds of simulation time (exact within +-35 min).
+    pub fn sim_us_at(&self, m: Micros) -> i32 {
+        m.since(self.epoch) as i32
+    }
+
+    /// Run the firmware's ticks that fall at or before sim time `t_s`, then set the clock to `t_s`.
+    /// The sensor holds the level last set (zero-order hold between plant steps).
+    pub fn advance_to(&mut self, t_s: f64) {
+        self.advance_to_us((t_s * 1e6).round() as i64);
+    }
+
+    /// [`SimRig::advance_to`] in integer microseconds of sim time.
+    pub fn advance_to_us(&mut self, t_us: i64) {
+        while self.next_tick_us <= t_us {
+            self.clock.set(self.epoch.plus(self.next_tick_us as u32));
+            self.fw.tick();
+            self.next_tick_us += self.tick_us;
+        }
+        self.now_us = t_us.max(self.now_us);
+        self.clock.set(self.epoch.plus(self.now_us as u32));
+    }
+
+    /// Skip the firmware's ticks up to sim time `t_s` without running them (a blocked firmware:
+    /// the missed-deadline fault).
+    pub fn skip_ticks_until(&mut self, t_s: f64) {
+        let t_us = (t_s * 1e6).round() as i64;
+        while self.next_tick_us <= t_us {
+            self.next_tick_us += self.tick_us;
+        }
+    }
+
+    /// Hand the plant's decoupler travel (metres back from the front end-stop) to the sensor.
+    pub fn set_travel_m(&mut self, travel_m: f64) {
+        let um = (travel_m * 1e6).round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
+        self.set_travel_um(um);
+    }
+
+    /// [`SimRig::set_travel_m`] in micrometres.
+    pub fn set_travel_um(&mut self, travel_um: i32) {
+        match &self.input {
+            PlantInput::Switch { pin, kind, switch_travel_um } => {
+                let before = pin.level();
+                pin.set(kind.level_for(travel_um >= *switch_travel_um));
+                let changed = pin.level() != before;
+                self.edge_if(changed);
+            }
+            PlantInput::Analog { adc, cfg } => {
+                let mm = Mm::saturating_from_num(travel_um) / 1000;
+                adc.set(cfg.counts_for(mm));
+            }
+        }
+    }
+
+    /// Inject a fault into the switch input; an observed level change fires the edge interrupt.
+    pub fn inject_switch_fault(&mut self, fault: PinFault) {
+        if let PlantInput::Switch { pin, .. } = &self.input {
+            let before = pin.level();
+            pin.set_fault(fault);
+            let changed = pin.level() != before;
+            self.edge_if(changed);
+        }
+    }
+
+    fn edge_if(&mut self, changed: bool) {
+        if changed && self.edge_irq {
+            self.fw.on_edge();
+        }
+    }
+
+    /// Drive the reset input (a press is a low-to-high change seen by a tick).
+    pub fn set_reset(&mut self, level: bool) {
+        self.reset.set(level);
+    }
+
+    /// The stop output reads low: stop requested.
+    pub fn stop_requested(&self) -> bool {
+        !self.stop.level()
+    }
+
+    /// The escalation output reads low: category 0 requested.
+    pub fn category0_requested(&self) -> bool {
+        !self.escalation.level()
+    }
+
+    /// Sim time of the last trip's stop write, seconds.
+    pub fn detected_at_s(&self) -> Option<f64> {
+        self.fw.detected_at().map(|m| self.seconds_at(m))
+    }
+
+    /// Sim time of the last trip's stop write, integer microseconds.
+    pub fn detected_at_us(&self) -> Option<i32> {
+        self.fw.detected_at().map(|m| self.sim_us_at(m))
+    }
+
+    /// The event log, oldest first.
+    pub fn events(&self) -> Vec<TripEvent> {
+        self.fw.log().iter().copied().collect()
+    }
+
+    /// The event log in its serialised form (see `flinch_firmware::event_log`).
+    pub fn event_log_bytes(&self) -> Vec<u8> {
+        let mut buf = vec![0u8; self.fw.log().serialized_len()];
+        // The buffer is sized from the log itself, so this cannot fail.
+        let n = self.fw.log().serialize(&mut buf).unwrap_or(0);
+        buf.truncate(n);
+        buf
+    }
+
+    /// Current sim time of the rig, microseconds.
+    pub fn now_us(&self) -> i64 {
+        self.now_us
+    }
+}
