@@ -2,5 +2,7 @@
 //!
 //! `model` holds the validated values; `load` parses and validates a file with errors that name the
 //! file, the key, the line and what is allowed.
+mod load;
 mod model;
+pub use load::*;
 pub use model::*;
