@@ -1,1 +1,29 @@
-//! On-board collision-avoidance step (Ch. 5 of the thesis). Filled by the avoidance issue.
+//! On-board collision-avoidance step (Ch. 5 of the thesis, section 5.3).
+//!
+//! The host fits a grid of Gaussian radial basis functions to the depth image (eq 65-71) and sends the
+//! weights here over a framed serial protocol ([`frame`], [`receiver`]). Every control step the MCU
+//! evaluates the interpolated field `f*` and its analytic gradient (eq 72-73) at the tool point
+//! ([`field`]), adds the constant attraction (eq 74) and the vortex repulsion (eq 76), and turns the
+//! sum into a velocity command (eq 77-78) scaled down by the field height and by the age of the weights
+//! ([`control`]).
+//!
+//! Everything is generic over the number type ([`num::Real`]: `I16F16`, `I8F24`, `I20F12`, `f32`,
+//! `f64`) and the Gaussian ([`gauss`]: lookup table, `micromath`, `libm`), so the host can measure the
+//! error of each choice against an `f64` reference while the target runs the fixed-point one.
+//!
+//! Units: metres, seconds, metres per second; heights of `f*` in metres; gradients dimensionless.
+//! No heap, no panics, bounded loops.
+
+pub mod control;
+pub mod field;
+pub mod frame;
+pub mod gauss;
+pub mod num;
+pub mod receiver;
+
+pub use control::{Command, Controller, Gains, Watchdog};
+pub use field::{sample, FieldSample, Grid, MAX_AXIS, MAX_CENTRES, MAX_WINDOW, TRUNC_SIGMAS};
+pub use frame::{encode_frame, frame_len, FrameHeader};
+pub use gauss::{Gauss, GaussLibm, GaussLut, GaussMicromath};
+pub use num::Real;
+pub use receiver::{Receiver, RxStats};

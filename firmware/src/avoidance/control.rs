@@ -1,0 +1,201 @@
+//! Potential-field command (eq 74-79) with speed scaling from the field height and a fail-safe on the
+//! age of the weights.
+//!
+//! * Attraction (eq 74): `F_a = k_a e / |e|`, `e = p_goal - p`. Inside `capture_radius_m` the
+//!   magnitude falls linearly to zero (`e / capture_radius`) so the tool settles on the goal instead
+//!   of chattering around it (the thesis's constant magnitude never stops).
+//! * Vortex repulsion (eq 76): `F_r = s k_r [df*/dy, -df*/dx]`, `s = +/-1`. The sign comes from the
+//!   direction of motion `d = e / |e|`: `s` makes `F_r . d >= 0`, so the vortex carries the tool on
+//!   around the hill rather than back. It is latched while `f*` at the tool stays above
+//!   `latch_height_m` (and chosen afresh below it) so it cannot flip on the hill's axis.
+//! * Command (eq 77-78): `p' = (F_a + F_r) * speed_scale(f*) * watchdog(age)`.
+//! * Speed scaling: 1 below `slow_height_m`, 0 at and above `stop_height_m`, linear between.
+//! * Fail-safe ([`Watchdog`]): full speed while the weights are younger than `slow_after_ms`, then a
+//!   linear ramp to zero at `stop_after_ms`; zero with no weights at all.
+
+use super::field::FieldSample;
+use super::num::Real;
+
+/// Gains and thresholds of the step.
+#[derive(Clone, Copy, Debug)]
+pub struct Gains<R> {
+    /// `k_a`, the cruise speed towards the goal, m/s (eq 74).
+    pub k_att: R,
+    /// `k_r`, m/s per unit gradient (eq 76).
+    pub k_rep: R,
+    /// Radius around the goal inside which attraction falls off linearly, m.
+    pub capture_radius_m: R,
+    /// Field height above which the vortex sign is latched, m.
+    pub latch_height_m: R,
+    /// Field height where speed scaling starts, m.
+    pub slow_height_m: R,
+    /// Field height at which the command is zero, m (set above any reachable height to disable).
+    pub stop_height_m: R,
+}
+
+/// Fail-safe on the age of the last good weights.
+#[derive(Clone, Copy, Debug)]
+pub struct Watchdog {
+    /// Age up to which the command is not reduced, ms.
+    pub slow_after_ms: u32,
+    /// Age at and after which the command is zero, ms.
+    pub stop_after_ms: u32,
+}
+
+impl Watchdog {
+    /// Speed factor in `[0, 1]` for weights `age_ms` old (`None`: no weights ever received).
+    pub fn factor<R: Real>(&self, age_ms: Option<u32>) -> R {
+        let age = match age_ms {
+            Some(a) => a,
+            None => return R::ZERO,
+        };
+        if age <= self.slow_after_ms {
+            R::ONE
+        } else if age >= self.stop_after_ms || self.stop_after_ms <= self.slow_after_ms {
+            R::ZERO
+        } else {
+            let left = (self.stop_after_ms - age) as i32;
+            let span = (self.stop_after_ms - self.slow_after_ms) as i32;
+            R::from_int(left.min(1 << 20)).div(R::from_int(span.min(1 << 20)))
+        }
+    }
+}
+
+/// One velocity command.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Command<R> {
+    /// Commanded velocity along x, m/s.
+    pub vx: R,
+    /// Commanded velocity along y, m/s.
+    pub vy: R,
+    /// Combined speed factor applied (height scaling times watchdog), `[0, 1]`.
+    pub scale: R,
+    /// Vortex sign used this step (+1 or -1).
+    pub vortex_sign: i8,
+}
+
+/// The per-step controller: holds only the latched vortex sign.
+#[derive(Clone, Copy, Debug)]
+pub struct Controller<R> {
+    /// Gains and thresholds.
+    pub gains: Gains<R>,
+    latched: i8,
+}
+
+impl<R: Real> Controller<R> {
+    /// A controller with nothing latched.
+    pub fn new(gains: Gains<R>) -> Self {
+        Controller { gains, latched: 0 }
+    }
+
+    /// Speed factor from the field height at the tool.
+    pub fn height_scale(&self, h: R) -> R {
+        let g = &self.gains;
+        if h <= g.slow_height_m {
+            R::ONE
+        } else if h >= g.stop_height_m {
+            R::ZERO
+        } else {
+            g.stop_height_m.sub(h).div(g.stop_height_m.sub(g.slow_height_m))
+        }
+    }
+
+    /// Eq 74-78: the velocity command at `(x, y)` for goal `(gx, gy)`, field `f`, extra factor
+    /// `watchdog` (from [`Watchdog::factor`]).
+    pub fn command(&mut self, x: R, y: R, gx: R, gy: R, f: &FieldSample<R>, watchdog: R) -> Command<R> {
+        let g = self.gains;
+        let ex = gx.sub(x);
+        let ey = gy.sub(y);
+        let dist = ex.mul(ex).add(ey.mul(ey)).sqrt();
+        let denom = if dist > g.capture_radius_m { dist } else { g.capture_radius_m };
+        let (fax, fay) = if denom > R::ZERO {
+            (g.k_att.mul(ex.div(denom)), g.k_att.mul(ey.div(denom)))
+        } else {
+            (R::ZERO, R::ZERO)
+        };
+
+        // Vortex direction [df/dy, -df/dx] (eq 76) and its sign from the direction of motion.
+        let vx = f.grad_y;
+        let vy = f.grad_x.neg();
+        let along = vx.mul(ex).add(vy.mul(ey));
+        let fresh: i8 = if along < R::ZERO { -1 } else { 1 };
+        let sign = if f.height > g.latch_height_m {
+            if self.latched == 0 {
+                self.latched = fresh;
+            }
+            self.latched
+        } else {
+            self.latched = 0;
+            fresh
+        };
+        let kr = if sign < 0 { g.k_rep.neg() } else { g.k_rep };
+        let frx = kr.mul(vx);
+        let fry = kr.mul(vy);
+
+        let scale = self.height_scale(f.height).mul(watchdog);
+        Command {
+            vx: fax.add(frx).mul(scale),
+            vy: fay.add(fry).mul(scale),
+            scale,
+            vortex_sign: sign,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gains() -> Gains<f64> {
+        Gains {
+            k_att: 0.2,
+            k_rep: 0.5,
+            capture_radius_m: 0.02,
+            latch_height_m: 0.01,
+            slow_height_m: 0.2,
+            stop_height_m: 0.4,
+        }
+    }
+
+    #[test]
+    fn attraction_has_constant_magnitude_then_settles() {
+        let mut c = Controller::new(gains());
+        let flat = FieldSample { height: 0.0, grad_x: 0.0, grad_y: 0.0 };
+        let cmd = c.command(0.0, 0.0, 0.3, 0.4, &flat, 1.0);
+        assert!((cmd.vx - 0.12).abs() < 1e-12 && (cmd.vy - 0.16).abs() < 1e-12);
+        let near = c.command(0.0, 0.0, 0.01, 0.0, &flat, 1.0);
+        assert!((near.vx - 0.1).abs() < 1e-12, "half speed at half the capture radius");
+    }
+
+    #[test]
+    fn vortex_is_tangential_pushes_forward_and_latches() {
+        let mut c = Controller::new(gains());
+        // Hill ahead on +x: gradient points uphill (+x). Vortex is along y; sign is free (along = 0).
+        let f = FieldSample { height: 0.05, grad_x: 1.0, grad_y: 0.2 };
+        let cmd = c.command(0.0, 0.0, 1.0, 0.0, &f, 1.0);
+        let rx = cmd.vx - 0.2;
+        // F_r is perpendicular to the gradient.
+        assert!((rx * f.grad_x + cmd.vy * f.grad_y).abs() < 1e-12);
+        assert!(rx >= 0.0, "vortex does not push back against the motion");
+        let first = cmd.vortex_sign;
+        // Gradient tilts the other way: latched sign holds while on the hill.
+        let f2 = FieldSample { height: 0.05, grad_x: 1.0, grad_y: -0.2 };
+        assert_eq!(c.command(0.0, 0.0, 1.0, 0.0, &f2, 1.0).vortex_sign, first);
+        let off = FieldSample { height: 0.0, grad_x: 1.0, grad_y: -0.2 };
+        assert_eq!(c.command(0.0, 0.0, 1.0, 0.0, &off, 1.0).vortex_sign, -first);
+    }
+
+    #[test]
+    fn height_scaling_and_watchdog() {
+        let c = Controller::new(gains());
+        assert_eq!(c.height_scale(0.1), 1.0);
+        assert!((c.height_scale(0.3) - 0.5).abs() < 1e-12);
+        assert_eq!(c.height_scale(0.5), 0.0);
+        let w = Watchdog { slow_after_ms: 100, stop_after_ms: 300 };
+        assert_eq!(w.factor::<f64>(None), 0.0);
+        assert_eq!(w.factor::<f64>(Some(50)), 1.0);
+        assert!((w.factor::<f64>(Some(200)) - 0.5).abs() < 1e-12);
+        assert_eq!(w.factor::<f64>(Some(300)), 0.0);
+        assert_eq!(w.factor::<f64>(Some(u32::MAX)), 0.0);
+    }
+}

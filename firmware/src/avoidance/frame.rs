@@ -1,0 +1,146 @@
+//! The serial frame that carries one grid of weights from the host (defined once, here; the host
+//! encodes with [`encode_frame`]).
+//!
+//! All integers little-endian; lengths and positions are Q16.16 metres (`raw / 65536`).
+//!
+//! | offset | size | field |
+//! |---|---|---|
+//! | 0 | 2 | sync `0xA5 0x5A` |
+//! | 2 | 1 | version ([`VERSION`]) |
+//! | 3 | 1 | `nx`, centres along x, 1..=30 |
+//! | 4 | 1 | `ny`, centres along y, 1..=30 |
+//! | 5 | 1 | reserved, 0 |
+//! | 6 | 4 | `seq`, u32, increases by at least one per frame (wrapping) |
+//! | 10 | 2 | `age_ms`, u16: age of the depth image when the frame was sent |
+//! | 12 | 4 | `x0`, Q16.16 m: position of centre (0, 0) |
+//! | 16 | 4 | `y0`, Q16.16 m |
+//! | 20 | 4 | `spacing`, Q16.16 m, > 0 |
+//! | 24 | 4 | `sigma`, Q16.16 m, > 0: the sigma to evaluate with (eq 70, or widened per Fig. 90) |
+//! | 28 | 4 nx ny | weights, i32 Q16.16 m, row-major (`j * nx + i`, y outer) |
+//! | end-4 | 4 | CRC-32/ISO-HDLC (the zlib CRC) of bytes 2..end-4 |
+//!
+//! A 15 x 15 frame is 932 bytes, a 30 x 30 one 3,632 bytes.
+
+use super::field::MAX_AXIS;
+
+/// First sync byte.
+pub const SYNC0: u8 = 0xA5;
+/// Second sync byte.
+pub const SYNC1: u8 = 0x5A;
+/// Protocol version carried in byte 2.
+pub const VERSION: u8 = 1;
+/// Bytes before the weights.
+pub const HEADER_LEN: usize = 28;
+/// Bytes of the trailing CRC.
+pub const CRC_LEN: usize = 4;
+/// Longest frame (30 x 30).
+pub const MAX_FRAME: usize = HEADER_LEN + 4 * MAX_AXIS * MAX_AXIS + CRC_LEN;
+
+/// The CRC used by the frame.
+pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// Header fields of a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameHeader {
+    /// Centres along x.
+    pub nx: u8,
+    /// Centres along y.
+    pub ny: u8,
+    /// Sequence number.
+    pub seq: u32,
+    /// Age of the image when sent, ms.
+    pub age_ms: u16,
+    /// Centre (0, 0) x, Q16.16 m.
+    pub x0_q16: i32,
+    /// Centre (0, 0) y, Q16.16 m.
+    pub y0_q16: i32,
+    /// Spacing, Q16.16 m.
+    pub spacing_q16: i32,
+    /// Sigma, Q16.16 m.
+    pub sigma_q16: i32,
+}
+
+/// Total frame length for an `nx` by `ny` grid, `None` if the grid is out of range.
+pub const fn frame_len(nx: usize, ny: usize) -> Option<usize> {
+    if nx == 0 || ny == 0 || nx > MAX_AXIS || ny > MAX_AXIS {
+        None
+    } else {
+        Some(HEADER_LEN + 4 * nx * ny + CRC_LEN)
+    }
+}
+
+fn put(out: &mut [u8], at: usize, bytes: &[u8]) -> Option<()> {
+    out.get_mut(at..at + bytes.len())?.copy_from_slice(bytes);
+    Some(())
+}
+
+/// Encode one frame into `out`; the frame length, or `None` if the grid is out of range, `weights_q16`
+/// does not hold `nx * ny` values, or `out` is too short.
+pub fn encode_frame(h: &FrameHeader, weights_q16: &[i32], out: &mut [u8]) -> Option<usize> {
+    let (nx, ny) = (h.nx as usize, h.ny as usize);
+    let len = frame_len(nx, ny)?;
+    if weights_q16.len() != nx * ny || out.len() < len {
+        return None;
+    }
+    put(out, 0, &[SYNC0, SYNC1, VERSION, h.nx, h.ny, 0])?;
+    put(out, 6, &h.seq.to_le_bytes())?;
+    put(out, 10, &h.age_ms.to_le_bytes())?;
+    put(out, 12, &h.x0_q16.to_le_bytes())?;
+    put(out, 16, &h.y0_q16.to_le_bytes())?;
+    put(out, 20, &h.spacing_q16.to_le_bytes())?;
+    put(out, 24, &h.sigma_q16.to_le_bytes())?;
+    for (k, w) in weights_q16.iter().enumerate() {
+        put(out, HEADER_LEN + 4 * k, &w.to_le_bytes())?;
+    }
+    let crc = CRC.checksum(out.get(2..len - CRC_LEN)?);
+    put(out, len - CRC_LEN, &crc.to_le_bytes())?;
+    Some(len)
+}
+
+fn le_u32(b: &[u8], at: usize) -> Option<u32> {
+    let s = b.get(at..at + 4)?;
+    let mut a = [0u8; 4];
+    a.copy_from_slice(s);
+    Some(u32::from_le_bytes(a))
+}
+
+/// Read the header of a buffer that starts with the sync bytes; `None` if short or invalid.
+pub fn decode_header(b: &[u8]) -> Option<FrameHeader> {
+    if b.len() < HEADER_LEN || b.first() != Some(&SYNC0) || b.get(1) != Some(&SYNC1) {
+        return None;
+    }
+    if b.get(2) != Some(&VERSION) || b.get(5) != Some(&0) {
+        return None;
+    }
+    let nx = *b.get(3)?;
+    let ny = *b.get(4)?;
+    frame_len(nx as usize, ny as usize)?;
+    let age = b.get(10..12)?;
+    Some(FrameHeader {
+        nx,
+        ny,
+        seq: le_u32(b, 6)?,
+        age_ms: u16::from_le_bytes([*age.first()?, *age.get(1)?]),
+        x0_q16: le_u32(b, 12)? as i32,
+        y0_q16: le_u32(b, 16)? as i32,
+        spacing_q16: le_u32(b, 20)? as i32,
+        sigma_q16: le_u32(b, 24)? as i32,
+    })
+}
+
+/// Whether the whole frame `b` (exactly one frame long) carries a correct CRC.
+pub fn crc_ok(b: &[u8]) -> bool {
+    let n = b.len();
+    if n < HEADER_LEN + CRC_LEN {
+        return false;
+    }
+    match (b.get(2..n - CRC_LEN), le_u32(b, n - CRC_LEN)) {
+        (Some(body), Some(c)) => CRC.checksum(body) == c,
+        _ => false,
+    }
+}
+
+/// Weight `k` of a validated frame, Q16.16.
+pub fn weight_q16(b: &[u8], k: usize) -> Option<i32> {
+    le_u32(b, HEADER_LEN + 4 * k).map(|v| v as i32)
+}
