@@ -1,7 +1,11 @@
 //! Flinch host harness: the plant, the controller model, the solvers, scenes and the CLI.
 //!
 //! Layout: `scene` reads and validates scene files; `plant` holds one physical element per file;
-//! `solver` integrates; `sim` assembles a scene into a plant and runs it; `report` prints, plots and
-//! writes what a run produced; `hil` runs the firmware in the loop; `avoid` is collision avoidance.
+//! `solver` integrates; `sim` runs a scene and summarises it; `report` prints, plots and writes
+//! what a run produced; `avoid` is collision avoidance (Ch. 5).
 pub mod avoid;
+pub mod plant;
+pub mod report;
 pub mod scene;
+pub mod sim;
+pub mod solver;

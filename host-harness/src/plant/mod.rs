@@ -1,0 +1,239 @@
+//! The plant: motion law, robot, decoupler, contact, target and sensor, one element per file,
+//! assembled into one ODE (eq 33-45, 49-54). Coordinates are 1-D along the approach, +x towards
+//! the target (MODEL.md): x_c commanded flange, x_r actual flange, x_t tool face, x_p object face;
+//! the stroke coordinate is s = x_t - x_r.
+//!
+//! State (a stack array): [x_r, v_r, x_t, v_t, x_p, v_p, I], I the decoupler impulse of eq 21
+//! accumulated while in contact. Entries an element does not use (x_r of a rigid robot, x_t of a
+//! rigid tool, x_p of an obstacle) stay constant and are ignored.
+
+pub mod contact;
+pub mod damping_law;
+pub mod decoupler;
+pub mod friction;
+pub mod motion_law;
+pub mod robot;
+pub mod sensor;
+pub mod target;
+
+use crate::scene::Scene;
+use contact::Contact;
+use decoupler::{Decoupler, DecouplerForce};
+use motion_law::MotionLaw;
+use robot::CompliantRobot;
+use sensor::Detector;
+use target::Target;
+
+/// Number of states.
+pub const N: usize = 7;
+/// The state vector.
+pub type State = [f64; N];
+/// x_r, m.
+pub const XR: usize = 0;
+/// x_r', m/s.
+pub const VR: usize = 1;
+/// x_t, m.
+pub const XT: usize = 2;
+/// x_t', m/s.
+pub const VT: usize = 3;
+/// x_p, m.
+pub const XP: usize = 4;
+/// x_p', m/s.
+pub const VP: usize = 5;
+/// Decoupler impulse during contact (eq 21), N s.
+pub const IMPULSE: usize = 6;
+
+/// Positions and velocities of every body at one instant (rigid ones filled in from the law).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Kinematics {
+    /// x_c, x_c', m, m/s.
+    pub xc: f64,
+    /// x_c'.
+    pub vc: f64,
+    /// x_r.
+    pub xr: f64,
+    /// x_r'.
+    pub vr: f64,
+    /// x_t (tool face).
+    pub xt: f64,
+    /// x_t'.
+    pub vt: f64,
+    /// Target face position.
+    pub xp: f64,
+    /// Target velocity.
+    pub vp: f64,
+    /// s = x_t - x_r.
+    pub s: f64,
+    /// s'.
+    pub s_dot: f64,
+    /// Penetration into the target, m (positive in contact).
+    pub delta: f64,
+    /// Its rate, m/s.
+    pub delta_dot: f64,
+}
+
+/// Forces at one instant, N.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Forces {
+    /// Contact force on the target (>= 0).
+    pub contact: f64,
+    /// The decoupler's force on the tool, by part.
+    pub decoupler: DecouplerForce,
+    /// Force the tool puts on the robot (decoupler, or the contact for a rigid tool), signed.
+    pub robot: f64,
+}
+
+/// The assembled plant, with the contact dampings fixed at their onsets.
+#[derive(Debug, Clone)]
+pub struct Plant {
+    /// The commanded flange motion (braking is scheduled into it).
+    pub motion: MotionLaw,
+    /// Compliant robot, or `None` for x_r = x_c.
+    pub robot: Option<CompliantRobot>,
+    /// m_t, kg.
+    pub tool_mass: f64,
+    /// Gravity along the approach, m/s^2.
+    pub gravity: f64,
+    /// The decoupler.
+    pub decoupler: Decoupler,
+    /// Tool-target contact.
+    pub contact: Contact,
+    /// The target.
+    pub target: Target,
+    /// The detector, if any.
+    pub detector: Option<Detector>,
+    /// chi of the current (or last) tool-target contact.
+    pub target_chi: f64,
+    /// chi of the current (or last) back-stop contact.
+    pub back_chi: f64,
+    /// Stroke coordinate at rest (static equilibrium), m.
+    pub s_rest: f64,
+}
+
+impl Plant {
+    /// Assembles a scene, with every body at static equilibrium at t = 0.
+    pub fn new(scene: &Scene) -> Self {
+        let decoupler = Decoupler::new(&scene.decoupler, &scene.tool);
+        let robot = scene.robot.as_ref().map(|r| CompliantRobot::new(r, if decoupler.is_rigid() { scene.tool.mass } else { 0.0 }));
+        let mut plant = Self {
+            motion: MotionLaw::new(&scene.motion),
+            robot,
+            tool_mass: scene.tool.mass,
+            gravity: scene.motion.gravity,
+            decoupler,
+            contact: Contact::new(scene.target.stiffness, &scene.target.damping),
+            target: Target::Obstacle { surface: 0.0 },
+            detector: None,
+            target_chi: 0.0,
+            back_chi: 0.0,
+            s_rest: 0.0,
+        };
+        plant.s_rest = plant.rest_stroke();
+        let x_r0 = plant.robot.map_or(0.0, |r| r.static_offset(plant.tool_mass * plant.gravity));
+        let face0 = x_r0 + plant.s_rest;
+        plant.target = Target::new(&scene.target.kind, face0, scene.target.gap);
+        let reference = plant.decoupler.front_stop().map_or(plant.s_rest, |f| f.at);
+        plant.detector = scene.sensor.as_ref().map(|s| Detector::new(s, reference));
+        plant
+    }
+
+    /// The stroke at which the decoupler holds the tool's weight at rest: the stable equilibrium
+    /// nearest the front (scan from the front down, then bisect), or the front stop if none.
+    fn rest_stroke(&self) -> f64 {
+        let w = self.tool_mass * self.gravity;
+        let net = |s: f64| self.decoupler.force(s, 0.0, 0.0).total + w;
+        match (&self.decoupler, self.decoupler.front_stop(), self.decoupler.back_stop()) {
+            (Decoupler::Rigid, ..) => 0.0,
+            (Decoupler::Linear(l), ..) => if l.stiffness > 0.0 { w / l.stiffness } else { 0.0 },
+            (_, Some(front), Some(back)) => {
+                // Above the front stop the net force is negative (the stop pushes back) far enough in.
+                let mut hi = front.at + (w.abs() + 1.0) / front.stiffness * 10.0 + 1e-9;
+                while net(hi) > 0.0 && hi < front.at + 1.0 {
+                    hi = front.at + 2.0 * (hi - front.at);
+                }
+                let n = 4000;
+                let lo_end = back.at;
+                let mut prev = hi;
+                for k in 1..=n {
+                    let s = hi - (hi - lo_end) * k as f64 / n as f64;
+                    if net(s) >= 0.0 {
+                        let (mut a, mut b) = (s, prev);
+                        for _ in 0..200 {
+                            let m = 0.5 * (a + b);
+                            if net(m) >= 0.0 { a = m } else { b = m }
+                        }
+                        return 0.5 * (a + b);
+                    }
+                    prev = s;
+                }
+                back.at
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Initial state: at rest (or cruising at V_c with `start_at_speed`), in static equilibrium.
+    pub fn initial_state(&self, start_at_speed: bool, speed: f64) -> State {
+        let v0 = if start_at_speed { speed } else { 0.0 };
+        let x_r0 = self.robot.map_or(0.0, |r| r.static_offset(self.tool_mass * self.gravity));
+        let mut y = [0.0; N];
+        y[XR] = x_r0;
+        y[VR] = v0;
+        y[XT] = x_r0 + self.s_rest;
+        y[VT] = v0;
+        if let Target::Object { start, .. } = self.target {
+            y[XP] = start;
+        }
+        y
+    }
+
+    /// Positions and velocities of every body.
+    pub fn kinematics(&self, t: f64, y: &State) -> Kinematics {
+        let c = self.motion.at(t);
+        let (xr, vr) = if self.robot.is_some() { (y[XR], y[VR]) } else { (c.x, c.v) };
+        let (xt, vt) = if self.decoupler.is_rigid() { (xr, vr) } else { (y[XT], y[VT]) };
+        let (xp, vp) = match self.target {
+            Target::Obstacle { surface } => (surface, 0.0),
+            Target::Object { .. } => (y[XP], y[VP]),
+        };
+        Kinematics { xc: c.x, vc: c.v, xr, vr, xt, vt, xp, vp, s: xt - xr, s_dot: vt - vr, delta: xt - xp, delta_dot: vt - vp }
+    }
+
+    /// Forces at one instant.
+    pub fn forces(&self, k: &Kinematics) -> Forces {
+        let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
+        let decoupler = self.decoupler.force(k.s, k.s_dot, self.back_chi);
+        let robot = if self.decoupler.is_rigid() { -contact } else { -decoupler.total };
+        Forces { contact, decoupler, robot }
+    }
+
+    /// The right-hand side, with the kinematics and forces it used.
+    pub fn eval(&self, t: f64, y: &State, dy: &mut State) -> (Kinematics, Forces) {
+        let k = self.kinematics(t, y);
+        let f = self.forces(&k);
+        *dy = [0.0; N];
+        let weight = self.tool_mass * self.gravity;
+        if let Some(r) = &self.robot {
+            let c = self.motion.at(t);
+            // Rigid tool: contact and the tool's weight act on the joint mass m_r + m_t.
+            let f_ext = if self.decoupler.is_rigid() { weight - f.contact } else { f.robot };
+            dy[XR] = k.vr;
+            dy[VR] = r.accel(&c, k.xr, k.vr, f_ext);
+        }
+        if !self.decoupler.is_rigid() {
+            dy[XT] = k.vt;
+            dy[VT] = (f.decoupler.total - f.contact + weight) / self.tool_mass;
+        }
+        if self.target.is_object() {
+            dy[XP] = k.vp;
+            dy[VP] = self.target.accel(f.contact, k.vp);
+        }
+        dy[IMPULSE] = if k.delta > 0.0 { f.decoupler.total } else { 0.0 };
+        (k, f)
+    }
+
+    /// Travel of the tool back from its front stop (or rest position), m.
+    pub fn travel(&self, k: &Kinematics) -> f64 {
+        self.decoupler.front_stop().map_or(self.s_rest, |f| f.at) - k.s
+    }
+}

@@ -1,0 +1,144 @@
+//! Motion law of the commanded flange x_c (MODEL.md element 1; Ch. 3.1.2, "trapezoidal velocity
+//! profile"): accelerate at a_c to V_c, cruise, and, from t_brake = t_detect + DT, brake at d_c to
+//! standstill without reversing. Units: s, m, m/s, m/s^2.
+
+use crate::scene::Motion;
+
+/// The commanded flange motion, with the braking instant once it is known.
+#[derive(Debug, Clone, Copy)]
+pub struct MotionLaw {
+    speed: f64,
+    accel: f64,
+    decel: f64,
+    start_at_speed: bool,
+    /// Start of braking, s; `None` until detection has scheduled it.
+    t_brake: Option<f64>,
+}
+
+/// Commanded position, velocity and acceleration at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Commanded {
+    /// x_c, m (x_c(0) = 0).
+    pub x: f64,
+    /// x_c', m/s.
+    pub v: f64,
+    /// x_c'', m/s^2.
+    pub a: f64,
+}
+
+impl MotionLaw {
+    /// The law of a scene's `[motion]`, not yet braking.
+    pub fn new(m: &Motion) -> Self {
+        Self { speed: m.speed, accel: m.accel, decel: m.decel, start_at_speed: m.start_at_speed, t_brake: None }
+    }
+
+    /// End of the acceleration phase, s (0 when the scene starts at speed).
+    pub fn t_cruise(&self) -> f64 {
+        if self.start_at_speed { 0.0 } else { self.speed / self.accel }
+    }
+
+    /// Schedule braking at `t` (the first call wins: braking cannot be re-planned).
+    pub fn brake_at(&mut self, t: f64) {
+        if self.t_brake.is_none() {
+            self.t_brake = Some(t.max(0.0));
+        }
+    }
+
+    /// Start of braking, if scheduled.
+    pub fn t_brake(&self) -> Option<f64> {
+        self.t_brake
+    }
+
+    /// Instant the flange comes to rest, if braking is scheduled.
+    pub fn t_stop(&self) -> Option<f64> {
+        self.t_brake.map(|tb| tb + self.unbraked(tb).v / self.decel)
+    }
+
+    /// The instants where x_c'' jumps: the solver must not step across them.
+    pub fn breakpoints(&self) -> [Option<f64>; 3] {
+        let cruise = if self.start_at_speed { None } else { Some(self.t_cruise()) };
+        [cruise, self.t_brake, self.t_stop()]
+    }
+
+    /// Commanded motion at `t`.
+    pub fn at(&self, t: f64) -> Commanded {
+        match self.t_brake {
+            Some(tb) if t > tb => {
+                let c0 = self.unbraked(tb);
+                let t_rest = c0.v / self.decel;
+                let tau = (t - tb).min(t_rest);
+                let moving = t - tb < t_rest;
+                Commanded {
+                    x: c0.x + c0.v * tau - 0.5 * self.decel * tau * tau,
+                    v: (c0.v - self.decel * tau).max(0.0),
+                    a: if moving { -self.decel } else { 0.0 },
+                }
+            }
+            _ => self.unbraked(t),
+        }
+    }
+
+    /// The trapezoid without braking.
+    fn unbraked(&self, t: f64) -> Commanded {
+        let t = t.max(0.0);
+        let t1 = self.t_cruise();
+        if t < t1 {
+            Commanded { x: 0.5 * self.accel * t * t, v: self.accel * t, a: self.accel }
+        } else {
+            let x1 = if self.start_at_speed { 0.0 } else { 0.5 * self.speed * t1 };
+            Commanded { x: x1 + self.speed * (t - t1), v: self.speed, a: 0.0 }
+        }
+    }
+
+    /// Flange travel from t = 0 to `t` if it never brakes, m (the validator's "gap never closed").
+    pub fn travel_unbraked(&self, t: f64) -> f64 {
+        self.unbraked(t).x
+    }
+
+    /// Stopping distance from `v` with dead time `dead_time`: v DT + v^2 / (2 d_c), m.
+    pub fn stopping_distance(v: f64, dead_time: f64, decel: f64) -> f64 {
+        v * dead_time + v * v / (2.0 * decel)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn law() -> MotionLaw {
+        MotionLaw::new(&Motion { speed: 0.05, accel: 1.0, decel: 2.0, dead_time: 0.016, gravity: 0.0, start_at_speed: false })
+    }
+
+    #[test]
+    fn trapezoid_then_braking_is_continuous_and_stops() {
+        let mut m = law();
+        m.brake_at(0.3);
+        let tb = 0.3;
+        let before = m.at(tb - 1e-12);
+        let after = m.at(tb + 1e-12);
+        assert!((before.x - after.x).abs() < 1e-12 && (before.v - after.v).abs() < 1e-9);
+        let ts = m.t_stop().unwrap();
+        assert!((ts - (0.3 + 0.025)).abs() < 1e-12);
+        let end = m.at(10.0);
+        assert_eq!(end.v, 0.0);
+        // x at rest = x(tb) + v^2 / 2d
+        let expect = m.at(tb).x + 0.05 * 0.05 / 4.0;
+        assert!((end.x - expect).abs() < 1e-12);
+    }
+
+    #[test]
+    fn braking_during_acceleration_starts_from_current_speed() {
+        let mut m = law();
+        m.brake_at(0.02); // v = 0.02 < V_c
+        assert!((m.at(0.02).v - 0.02).abs() < 1e-12);
+        assert!((m.t_stop().unwrap() - 0.03).abs() < 1e-12);
+    }
+
+    #[test]
+    fn braking_cannot_be_replanned() {
+        let mut m = law();
+        m.brake_at(0.3);
+        m.brake_at(0.1);
+        assert_eq!(m.t_brake(), Some(0.3));
+    }
+}

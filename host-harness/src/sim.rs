@@ -1,0 +1,436 @@
+//! A scene run: the plant integrated with its events, and what the summary reports.
+//!
+//! Events (located, not sampled): 0 tool-target contact onset/separation, 1 front end-stop
+//! entry/exit, 2 back end-stop entry/exit, 3 the sensor's threshold. Breakpoints: end of the
+//! acceleration, start and end of braking. Contact dampings chi are fixed at each onset from the
+//! approach velocity (eq 7).
+
+use crate::plant::{self, Forces, Kinematics, Plant, State, N};
+use crate::scene::{Method, Scene, TargetKind};
+use crate::solver::dopri5::Dopri5;
+use crate::solver::driver::{Crossing, Driver, Hybrid, Settings, SolveError, Stats};
+use crate::solver::fixed::{Fixed, FixedKind};
+use crate::solver::{Stepper, System};
+use serde::Serialize;
+use std::cell::Cell;
+
+/// Number of event functions.
+pub const E: usize = 4;
+const EV_CONTACT: usize = 0;
+const EV_FRONT: usize = 1;
+const EV_BACK: usize = 2;
+const EV_SWITCH: usize = 3;
+
+/// One recorded instant of the time history.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Sample {
+    /// s.
+    pub t: f64,
+    /// x_c', m/s.
+    pub v_c: f64,
+    /// x_r', m/s.
+    pub v_r: f64,
+    /// x_t', m/s.
+    pub v_t: f64,
+    /// Object velocity (0 for an obstacle), m/s.
+    pub v_p: f64,
+    /// Stroke coordinate s = x_t - x_r, m.
+    pub s: f64,
+    /// Contact force, N.
+    pub f_contact: f64,
+    /// Force on the robot, N (signed: positive pulls the robot forward).
+    pub f_robot: f64,
+    /// Decoupler spring (or hydraulic) force on the tool, N.
+    pub f_spring: f64,
+    /// End-stop forces on the tool, N.
+    pub f_stops: f64,
+    /// Friction on the tool, N.
+    pub f_friction: f64,
+}
+
+/// What a run reports: the `--json` contract of SCENES.md plus extras.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// First tool-target contact, s.
+    pub t_contact: Option<f64>,
+    /// Detection, s.
+    pub t_detect: Option<f64>,
+    /// Start of braking, s.
+    pub t_brake: Option<f64>,
+    /// t_detect - t_contact, s.
+    pub detection_delay: Option<f64>,
+    /// t_brake - t_contact, s.
+    pub reaction_time: Option<f64>,
+    /// Largest contact force, N.
+    pub peak_contact_force: f64,
+    /// Largest magnitude of the force on the robot, N.
+    pub peak_robot_force: f64,
+    /// Object velocity when it last left the tool (or at the end if still in contact), m/s.
+    pub object_final_velocity: Option<f64>,
+    /// Working mode of Fig. 46 (1, 2, 3), null without a back end-stop.
+    pub mode: Option<u8>,
+    /// True when the flange itself reached the target (through a bottomed or rigid tool).
+    pub stroke_exhausted: bool,
+    /// Separation over approach velocity of the first contact.
+    pub achieved_restitution: Option<f64>,
+    /// Accepted steps.
+    pub steps: u64,
+    /// Right-hand-side evaluations.
+    pub rhs_evals: u64,
+    /// Flange standstill, s.
+    pub t_stop: Option<f64>,
+    /// Approach velocity of the first contact, m/s.
+    pub approach_velocity: Option<f64>,
+    /// Number of tool-target contacts (bounces).
+    pub contacts: u32,
+    /// Largest object velocity, m/s.
+    pub object_peak_velocity: Option<f64>,
+    /// Largest travel back from the front stop (or rest), m.
+    pub max_travel: f64,
+    /// Decoupler impulse while in contact (eq 21), N s.
+    pub decoupler_impulse: f64,
+    /// Largest gas pressure (hydraulic), Pa.
+    pub peak_gas_pressure: Option<f64>,
+    /// Rejected steps.
+    pub rejected_steps: u64,
+    /// Located events.
+    pub events: u64,
+    /// Integration method.
+    pub method: String,
+    /// Things the user should know about this run (regularisations applied, ...).
+    pub warnings: Vec<String>,
+}
+
+/// The plant as a hybrid system, with the run's bookkeeping.
+pub struct Simulation {
+    /// The plant.
+    pub plant: Plant,
+    name: String,
+    dead_time: f64,
+    external_brake: bool,
+    in_contact: bool,
+    on_front: bool,
+    on_back: bool,
+    detected: bool,
+    rhs_evals: Cell<u64>,
+    t_contact: Option<f64>,
+    t_detect: Option<f64>,
+    t_back: Option<f64>,
+    v_in_first: Option<f64>,
+    v_out_first: Option<f64>,
+    contacts: u32,
+    object_velocity_at_separation: Option<f64>,
+    peak_contact: f64,
+    peak_robot: f64,
+    peak_object_v: f64,
+    peak_gas: f64,
+    max_travel: f64,
+    exhausted: bool,
+    record_every: Option<f64>,
+    next_record: f64,
+    /// The recorded time history (empty unless recording).
+    pub history: Vec<Sample>,
+    warnings: Vec<String>,
+}
+
+impl System<N> for Simulation {
+    fn rhs(&self, t: f64, y: &State, dy: &mut State) {
+        self.rhs_evals.set(self.rhs_evals.get() + 1);
+        self.plant.eval(t, y, dy);
+    }
+}
+
+impl Hybrid<N, E> for Simulation {
+    fn events(&self, t: f64, y: &State) -> [f64; E] {
+        let k = self.plant.kinematics(t, y);
+        let mut g = [-1.0; E];
+        g[EV_CONTACT] = k.delta;
+        if let Some(f) = self.plant.decoupler.front_stop() {
+            g[EV_FRONT] = k.s - f.at;
+        }
+        if let Some(b) = self.plant.decoupler.back_stop() {
+            g[EV_BACK] = b.penetration(k.s);
+        }
+        if let Some(d) = &self.plant.detector {
+            let fc = self.plant.contact.force(k.delta, k.delta_dot, self.plant.target_chi);
+            g[EV_SWITCH] = d.signal(k.s, fc);
+        }
+        g
+    }
+
+    fn watching(&self, i: usize) -> Option<Crossing> {
+        let dir = |inside: bool| Some(if inside { Crossing::Down } else { Crossing::Up });
+        match i {
+            EV_CONTACT => dir(self.in_contact),
+            EV_FRONT if self.plant.decoupler.front_stop().is_some() => dir(self.on_front),
+            EV_BACK if self.plant.decoupler.back_stop().is_some() => dir(self.on_back),
+            EV_SWITCH if self.plant.detector.is_some() && !self.detected => Some(Crossing::Up),
+            _ => None,
+        }
+    }
+
+    fn on_event(&mut self, i: usize, t: f64, y: &mut State) {
+        let k = self.plant.kinematics(t, y);
+        match i {
+            EV_CONTACT if !self.in_contact => {
+                self.in_contact = true;
+                self.contacts += 1;
+                self.plant.target_chi = self.plant.contact.chi(k.delta_dot);
+                if self.t_contact.is_none() {
+                    self.t_contact = Some(t);
+                    self.v_in_first = Some(k.delta_dot);
+                }
+            }
+            EV_CONTACT => {
+                self.in_contact = false;
+                if self.contacts == 1 && self.v_out_first.is_none() {
+                    self.v_out_first = Some(k.delta_dot);
+                }
+                if self.plant.target.is_object() {
+                    self.object_velocity_at_separation = Some(k.vp);
+                }
+            }
+            EV_FRONT => self.on_front = !self.on_front,
+            EV_BACK => {
+                self.on_back = !self.on_back;
+                if self.on_back {
+                    if let Some(b) = self.plant.decoupler.back_stop() {
+                        self.plant.back_chi = b.contact.chi(-k.s_dot);
+                    }
+                    self.t_back.get_or_insert(t);
+                }
+            }
+            EV_SWITCH => {
+                self.detected = true;
+                self.t_detect = Some(t);
+                if !self.external_brake {
+                    self.plant.motion.brake_at(t + self.dead_time);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn next_breakpoint(&self, t: f64) -> Option<f64> {
+        self.plant.motion.breakpoints().into_iter().flatten().filter(|&b| b > t).reduce(f64::min)
+    }
+
+    fn on_step(&mut self, t0: f64, t1: f64, y1: &State, dense: &dyn Fn(f64) -> State) {
+        if let Some(dt) = self.record_every {
+            while self.next_record <= t1 {
+                let tr = self.next_record.max(t0);
+                let y = if tr >= t1 { *y1 } else { dense(tr) };
+                let (k, f) = self.observe(tr, &y);
+                self.history.push(sample(tr, &k, &f));
+                self.next_record += dt;
+            }
+        }
+        let (k, f) = self.observe(t1, y1);
+        self.peak_contact = self.peak_contact.max(f.contact);
+        self.peak_robot = self.peak_robot.max(f.robot.abs());
+        self.peak_object_v = self.peak_object_v.max(k.vp);
+        self.max_travel = self.max_travel.max(self.plant.travel(&k));
+        if let Some(p) = f.decoupler.gas_pressure {
+            self.peak_gas = self.peak_gas.max(p);
+        }
+        let bottomed = self.plant.decoupler.back_stop().is_some_and(|b| b.penetration(k.s) > 0.0);
+        if k.delta > 0.0 && (bottomed || self.plant.decoupler.is_rigid()) {
+            self.exhausted = true;
+        }
+    }
+}
+
+fn sample(t: f64, k: &Kinematics, f: &Forces) -> Sample {
+    Sample {
+        t, v_c: k.vc, v_r: k.vr, v_t: k.vt, v_p: k.vp, s: k.s,
+        f_contact: f.contact, f_robot: f.robot, f_spring: f.decoupler.spring,
+        f_stops: f.decoupler.front_stop + f.decoupler.back_stop, f_friction: f.decoupler.friction,
+    }
+}
+
+/// A scene's run in progress: the simulation, its stepper and its driver.
+pub struct Run {
+    /// The simulation (plant and bookkeeping).
+    pub sim: Simulation,
+    stepper: Box<dyn Stepper<N>>,
+    driver: Driver<N, E>,
+    method: Method,
+    duration: f64,
+}
+
+impl Simulation {
+    /// A simulation of `scene`; with `external_brake` the sensor only records detection and the
+    /// caller decides when braking starts (firmware in the loop).
+    pub fn new(scene: &Scene, external_brake: bool, record: bool) -> Self {
+        let plant = Plant::new(scene);
+        let mut warnings = Vec::new();
+        if plant.decoupler.friction_regularised() {
+            warnings.push(format!("decoupler.friction.v0 below {} m/s was raised to it (Coulomb limit regularised, plant::friction)", plant::friction::V0_MIN));
+        }
+        if scene.sensor.is_none() {
+            warnings.push("no [sensor]: nothing detects the collision and the robot never brakes".into());
+        }
+        let mut sim = Self {
+            plant,
+            name: scene.name.clone(),
+            dead_time: scene.motion.dead_time,
+            external_brake,
+            in_contact: false,
+            on_front: false,
+            on_back: false,
+            detected: false,
+            rhs_evals: Cell::new(0),
+            t_contact: None,
+            t_detect: None,
+            t_back: None,
+            v_in_first: None,
+            v_out_first: None,
+            contacts: 0,
+            object_velocity_at_separation: None,
+            peak_contact: 0.0,
+            peak_robot: 0.0,
+            peak_object_v: 0.0,
+            peak_gas: 0.0,
+            max_travel: 0.0,
+            exhausted: false,
+            record_every: record.then_some(scene.solver.output_interval.max(0.0)),
+            next_record: 0.0,
+            history: Vec::new(),
+            warnings,
+        };
+        if let Some(TargetKind::Object { floor_friction: Some(_), .. }) = Some(scene.target.kind) {
+            sim.warnings.push(format!("target.floor_friction regularised with v0 = {} m/s", plant::friction::V0_MIN));
+        }
+        sim
+    }
+
+    /// Kinematics and forces at (t, y).
+    pub fn observe(&self, t: f64, y: &State) -> (Kinematics, Forces) {
+        let k = self.plant.kinematics(t, y);
+        let f = self.plant.forces(&k);
+        (k, f)
+    }
+
+    fn init_flags(&mut self, t: f64, y: &State) {
+        let g = self.events(t, y);
+        self.in_contact = g[EV_CONTACT] > 0.0;
+        self.on_front = g[EV_FRONT] > 0.0;
+        self.on_back = g[EV_BACK] > 0.0;
+    }
+}
+
+impl Run {
+    /// Prepares a run of `scene` (see [`Simulation::new`]).
+    pub fn new(scene: &Scene, external_brake: bool, record: bool) -> Self {
+        let mut sim = Simulation::new(scene, external_brake, record);
+        let y0 = sim.plant.initial_state(scene.motion.start_at_speed, scene.motion.speed);
+        sim.init_flags(0.0, &y0);
+        let s = &scene.solver;
+        let stepper: Box<dyn Stepper<N>> = match s.method {
+            Method::Dopri5 => Box::new(Dopri5::<N>::new(s.rtol, s.atol)),
+            Method::Rk4 => Box::new(Fixed::<N>::new(FixedKind::Rk4)),
+            Method::SemiImplicitEuler => Box::new(Fixed::<N>::new(FixedKind::SemiImplicitEuler { pairs: 3 })),
+        };
+        let driver = Driver::new(&sim, 0.0, y0, Settings { max_step: s.max_step, ..Default::default() });
+        sim.on_step(0.0, 0.0, &y0, &|_| y0);
+        Self { sim, stepper, driver, method: s.method, duration: scene.duration_s }
+    }
+
+    /// Integrates to `t` (clamped to the scene's duration).
+    pub fn advance_to(&mut self, t: f64) -> Result<(), SolveError> {
+        self.driver.advance_to(&mut self.sim, self.stepper.as_mut(), t.min(self.duration))
+    }
+
+    /// Integrates to the end of the scene.
+    pub fn finish(&mut self) -> Result<(), SolveError> {
+        self.advance_to(self.duration)
+    }
+
+    /// Current time, s.
+    pub fn time(&self) -> f64 {
+        self.driver.t
+    }
+
+    /// Kinematics and forces now.
+    pub fn now(&self) -> (Kinematics, Forces) {
+        self.sim.observe(self.driver.t, &self.driver.y)
+    }
+
+    /// The physical switch state now (true = threshold passed), if there is a sensor.
+    pub fn sensor_tripped(&self) -> Option<bool> {
+        let (k, f) = self.now();
+        self.sim.plant.detector.map(|d| d.tripped(k.s, f.contact))
+    }
+
+    /// Travel back from the front stop now, m.
+    pub fn travel(&self) -> f64 {
+        let (k, _) = self.now();
+        self.sim.plant.travel(&k)
+    }
+
+    /// Starts braking at `t` (>= now), for an external controller.
+    pub fn command_brake(&mut self, t: f64) {
+        self.sim.plant.motion.brake_at(t.max(self.driver.t));
+    }
+
+    /// Integration cost so far.
+    pub fn stats(&self) -> Stats {
+        self.driver.stats
+    }
+
+    /// The summary of the run so far.
+    pub fn summary(&self) -> Summary {
+        let s = &self.sim;
+        let t_brake = s.plant.motion.t_brake();
+        let (k, _) = self.now();
+        let mode = s.plant.decoupler.back_stop().map(|_| match (s.t_back, s.plant.motion.t_stop()) {
+            (None, _) => 1,
+            (Some(tb), Some(ts)) if tb >= ts => 2,
+            _ => 3,
+        });
+        let object = s.plant.target.is_object();
+        let object_final = object.then(|| if s.in_contact { k.vp } else { s.object_velocity_at_separation.unwrap_or(k.vp) });
+        let achieved = match (s.v_in_first, s.v_out_first) {
+            (Some(vi), Some(vo)) if vi > 0.0 => Some(-vo / vi),
+            _ => None,
+        };
+        let stats = self.driver.stats;
+        Summary {
+            scene: s.name.clone(),
+            t_contact: s.t_contact,
+            t_detect: s.t_detect,
+            t_brake,
+            detection_delay: s.t_contact.zip(s.t_detect).map(|(c, d)| d - c),
+            reaction_time: s.t_contact.zip(t_brake).map(|(c, b)| b - c),
+            peak_contact_force: s.peak_contact,
+            peak_robot_force: s.peak_robot,
+            object_final_velocity: object_final,
+            mode,
+            stroke_exhausted: s.exhausted,
+            achieved_restitution: achieved,
+            steps: stats.steps,
+            rhs_evals: s.rhs_evals.get(),
+            t_stop: s.plant.motion.t_stop(),
+            approach_velocity: s.v_in_first,
+            contacts: s.contacts,
+            object_peak_velocity: object.then_some(s.peak_object_v),
+            max_travel: s.max_travel,
+            decoupler_impulse: self.driver.y[plant::IMPULSE],
+            peak_gas_pressure: matches!(s.plant.decoupler, plant::decoupler::Decoupler::Hydraulic(_)).then_some(s.peak_gas),
+            rejected_steps: stats.rejected,
+            events: stats.events,
+            method: format!("{:?}", self.method),
+            warnings: s.warnings.clone(),
+        }
+    }
+}
+
+/// Runs a scene to its end and returns the summary and, if `record`, the time history.
+pub fn run(scene: &Scene, record: bool) -> Result<(Summary, Vec<Sample>), SolveError> {
+    let mut r = Run::new(scene, false, record);
+    r.finish()?;
+    let summary = r.summary();
+    Ok((summary, std::mem::take(&mut r.sim.history)))
+}
