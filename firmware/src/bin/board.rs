@@ -1,3 +1,280 @@
-#![cfg_attr(target_os = "none", no_std, no_main)]
+//! Board binary: the Flinch firmware on an STM32F407VGTx (Cortex-M4F, e.g. an STM32F4-Discovery).
+//!
+//! A thin shell around `flinch_firmware::Firmware`: it owns the registers, the library owns the logic.
+//!
+//! | signal            | pin  | notes                                                             |
+//! |-------------------|------|-------------------------------------------------------------------|
+//! | travel switch in  | PA0  | EXTI0 on both edges; pull-down, so a cut wire reads low = trip     |
+//! | reset input       | PA1  | pull-down, active high                                            |
+//! | stop out          | PD12 | high = energised = go; low = controlled stop (fit an external pull-down: a reset or dead MCU floats the pin) |
+//! | escalation out    | PD13 | high = energised; low = category-0 stop                           |
+//! | sensor supply out | PD14 | high = powered; switched off by the start-up stuck-input test     |
+//!
+//! Time: TIM2, a 32-bit counter at 1 MHz, is the firmware's `Clock`. SysTick interrupts every
+//! `TICK_US` and calls `Firmware::tick`; EXTI0 calls `Firmware::on_edge`. Both run at the same
+//! priority (0, the reset default), so they never preempt each other (see `support/isr_cell.rs`).
+//! The core runs on the 16 MHz HSI, the reset default: no PLL code to get wrong, and the detection
+//! path is short enough at that speed (the QEMU build measures it in instructions).
+//!
+//! Failure handling: the independent watchdog (IWDG, LSI) is fed from the tick; a firmware that stops
+//! ticking resets the MCU within about 8 ms, and the reset state de-energises the outputs. The panic
+//! and HardFault handlers write the stop and escalation pins low before anything else.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg_attr(target_os = "none", no_main)]
+
 #[cfg(not(target_os = "none"))]
-fn main() {}
+fn main() {
+    eprintln!(
+        "flinch board firmware: this binary runs on the MCU. Build it with\n  \
+         cd firmware && cargo build --release --target thumbv7em-none-eabihf"
+    );
+}
+
+#[cfg(target_os = "none")]
+#[path = "support/isr_cell.rs"]
+mod isr_cell;
+
+#[cfg(target_os = "none")]
+mod board {
+    use super::isr_cell::IsrCell;
+    use core::convert::Infallible;
+    use core::ptr::{read_volatile, write_volatile};
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m_rt::{entry, exception, ExceptionFrame};
+    use defmt_rtt as _;
+    use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
+    use flinch_firmware::{BudgetConfig, Clock, Config, DigitalSwitch, Firmware, Micros, SwitchKind};
+
+    // ---- Registers (RM0090 Rev 19) --------------------------------------------------------------
+    const RCC: u32 = 0x4002_3800; // sec. 7.3
+    const RCC_AHB1ENR: u32 = RCC + 0x30;
+    const RCC_APB1ENR: u32 = RCC + 0x40;
+    const RCC_APB2ENR: u32 = RCC + 0x44;
+    const GPIOA: u32 = 0x4002_0000; // sec. 8.4
+    const GPIOD: u32 = 0x4002_0C00;
+    const MODER: u32 = 0x00;
+    const PUPDR: u32 = 0x0C;
+    const IDR: u32 = 0x10;
+    const BSRR: u32 = 0x18;
+    const SYSCFG_EXTICR1: u32 = 0x4001_3800 + 0x08; // sec. 9.2.3
+    const EXTI: u32 = 0x4001_3C00; // sec. 12.3
+    const EXTI_IMR: u32 = EXTI;
+    const EXTI_RTSR: u32 = EXTI + 0x08;
+    const EXTI_FTSR: u32 = EXTI + 0x0C;
+    const EXTI_PR: u32 = EXTI + 0x14;
+    const TIM2: u32 = 0x4000_0000; // sec. 18.4
+    const TIM2_CR1: u32 = TIM2;
+    const TIM2_EGR: u32 = TIM2 + 0x14;
+    const TIM2_CNT: u32 = TIM2 + 0x24;
+    const TIM2_PSC: u32 = TIM2 + 0x28;
+    const TIM2_ARR: u32 = TIM2 + 0x2C;
+    const IWDG_KR: u32 = 0x4000_3000; // sec. 21.4
+    const IWDG_PR: u32 = 0x4000_3004;
+    const IWDG_RLR: u32 = 0x4000_3008;
+    const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
+
+    const HSI_HZ: u32 = 16_000_000;
+    const TICK_US: u32 = 1_000;
+
+    #[inline(always)]
+    fn rd(addr: u32) -> u32 {
+        // SAFETY: `addr` is one of the register constants above, valid and aligned on this part.
+        unsafe { read_volatile(addr as *const u32) }
+    }
+    #[inline(always)]
+    fn wr(addr: u32, v: u32) {
+        // SAFETY: as for `rd`; the registers written here have no memory-safety side effects.
+        unsafe { write_volatile(addr as *mut u32, v) }
+    }
+    fn modify(addr: u32, clear: u32, set: u32) {
+        wr(addr, (rd(addr) & !clear) | set);
+    }
+
+    // ---- Pins: zero-sized, the port and pin are constants, so a write is a single `str` ------------
+    /// A push-pull output on `PORT`, pin `N`, written through BSRR (atomic, no read-modify-write).
+    pub struct Out<const PORT: u32, const N: u32>;
+    impl<const PORT: u32, const N: u32> ErrorType for Out<PORT, N> {
+        type Error = Infallible;
+    }
+    impl<const PORT: u32, const N: u32> OutputPin for Out<PORT, N> {
+        #[inline(always)]
+        fn set_low(&mut self) -> Result<(), Infallible> {
+            wr(PORT + BSRR, 1 << (N + 16));
+            Ok(())
+        }
+        #[inline(always)]
+        fn set_high(&mut self) -> Result<(), Infallible> {
+            wr(PORT + BSRR, 1 << N);
+            Ok(())
+        }
+    }
+    /// An input on `PORT`, pin `N`, read from IDR.
+    pub struct In<const PORT: u32, const N: u32>;
+    impl<const PORT: u32, const N: u32> ErrorType for In<PORT, N> {
+        type Error = Infallible;
+    }
+    impl<const PORT: u32, const N: u32> InputPin for In<PORT, N> {
+        #[inline(always)]
+        fn is_high(&mut self) -> Result<bool, Infallible> {
+            Ok(rd(PORT + IDR) & (1 << N) != 0)
+        }
+        #[inline(always)]
+        fn is_low(&mut self) -> Result<bool, Infallible> {
+            Ok(rd(PORT + IDR) & (1 << N) == 0)
+        }
+    }
+
+    /// TIM2 as a 1 MHz, 32-bit free-running counter.
+    pub struct Tim2;
+    impl Clock for Tim2 {
+        #[inline(always)]
+        fn now(&mut self) -> Micros {
+            Micros(rd(TIM2_CNT))
+        }
+    }
+
+    type Switch = DigitalSwitch<In<GPIOA, 0>, Out<GPIOD, 14>>;
+    type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>>;
+    static FW: IsrCell<Fw> = IsrCell::new();
+
+    /// The installation's configuration. The numbers are those of the thesis's Ch. 3 set-up and
+    /// must be replaced by the real cell's: V_c = 0.05 m/s and DT = 16 ms (Tables 5-7, Viper scan
+    /// cycle), d_sw = 5 mm (Ch. 3 simulations); deceleration 1 m/s^2 and a 10 mm stroke are
+    /// placeholders for the robot's braking and the module's C1 + C2.
+    const fn config() -> Config {
+        Config::new(
+            TICK_US,
+            BudgetConfig { robot_speed_um_per_s: 50_000, dead_time_us: 16_000, decel_um_per_s2: 1_000_000, stroke_um: 10_000 },
+        )
+    }
+    const SWITCH_TRAVEL_UM: i32 = 5_000;
+
+    defmt::timestamp!("{=u32:us}", rd(TIM2_CNT));
+
+    /// Drop both outputs with raw register writes (usable from any context, even before init).
+    #[inline(always)]
+    fn emergency_stop() {
+        wr(GPIOD + BSRR, (1 << (12 + 16)) | (1 << (13 + 16)));
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
+            emergency_stop();
+        });
+        // Clocks for GPIOA, GPIOD, TIM2, SYSCFG.
+        modify(RCC_AHB1ENR, 0, (1 << 0) | (1 << 3));
+        modify(RCC_APB1ENR, 0, 1 << 0);
+        modify(RCC_APB2ENR, 0, 1 << 14);
+        // Outputs low before they become outputs, so they never glitch high.
+        emergency_stop();
+        modify(GPIOD + MODER, 0b11_11_11 << 24, 0b01_01_01 << 24); // PD12..14 output
+        modify(GPIOA + MODER, 0b11_11, 0); // PA0, PA1 input
+        modify(GPIOA + PUPDR, 0b11_11, 0b10_10); // pull-down
+        // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
+        wr(TIM2_PSC, HSI_HZ / 1_000_000 - 1);
+        wr(TIM2_ARR, u32::MAX);
+        wr(TIM2_EGR, 1); // load the prescaler
+        wr(TIM2_CR1, 1);
+        // Independent watchdog: LSI ~32 kHz / 4 = 8 kHz, reload 64 -> about 8 ms.
+        wr(IWDG_KR, 0x5555);
+        wr(IWDG_PR, 0);
+        wr(IWDG_RLR, 64);
+        wr(IWDG_KR, 0xCCCC);
+
+        let sensor = DigitalSwitch::with_supply(In::<GPIOA, 0>, Out::<GPIOD, 14>, SwitchKind::Inductive, SWITCH_TRAVEL_UM);
+        match Firmware::new(config(), Tim2, sensor, Out, Out, In) {
+            // SAFETY: once, before SysTick and EXTI0 are enabled below.
+            Ok(fw) => unsafe { FW.init(fw) },
+            Err(e) => {
+                defmt::error!("bad configuration: {=str}", e.message());
+                loop {
+                    emergency_stop();
+                }
+            }
+        }
+
+        // EXTI0 <- PA0 (EXTICR1 = 0 is port A), both edges.
+        modify(SYSCFG_EXTICR1, 0xF, 0);
+        modify(EXTI_RTSR, 0, 1);
+        modify(EXTI_FTSR, 0, 1);
+        modify(EXTI_IMR, 0, 1);
+        // SAFETY: the handler's data (FW) is initialised.
+        unsafe { cortex_m::peripheral::NVIC::unmask(Exti0) };
+
+        cp.SYST.set_clock_source(SystClkSource::Core);
+        cp.SYST.set_reload(HSI_HZ / 1_000_000 * TICK_US - 1);
+        cp.SYST.clear_current();
+        cp.SYST.enable_interrupt();
+        cp.SYST.enable_counter();
+        defmt::info!("flinch board up, tick {=u32} us", TICK_US);
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    #[derive(Copy, Clone)]
+    struct Exti0;
+    // SAFETY: 6 is EXTI0's position in the STM32F407 vector table (RM0090 Table 61).
+    unsafe impl cortex_m::interrupt::InterruptNumber for Exti0 {
+        fn number(self) -> u16 {
+            EXTI0_IRQ
+        }
+    }
+
+    /// The switch edge: the detect-to-stop path.
+    extern "C" fn exti0() {
+        // SAFETY: same priority as SysTick, initialised before unmasking.
+        let fw = unsafe { FW.get() };
+        fw.on_edge();
+        wr(EXTI_PR, 1); // clear the pending line after the stop write, not before
+    }
+
+    #[exception]
+    fn SysTick() {
+        // SAFETY: same priority as EXTI0, initialised before SysTick was enabled.
+        let fw = unsafe { FW.get() };
+        fw.tick();
+        wr(IWDG_KR, 0xAAAA); // the tick ran: feed the watchdog
+    }
+
+    #[exception]
+    unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
+        emergency_stop();
+        loop {
+            cortex_m::asm::nop(); // the IWDG resets the part
+        }
+    }
+
+    #[panic_handler]
+    fn panic(_info: &core::panic::PanicInfo) -> ! {
+        emergency_stop();
+        defmt::error!("panic: outputs de-energised");
+        loop {
+            cortex_m::asm::nop(); // the IWDG resets the part
+        }
+    }
+
+    // ---- Vector table: the 82 STM32F407 interrupts, EXTI0 wired, the rest to DefaultHandler --------
+    #[derive(Copy, Clone)]
+    #[repr(C)]
+    pub union Vector {
+        handler: unsafe extern "C" fn(),
+        reserved: usize,
+    }
+    extern "C" {
+        fn DefaultHandler();
+    }
+    const DEFAULT: Vector = Vector { handler: DefaultHandler };
+    const fn vectors() -> [Vector; 82] {
+        let mut v = [DEFAULT; 82];
+        v[EXTI0_IRQ as usize] = Vector { handler: exti0_entry };
+        v
+    }
+    unsafe extern "C" fn exti0_entry() {
+        exti0()
+    }
+    #[link_section = ".vector_table.interrupts"]
+    #[no_mangle]
+    pub static __INTERRUPTS: [Vector; 82] = vectors();
+}

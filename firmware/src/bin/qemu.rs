@@ -1,3 +1,584 @@
-#![cfg_attr(target_os = "none", no_std, no_main)]
+//! QEMU flavour: the firmware library on an emulated Cortex-M4 (`qemu-system-arm -machine
+//! mps2-an386`), run as a self-test over semihosting, plus the instruction count of the
+//! detect-to-stop path. `cargo xtask qemu` builds and runs it; the expected output is
+//! `firmware/qemu/expected.txt` (the `icount:` line is checked by value instead).
+//!
+//! QEMU's MPS2 models have no GPIO worth driving, so the pins are bytes in RAM (`AtomicBool`s); a
+//! register write on the real part is one `str` as well, so the path length carries over.
+//!
+//! # The instruction count
+//!
+//! QEMU has no cycle model, and DWT's cycle counter reads 0. With `-icount shift=6` every instruction
+//! takes 2^6 = 64 ns of virtual time, and SysTick (clocked at the AN386's 25 MHz, 40 ns per count)
+//! moves 1.6 counts per instruction, so `counts * 40 / 64` is an instruction count. We read SysTick,
+//! pend the edge interrupt by software, and the stop pin's `set_low` reads SysTick again as the first
+//! thing it does, so the count runs from the pend to the stop write:
+//!
+//! * `pend_to_stop`: the pend store, exception entry and the handler up to and including the stop
+//!   write, plus the 3 instructions of the SysTick read after it. This is the figure asserted
+//!   (<= 100, issue 3): an upper bound on the handler's own count.
+//! * `entry_overhead`: the same measurement into a calibration handler written in assembly whose
+//!   SysTick read is its 3rd instruction (`CAL_PREFIX`): the pend and exception-entry part.
+//! * `edge_to_stop = pend_to_stop - entry_overhead + CAL_PREFIX - 3`: the edge handler's instructions
+//!   from its first one to the stop write inclusive, within +-2 (SysTick rounding, and the compiler may
+//!   schedule part of the SysTick read's address set-up before the write).
+//!
+//! These are instructions, not cycles: on the real M4 exception entry alone takes 12 cycles, loads
+//! from flash add wait states, and nothing here models that.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg_attr(target_os = "none", no_main)]
+
 #[cfg(not(target_os = "none"))]
-fn main() {}
+fn main() {
+    eprintln!(
+        "flinch QEMU self-test: this binary runs in qemu-system-arm (mps2-an386). Run it with\n  \
+         cargo xtask qemu"
+    );
+}
+
+#[cfg(target_os = "none")]
+#[path = "support/isr_cell.rs"]
+mod isr_cell;
+
+#[cfg(target_os = "none")]
+mod qemu {
+    use super::isr_cell::IsrCell;
+    use core::convert::Infallible;
+    use core::ptr::read_volatile;
+    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m::peripheral::NVIC;
+    use cortex_m_rt::{entry, exception, ExceptionFrame};
+    use cortex_m_semihosting::{debug, hprintln};
+    use defmt_rtt as _;
+    use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
+    use flinch_firmware::event_log::{self, FLAG_EDGE, FLAG_ESCALATED};
+    use flinch_firmware::{
+        stopping_distance_um, AnalogConfig, AnalogTravel, BudgetConfig, Cause, ChatterGuard, Clock, Config,
+        DigitalSwitch, Filter, Firmware, Micros, Mm, ResetPolicy, State, SwitchKind, Unconnected,
+    };
+
+    const SYST_CVR: u32 = 0xE000_E018;
+    const T: u32 = 1_000;
+
+    // ---- RAM pins and a settable clock ----------------------------------------------------------
+    struct Level<'a>(&'a AtomicBool);
+    impl ErrorType for Level<'_> {
+        type Error = Infallible;
+    }
+    impl InputPin for Level<'_> {
+        fn is_high(&mut self) -> Result<bool, Infallible> {
+            Ok(self.0.load(Relaxed))
+        }
+        fn is_low(&mut self) -> Result<bool, Infallible> {
+            Ok(!self.0.load(Relaxed))
+        }
+    }
+    impl OutputPin for Level<'_> {
+        fn set_high(&mut self) -> Result<(), Infallible> {
+            self.0.store(true, Relaxed);
+            Ok(())
+        }
+        fn set_low(&mut self) -> Result<(), Infallible> {
+            self.0.store(false, Relaxed);
+            Ok(())
+        }
+    }
+
+    /// The switch: reads `level` while `supply` is on, low (a trip, for the inductive switch) while it
+    /// is off, unless `stuck` forces it high.
+    struct Switch<'a> {
+        level: &'a AtomicBool,
+        supply: &'a AtomicBool,
+        stuck_high: &'a AtomicBool,
+    }
+    impl ErrorType for Switch<'_> {
+        type Error = Infallible;
+    }
+    impl InputPin for Switch<'_> {
+        #[inline(always)]
+        fn is_high(&mut self) -> Result<bool, Infallible> {
+            Ok(self.stuck_high.load(Relaxed) || (self.supply.load(Relaxed) && self.level.load(Relaxed)))
+        }
+        fn is_low(&mut self) -> Result<bool, Infallible> {
+            self.is_high().map(|h| !h)
+        }
+    }
+
+    struct Time<'a>(&'a AtomicU32);
+    impl Clock for Time<'_> {
+        fn now(&mut self) -> Micros {
+            Micros(self.0.load(Relaxed))
+        }
+    }
+
+    /// Everything a scenario drives.
+    struct Bench {
+        level: AtomicBool,
+        supply: AtomicBool,
+        stuck: AtomicBool,
+        stop: AtomicBool,
+        esc: AtomicBool,
+        reset: AtomicBool,
+        now: AtomicU32,
+    }
+    impl Bench {
+        const fn new(start: u32) -> Bench {
+            Bench {
+                level: AtomicBool::new(true),
+                supply: AtomicBool::new(false),
+                stuck: AtomicBool::new(false),
+                stop: AtomicBool::new(true),
+                esc: AtomicBool::new(true),
+                reset: AtomicBool::new(false),
+                now: AtomicU32::new(start),
+            }
+        }
+        fn firmware(&self, cfg: Config) -> Option<BenchFw<'_>> {
+            let sensor = DigitalSwitch::with_supply(
+                Switch { level: &self.level, supply: &self.supply, stuck_high: &self.stuck },
+                Level(&self.supply),
+                SwitchKind::Inductive,
+                5_000,
+            );
+            Firmware::new(cfg, Time(&self.now), sensor, Level(&self.stop), Level(&self.esc), Level(&self.reset)).ok()
+        }
+        fn ticks(&self, fw: &mut BenchFw<'_>, n: u32) {
+            for _ in 0..n {
+                self.now.store(self.now.load(Relaxed).wrapping_add(T), Relaxed);
+                fw.tick();
+            }
+        }
+        fn boot(&self, fw: &mut BenchFw<'_>) -> bool {
+            for _ in 0..20 {
+                self.ticks(fw, 1);
+                if fw.is_armed() {
+                    return true;
+                }
+            }
+            false
+        }
+        fn stop_requested(&self) -> bool {
+            !self.stop.load(Relaxed)
+        }
+        fn cat0_requested(&self) -> bool {
+            !self.esc.load(Relaxed)
+        }
+    }
+    type BenchFw<'a> = Firmware<Time<'a>, DigitalSwitch<Switch<'a>, Level<'a>>, Level<'a>, Level<'a>, Level<'a>>;
+
+    /// Tables 5-7: V_c = 0.05 m/s, DT = 16 ms; d = 1 m/s^2, C = 10 mm chosen for the self-test.
+    const BUDGET: BudgetConfig =
+        BudgetConfig { robot_speed_um_per_s: 50_000, dead_time_us: 16_000, decel_um_per_s2: 1_000_000, stroke_um: 10_000 };
+
+    // ---- Scenarios: each returns Ok or the first failed check ------------------------------------
+    type Check = Result<(), &'static str>;
+    fn ensure(cond: bool, what: &'static str) -> Check {
+        if cond {
+            Ok(())
+        } else {
+            Err(what)
+        }
+    }
+
+    fn trip_latch_reset() -> Check {
+        let b = Bench::new(0);
+        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        ensure(b.stop_requested() && b.cat0_requested(), "outputs low before the self-test")?;
+        ensure(b.boot(&mut fw), "arms")?;
+        ensure(!b.stop_requested() && !b.cat0_requested(), "energised when armed")?;
+        let t_edge = b.now.load(Relaxed).wrapping_add(345); // between two ticks
+        b.now.store(t_edge, Relaxed);
+        b.level.store(false, Relaxed);
+        fw.on_edge();
+        ensure(b.stop_requested() && !b.cat0_requested(), "controlled stop on the edge")?;
+        ensure(fw.detected_at() == Some(Micros(t_edge)), "timestamp")?;
+        ensure(fw.log().last().map(|e| e.flags) == Some(FLAG_EDGE), "logged from the edge")?;
+        b.level.store(true, Relaxed);
+        b.ticks(&mut fw, 50);
+        ensure(b.stop_requested() && fw.state() == State::Tripped, "latched")?;
+        b.reset.store(true, Relaxed);
+        b.ticks(&mut fw, 1);
+        ensure(fw.is_armed() && !b.stop_requested(), "reset input re-arms")
+    }
+
+    fn auto_reset_across_the_wrap() -> Check {
+        let b = Bench::new(u32::MAX - 30_000);
+        let mut cfg = Config::new(T, BUDGET);
+        cfg.reset = ResetPolicy::Auto { hold_us: 20_000 };
+        let mut fw = b.firmware(cfg).ok_or("config")?;
+        ensure(b.boot(&mut fw), "arms")?;
+        b.level.store(false, Relaxed);
+        fw.on_edge();
+        let t_trip = fw.detected_at().ok_or("tripped")?;
+        b.ticks(&mut fw, 5);
+        b.level.store(true, Relaxed);
+        b.ticks(&mut fw, 20); // rest seen from the 1st of these ticks: hold ends on the 21st
+        ensure(b.stop_requested(), "still held")?;
+        b.ticks(&mut fw, 1);
+        ensure(!b.stop_requested(), "re-armed after 20 ms")?;
+        ensure(b.now.load(Relaxed) < t_trip.0, "the clock wrapped during the trip")
+    }
+
+    fn stuck_input_at_start_up() -> Check {
+        let b = Bench::new(0);
+        b.stuck.store(true, Relaxed);
+        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        ensure(!b.boot(&mut fw), "does not arm")?;
+        ensure(fw.state() == State::Fault(Cause::StuckInput), "stuck-input fault")?;
+        ensure(b.stop_requested() && b.cat0_requested(), "outputs low")
+    }
+
+    fn cut_wire() -> Check {
+        let b = Bench::new(0);
+        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        ensure(b.boot(&mut fw), "arms")?;
+        b.level.store(false, Relaxed); // a cut wire reads low, like a trip: caught by polling too
+        b.ticks(&mut fw, 1);
+        ensure(b.stop_requested() && fw.state() == State::Tripped, "trip")
+    }
+
+    fn clock_stall() -> Check {
+        let b = Bench::new(0);
+        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        ensure(b.boot(&mut fw), "arms")?;
+        fw.tick(); // same instant again
+        ensure(fw.state() == State::Fault(Cause::ClockStall), "stall fault")?;
+        ensure(b.stop_requested() && b.cat0_requested(), "outputs low")
+    }
+
+    fn missed_deadline() -> Check {
+        let b = Bench::new(0);
+        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        ensure(b.boot(&mut fw), "arms")?;
+        b.now.store(b.now.load(Relaxed).wrapping_add(2 * T), Relaxed);
+        fw.tick();
+        ensure(fw.state() == State::Fault(Cause::MissedDeadline), "deadline fault")?;
+        ensure(b.stop_requested(), "stop")
+    }
+
+    fn chatter() -> Check {
+        let b = Bench::new(0);
+        let mut cfg = Config::new(T, BUDGET);
+        cfg.filter = Filter::Consecutive(3);
+        cfg.chatter = Some(ChatterGuard { max_transitions: 6, window_us: 20_000 });
+        let mut fw = b.firmware(cfg).ok_or("config")?;
+        ensure(b.boot(&mut fw), "arms")?;
+        for k in 0..10 {
+            b.level.store(k % 2 == 1, Relaxed);
+            fw.on_edge();
+            b.ticks(&mut fw, 1);
+        }
+        ensure(fw.state() == State::Fault(Cause::Chatter), "chatter fault")
+    }
+
+    fn stroke_budget() -> Check {
+        ensure(stopping_distance_um(50_000, 16_000, 1_000_000) == 2_050, "0.8 + 1.25 mm")?;
+        let b = Bench::new(0);
+        // Fig. 46 mode 3 speed, 0.25 m/s: 35.25 mm needed, 5 mm left.
+        let fast = BudgetConfig { robot_speed_um_per_s: 250_000, ..BUDGET };
+        let mut fw = b.firmware(Config::new(T, fast)).ok_or("config")?;
+        ensure(b.boot(&mut fw), "arms")?;
+        b.level.store(false, Relaxed);
+        fw.on_edge();
+        ensure(b.stop_requested() && b.cat0_requested(), "category 0")?;
+        ensure(fw.log().last().map(|e| e.flags) == Some(FLAG_EDGE | FLAG_ESCALATED), "flagged")
+    }
+
+    fn analog_fixed_point() -> Check {
+        struct Raw<'a>(&'a AtomicU32);
+        impl flinch_firmware::Adc for Raw<'_> {
+            type Error = ();
+            fn read(&mut self) -> Result<u16, ()> {
+                u16::try_from(self.0.load(Relaxed)).map_err(|_| ())
+            }
+        }
+        let acfg = AnalogConfig::linear_12bit(200, Mm::from_num(20), Mm::from_num(1.5));
+        let raw = AtomicU32::new(u32::from(acfg.counts_for(Mm::ZERO)));
+        let (stop, esc, now) = (AtomicBool::new(true), AtomicBool::new(true), AtomicU32::new(0));
+        let sensor = AnalogTravel::new(Raw(&raw), acfg);
+        let mut fw = Firmware::<_, _, _, _, _>::new(Config::new(T, BUDGET), Time(&now), sensor, Level(&stop), Level(&esc), Unconnected)
+            .map_err(|_| "config")?;
+        for k in 1..10u32 {
+            now.store(k * T, Relaxed);
+            fw.tick();
+        }
+        ensure(fw.is_armed(), "arms")?;
+        raw.store(u32::from(acfg.counts_for(Mm::from_num(1.4))), Relaxed);
+        now.store(10 * T, Relaxed);
+        fw.tick();
+        ensure(stop.load(Relaxed), "1.4 mm: below")?;
+        raw.store(u32::from(acfg.counts_for(Mm::from_num(1.6))), Relaxed);
+        now.store(11 * T, Relaxed);
+        fw.tick();
+        ensure(!stop.load(Relaxed), "1.6 mm: trip")?;
+        let travel = fw.log().last().map(|e| e.travel_um).unwrap_or(0);
+        ensure((travel - 1_600).abs() < 10, "travel in um")
+    }
+
+    fn event_log_round_trip() -> Check {
+        let mut log: flinch_firmware::EventLog<4> = flinch_firmware::EventLog::new();
+        for k in 0..6u32 {
+            log.push(Cause::Trip, 0, Micros(u32::MAX - k), Micros(u32::MAX - k), -1);
+        }
+        let mut buf = [0u8; event_log::HEADER_LEN + 4 * event_log::EVENT_LEN];
+        let n = log.serialize(&mut buf).map_err(|_| "serialise")?;
+        let (h, mut evs) = event_log::decode(buf.get(..n).ok_or("len")?).ok_or("decode")?;
+        ensure(h.count == 4 && h.overwritten == 2, "header")?;
+        ensure(evs.next().map(|e| e.seq) == Some(2), "oldest kept is seq 2")
+    }
+
+    // ---- The measured edge interrupt ------------------------------------------------------------
+    const IRQ_EDGE: u16 = 31;
+    const IRQ_CAL: u16 = 30;
+    #[derive(Copy, Clone)]
+    struct Irq(u16);
+    // SAFETY: 30 and 31 exist on QEMU's AN386 NVIC (32 lines) and no model device drives them.
+    unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
+        fn number(self) -> u16 {
+            self.0
+        }
+    }
+
+    static STOP_LEVEL: AtomicBool = AtomicBool::new(true);
+    static STOP_CVR: AtomicU32 = AtomicU32::new(0);
+    static CAL_CVR: AtomicU32 = AtomicU32::new(0);
+    static M_LEVEL: AtomicBool = AtomicBool::new(true);
+    static M_SUPPLY: AtomicBool = AtomicBool::new(false);
+    static M_STUCK: AtomicBool = AtomicBool::new(false);
+    static M_ESC: AtomicBool = AtomicBool::new(true);
+    static M_RESET: AtomicBool = AtomicBool::new(false);
+    static M_NOW: AtomicU32 = AtomicU32::new(0);
+
+    /// The measured stop pin: `set_low` reads SysTick first, then stores the level (the "write").
+    struct MeasuredStop;
+    impl ErrorType for MeasuredStop {
+        type Error = Infallible;
+    }
+    impl OutputPin for MeasuredStop {
+        #[inline(always)]
+        fn set_low(&mut self) -> Result<(), Infallible> {
+            // The write first, then the time: the count includes the write.
+            STOP_LEVEL.store(false, Relaxed);
+            // SAFETY: SysTick's current-value register, always readable.
+            STOP_CVR.store(unsafe { read_volatile(SYST_CVR as *const u32) }, Relaxed);
+            Ok(())
+        }
+        fn set_high(&mut self) -> Result<(), Infallible> {
+            STOP_LEVEL.store(true, Relaxed);
+            Ok(())
+        }
+    }
+
+    type MeasuredFw = Firmware<
+        Time<'static>,
+        DigitalSwitch<Switch<'static>, Level<'static>>,
+        MeasuredStop,
+        Level<'static>,
+        Level<'static>,
+    >;
+    static MFW: IsrCell<MeasuredFw> = IsrCell::new();
+
+    unsafe extern "C" fn edge_handler() {
+        // SAFETY: the only handler touching MFW; the main thread does so only with it masked.
+        unsafe { MFW.get() }.on_edge();
+    }
+    // The calibration handler, in assembly so that its SysTick read is exactly its 3rd instruction
+    // whatever the compiler does (CAL_PREFIX below): movw, movt, ldr.
+    core::arch::global_asm!(
+        ".section .text.flinch_cal_handler,\"ax\",%progbits",
+        ".global flinch_cal_handler",
+        ".type flinch_cal_handler,%function",
+        ".syntax unified",
+        ".thumb_func",
+        "flinch_cal_handler:",
+        "    movw r0, #0xE018",
+        "    movt r0, #0xE000",
+        "    ldr r0, [r0]",
+        "    movw r1, :lower16:{cvr}",
+        "    movt r1, :upper16:{cvr}",
+        "    str r0, [r1]",
+        "    bx lr",
+        cvr = sym CAL_CVR,
+    );
+    extern "C" {
+        fn flinch_cal_handler();
+    }
+    /// Instructions of the calibration handler up to and including its SysTick read.
+    const CAL_PREFIX: u32 = 3;
+
+    /// Read SysTick, pend `irq`, let it run; return the SysTick value read before the pend.
+    #[inline(never)]
+    fn pend_and_wait(irq: u16) -> u32 {
+        // SAFETY: SysTick's current-value register.
+        let t0 = unsafe { read_volatile(SYST_CVR as *const u32) };
+        NVIC::pend(Irq(irq));
+        cortex_m::asm::dsb();
+        cortex_m::asm::isb();
+        t0
+    }
+
+    /// SysTick counts (down, 24-bit) to instructions: 25 MHz SysTick vs 64 ns per instruction.
+    fn counts_to_instructions(t0: u32, t1: u32) -> u32 {
+        let counts = t0.wrapping_sub(t1) & 0x00FF_FFFF;
+        (counts * 40 + 32) / 64
+    }
+
+    fn measure() -> Result<(u32, u32), &'static str> {
+        let sensor = DigitalSwitch::with_supply(
+            Switch { level: &M_LEVEL, supply: &M_SUPPLY, stuck_high: &M_STUCK },
+            Level(&M_SUPPLY),
+            SwitchKind::Inductive,
+            5_000,
+        );
+        let fw = Firmware::new(Config::new(T, BUDGET), Time(&M_NOW), sensor, MeasuredStop, Level(&M_ESC), Level(&M_RESET))
+            .map_err(|_| "config")?;
+        // SAFETY: once, before the edge interrupt is unmasked.
+        unsafe { MFW.init(fw) };
+        let mut worst = (0, 0);
+        for round in 0..5u32 {
+            // Arm (interrupt still masked, so this &mut is unique).
+            {
+                // SAFETY: IRQ_EDGE is masked here.
+                let fw = unsafe { MFW.get() };
+                M_LEVEL.store(true, Relaxed);
+                M_RESET.store(round % 2 == 1, Relaxed); // a fresh rising edge each odd round
+                for _ in 0..10 {
+                    M_NOW.store(M_NOW.load(Relaxed).wrapping_add(T), Relaxed);
+                    fw.tick();
+                    if fw.is_armed() {
+                        break;
+                    }
+                    M_RESET.store(!M_RESET.load(Relaxed), Relaxed);
+                }
+                if !fw.is_armed() || !STOP_LEVEL.load(Relaxed) {
+                    return Err("measurement firmware did not arm");
+                }
+            }
+            // Calibration: pend to the first load of an empty handler.
+            // SAFETY: cal_handler touches only CAL_CVR.
+            unsafe { NVIC::unmask(Irq(IRQ_CAL)) };
+            let t0 = pend_and_wait(IRQ_CAL);
+            let overhead = counts_to_instructions(t0, CAL_CVR.load(Relaxed));
+            NVIC::mask(Irq(IRQ_CAL));
+            // The edge: the tool has moved back.
+            M_LEVEL.store(false, Relaxed);
+            // SAFETY: from here until masked again only the handler uses MFW.
+            unsafe { NVIC::unmask(Irq(IRQ_EDGE)) };
+            let t0 = pend_and_wait(IRQ_EDGE);
+            NVIC::mask(Irq(IRQ_EDGE));
+            if STOP_LEVEL.load(Relaxed) {
+                return Err("the edge did not stop");
+            }
+            let total = counts_to_instructions(t0, STOP_CVR.load(Relaxed));
+            if total > worst.0 {
+                worst = (total, overhead);
+            }
+        }
+        Ok(worst)
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let mut cp = match cortex_m::Peripherals::take() {
+            Some(cp) => cp,
+            None => exit(debug::EXIT_FAILURE),
+        };
+        cp.SYST.set_clock_source(SystClkSource::Core);
+        cp.SYST.set_reload(0x00FF_FFFF);
+        cp.SYST.clear_current();
+        cp.SYST.enable_counter();
+
+        hprintln!("flinch firmware self-test on mps2-an386");
+        let scenarios: [(&str, fn() -> Check); 10] = [
+            ("trip on the edge, latch, reset by input", trip_latch_reset),
+            ("automatic reset across the u32 wrap", auto_reset_across_the_wrap),
+            ("stuck input fails the start-up test", stuck_input_at_start_up),
+            ("cut wire reads as a trip", cut_wire),
+            ("clock stall is a fault", clock_stall),
+            ("missed tick deadline is a fault", missed_deadline),
+            ("chattering input is a fault", chatter),
+            ("short stroke budget escalates to category 0", stroke_budget),
+            ("analog travel thresholded in fixed point", analog_fixed_point),
+            ("event log wraps and round-trips", event_log_round_trip),
+        ];
+        let (mut passed, mut failed) = (0u32, 0u32);
+        for (name, run) in scenarios {
+            match run() {
+                Ok(()) => {
+                    passed += 1;
+                    hprintln!("ok   {}", name);
+                }
+                Err(what) => {
+                    failed += 1;
+                    hprintln!("FAIL {}: {}", name, what);
+                }
+            }
+        }
+        match measure() {
+            Ok((total, overhead)) => {
+                hprintln!(
+                    "icount: pend_to_stop={} entry_overhead={} edge_to_stop={} (instructions, not cycles)",
+                    total,
+                    overhead,
+                    (total + CAL_PREFIX).saturating_sub(overhead + 3)
+                );
+                if total <= 100 {
+                    passed += 1;
+                    hprintln!("ok   detect-to-stop path within 100 instructions");
+                } else {
+                    failed += 1;
+                    hprintln!("FAIL detect-to-stop path within 100 instructions");
+                }
+            }
+            Err(what) => {
+                failed += 1;
+                hprintln!("FAIL detect-to-stop measurement: {}", what);
+            }
+        }
+        hprintln!("self-test: {} passed, {} failed", passed, failed);
+        exit(if failed == 0 { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE })
+    }
+
+    /// End the QEMU run with `code` as its exit status.
+    fn exit(code: debug::ExitStatus) -> ! {
+        debug::exit(code);
+        loop {
+            cortex_m::asm::nop(); // not reached: QEMU has exited
+        }
+    }
+
+    #[exception]
+    unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
+        STOP_LEVEL.store(false, Relaxed);
+        hprintln!("FAIL hard fault at pc {:#010x}", ef.pc());
+        exit(debug::EXIT_FAILURE)
+    }
+
+    #[panic_handler]
+    fn panic(info: &core::panic::PanicInfo) -> ! {
+        STOP_LEVEL.store(false, Relaxed); // de-energise first
+        hprintln!("FAIL panic: {}", info);
+        exit(debug::EXIT_FAILURE)
+    }
+
+    // ---- Vector table: AN386's 32 lines, the two measured ones wired ------------------------------
+    #[derive(Copy, Clone)]
+    #[repr(C)]
+    pub union Vector {
+        handler: unsafe extern "C" fn(),
+        reserved: usize,
+    }
+    extern "C" {
+        fn DefaultHandler();
+    }
+    const fn vectors() -> [Vector; 32] {
+        let mut v = [Vector { handler: DefaultHandler }; 32];
+        v[IRQ_CAL as usize] = Vector { handler: flinch_cal_handler };
+        v[IRQ_EDGE as usize] = Vector { handler: edge_handler };
+        v
+    }
+    #[link_section = ".vector_table.interrupts"]
+    #[no_mangle]
+    pub static __INTERRUPTS: [Vector; 32] = vectors();
+}
