@@ -188,7 +188,7 @@ impl<const N: usize> EventLog<N> {
 
     /// Bytes [`Self::serialize`] writes for the current content.
     pub fn serialized_len(&self) -> usize {
-        HEADER_LEN + EVENT_LEN * self.ring.len()
+        EVENT_LEN.saturating_mul(self.ring.len()).saturating_add(HEADER_LEN)
     }
 
     /// Write header and events into `out`; returns the number of bytes written.

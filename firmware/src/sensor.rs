@@ -196,7 +196,7 @@ impl AnalogConfig {
     pub fn linear_12bit(zero_counts: u16, span_mm: Mm, trip_mm: Mm) -> Self {
         AnalogConfig {
             zero_counts,
-            mm_per_count: span_mm / 4095,
+            mm_per_count: span_mm.checked_div_int(4095).unwrap_or(Mm::ZERO),
             trip_mm,
             valid_min: 16,
             valid_max: 4079,
@@ -227,8 +227,8 @@ impl AnalogConfig {
 /// Convert millimetres (I16F16) to whole micrometres, saturating.
 #[inline]
 pub fn mm_to_um(mm: Mm) -> i32 {
-    // bits * 1000 / 65536, in i64 so the product cannot overflow.
-    let um = (i64::from(mm.to_bits()) * 1000) >> 16;
+    // bits * 1000 / 65536, in i64: |bits| < 2^31, so the product stays below 2^41.
+    let um = i64::from(mm.to_bits()).wrapping_mul(1000).wrapping_shr(16);
     um.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
 }
 
@@ -268,10 +268,10 @@ impl<A: Adc> AnalogTravel<A> {
             if dt > 0 {
                 let dx_bits = i64::from(travel.to_bits()).wrapping_sub(i64::from(x0.to_bits()));
                 // (mm * 2^16) * 1e6 / us = (mm/s) * 2^16; |dx_bits| < 2^33 so the product fits i64.
-                let v_bits = dx_bits.saturating_mul(1_000_000) / i64::from(dt);
+                let v_bits = dx_bits.saturating_mul(1_000_000).checked_div(i64::from(dt)).unwrap_or(0);
                 let v_new = Mm::from_bits(v_bits.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32);
                 let shift = u32::from(self.cfg.velocity_shift.min(15));
-                let step = v_new.saturating_sub(self.velocity) >> shift;
+                let step = v_new.saturating_sub(self.velocity).wrapping_shr(shift);
                 self.velocity = self.velocity.saturating_add(step);
             }
         }

@@ -53,9 +53,9 @@ pub const fn stopping_distance_um(speed_um_per_s: u32, dead_time_us: u32, decel_
     }
     let v = speed_um_per_s as u64;
     // v * DT: (um/s) * us / 1e6 = um. Both factors < 2^32, so the product fits u64.
-    let during_dead_time = (v * dead_time_us as u64).div_ceil(1_000_000);
+    let during_dead_time = v.wrapping_mul(dead_time_us as u64).div_ceil(1_000_000);
     // v^2 / (2d): (um/s)^2 / (um/s^2) = um. v^2 < 2^64 fits; 2d < 2^33 fits.
-    let braking = (v * v).div_ceil(2 * decel_um_per_s2 as u64);
+    let braking = v.wrapping_mul(v).div_ceil((decel_um_per_s2 as u64).wrapping_mul(2));
     let total = during_dead_time.saturating_add(braking);
     if total > u32::MAX as u64 {
         u32::MAX
@@ -75,7 +75,7 @@ impl BudgetConfig {
     pub fn check_at(&self, trip_travel_um: i32, closing_um_per_s: u32) -> Verdict {
         let v = if closing_um_per_s > self.robot_speed_um_per_s { closing_um_per_s } else { self.robot_speed_um_per_s };
         let required_um = stopping_distance_um(v, self.dead_time_us, self.decel_um_per_s2);
-        let left = i64::from(self.stroke_um) - i64::from(trip_travel_um);
+        let left = i64::from(self.stroke_um).wrapping_sub(i64::from(trip_travel_um));
         let remaining_um = left.clamp(0, u32::MAX as i64) as u32;
         Verdict { required_um, remaining_um, escalate: required_um > remaining_um }
     }

@@ -1,1 +1,357 @@
-fn main() {}
+//! `cargo xtask`: the project's test driver (std only, no dependencies).
+//!
+//! * `cargo xtask test`: every stage below, then one closing line `N passed, N failed, N skipped`.
+//!   1. host tests: `cargo test --workspace` at the repo root (its output is shown as is);
+//!   2. firmware build: `cargo build --release --target thumbv7em-none-eabihf` inside `firmware/`
+//!      (skipped if that target is not installed);
+//!   3. QEMU self-test: the `qemu` binary in `qemu-system-arm -machine mps2-an386` over semihosting,
+//!      its output compared with `firmware/qemu/expected.txt` (skipped without `qemu-system-arm`);
+//!   4. instruction count: the self-test's `icount:` line, `pend_to_stop <= 100` (issue 3);
+//!   5. size: flash and static RAM of the release `board` ELF, under 32 KiB / 8 KiB.
+//!
+//!   Exits non-zero if any stage failed; skipped stages do not fail the run.
+//! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
+//! * `cargo xtask size`: build the board binary and print its flash and RAM use.
+
+use std::env;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+use std::thread::sleep;
+use std::time::{Duration, Instant};
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+const FLASH_LIMIT: u64 = 32 * 1024;
+const RAM_LIMIT: u64 = 8 * 1024;
+const ICOUNT_LIMIT: u32 = 100;
+const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
+
+fn main() -> ExitCode {
+    let args: Vec<String> = env::args().skip(1).collect();
+    match args.first().map(String::as_str) {
+        Some("test") => test(),
+        Some("qemu") => single(|| {
+            build_firmware()?;
+            let out = run_qemu()?;
+            print!("{}", out.stdout);
+            check_qemu_output(&out).and_then(|_| check_icount(&out.stdout).map(|_| ()))
+        }),
+        Some("size") => single(|| {
+            build_firmware()?;
+            let s = elf_size(&elf_path("board"))?;
+            println!("board (STM32F407VGTx): flash {} B, static RAM {} B", s.flash, s.ram);
+            check_size(&s)
+        }),
+        _ => {
+            eprintln!("usage: cargo xtask <test|qemu|size>");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn single(f: impl FnOnce() -> Result<(), String>) -> ExitCode {
+    match f() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+enum Outcome {
+    Pass(String),
+    Fail(String),
+    Skip(String),
+}
+
+fn test() -> ExitCode {
+    let mut results: Vec<(&str, Outcome)> = Vec::new();
+
+    results.push(("host tests", host_tests()));
+
+    let have_target = target_installed();
+    let built = if have_target {
+        match build_firmware() {
+            Ok(()) => Outcome::Pass(format!("board and qemu ELFs for {TARGET}")),
+            Err(e) => Outcome::Fail(e),
+        }
+    } else {
+        Outcome::Skip(format!("target {TARGET} not installed (rustup target add {TARGET})"))
+    };
+    let built_ok = matches!(built, Outcome::Pass(_));
+    results.push(("firmware build", built));
+
+    if !built_ok {
+        let why = "no firmware build".to_string();
+        results.push(("qemu self-test", Outcome::Skip(why.clone())));
+        results.push(("instruction count", Outcome::Skip(why.clone())));
+        results.push(("size", Outcome::Skip(why)));
+    } else {
+        if which("qemu-system-arm").is_none() {
+            println!("SKIPPED on-target part: qemu-system-arm not found");
+            let why = "qemu-system-arm not found".to_string();
+            results.push(("qemu self-test", Outcome::Skip(why.clone())));
+            results.push(("instruction count", Outcome::Skip(why)));
+        } else {
+            match run_qemu() {
+                Ok(out) => {
+                    print!("{}", out.stdout);
+                    results.push((
+                        "qemu self-test",
+                        match check_qemu_output(&out) {
+                            Ok(()) => Outcome::Pass("output matches firmware/qemu/expected.txt".into()),
+                            Err(e) => Outcome::Fail(e),
+                        },
+                    ));
+                    results.push((
+                        "instruction count",
+                        match check_icount(&out.stdout) {
+                            Ok(n) => Outcome::Pass(format!("pend_to_stop = {n} <= {ICOUNT_LIMIT} instructions")),
+                            Err(e) => Outcome::Fail(e),
+                        },
+                    ));
+                }
+                Err(e) => {
+                    results.push(("qemu self-test", Outcome::Fail(e)));
+                    results.push(("instruction count", Outcome::Skip("no qemu output".into())));
+                }
+            }
+        }
+        results.push((
+            "size",
+            match elf_size(&elf_path("board")).and_then(|s| check_size(&s).map(|_| s)) {
+                Ok(s) => Outcome::Pass(format!(
+                    "board flash {} B <= {} B, static RAM {} B <= {} B",
+                    s.flash, FLASH_LIMIT, s.ram, RAM_LIMIT
+                )),
+                Err(e) => Outcome::Fail(e),
+            },
+        ));
+    }
+
+    println!();
+    let (mut passed, mut failed, mut skipped) = (0, 0, 0);
+    for (stage, outcome) in &results {
+        match outcome {
+            Outcome::Pass(m) => {
+                passed += 1;
+                println!("xtask: PASS {stage}: {m}");
+            }
+            Outcome::Fail(m) => {
+                failed += 1;
+                println!("xtask: FAIL {stage}: {m}");
+            }
+            Outcome::Skip(m) => {
+                skipped += 1;
+                println!("xtask: SKIP {stage}: {m}");
+            }
+        }
+    }
+    println!("{passed} passed, {failed} failed, {skipped} skipped");
+    if failed == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+fn repo_root() -> PathBuf {
+    // xtask/ sits in the repo root.
+    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    manifest.parent().map(Path::to_path_buf).unwrap_or(manifest)
+}
+
+fn cargo() -> Command {
+    Command::new(env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+}
+
+fn host_tests() -> Outcome {
+    let status = cargo().args(["test", "--workspace"]).current_dir(repo_root()).status();
+    match status {
+        Ok(s) if s.success() => Outcome::Pass("cargo test --workspace".into()),
+        Ok(s) => Outcome::Fail(format!("cargo test --workspace exited with {s}")),
+        Err(e) => Outcome::Fail(format!("could not run cargo: {e}")),
+    }
+}
+
+fn target_installed() -> bool {
+    // The target's standard library exists when `rustc --print target-libdir` names a real directory.
+    let out = Command::new(env::var("RUSTC").unwrap_or_else(|_| "rustc".into()))
+        .args(["--print", "target-libdir", "--target", TARGET])
+        .output();
+    match out {
+        Ok(o) if o.status.success() => {
+            let dir = String::from_utf8_lossy(&o.stdout).trim().to_string();
+            fs::read_dir(&dir).map(|mut d| d.next().is_some()).unwrap_or(false)
+        }
+        _ => false,
+    }
+}
+
+/// Build both bare-metal binaries. Run inside firmware/ so that firmware/.cargo/config.toml (linker
+/// scripts, runner) applies.
+fn build_firmware() -> Result<(), String> {
+    let status = cargo()
+        .args(["build", "--release", "--target", TARGET])
+        .current_dir(repo_root().join("firmware"))
+        .status()
+        .map_err(|e| format!("could not run cargo: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("cargo build --release --target {TARGET} (in firmware/) exited with {status}"))
+    }
+}
+
+fn target_dir() -> PathBuf {
+    match env::var_os("CARGO_TARGET_DIR") {
+        Some(d) => {
+            let d = PathBuf::from(d);
+            if d.is_absolute() {
+                d
+            } else {
+                repo_root().join("firmware").join(d)
+            }
+        }
+        None => repo_root().join("target"),
+    }
+}
+
+fn elf_path(bin: &str) -> PathBuf {
+    target_dir().join(TARGET).join("release").join(bin)
+}
+
+fn which(name: &str) -> Option<PathBuf> {
+    env::var_os("PATH").and_then(|p| env::split_paths(&p).map(|d| d.join(name)).find(|f| f.is_file()))
+}
+
+struct QemuRun {
+    stdout: String,
+    success: bool,
+}
+
+/// Run the QEMU self-test ELF: AN386 (Cortex-M4), semihosting for output and exit status, and
+/// `-icount shift=6` (64 ns of virtual time per instruction) for the instruction count.
+fn run_qemu() -> Result<QemuRun, String> {
+    let elf = elf_path("qemu");
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native", "-icount", "shift=6", "-kernel"])
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
+    let start = Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(s)) => break s,
+            Ok(None) if start.elapsed() > QEMU_TIMEOUT => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!("qemu did not exit within {} s", QEMU_TIMEOUT.as_secs()));
+            }
+            Ok(None) => sleep(Duration::from_millis(20)),
+            Err(e) => return Err(format!("waiting for qemu: {e}")),
+        }
+    };
+    let mut stdout = String::new();
+    if let Some(mut out) = child.stdout.take() {
+        use std::io::Read;
+        out.read_to_string(&mut stdout).map_err(|e| format!("reading qemu output: {e}"))?;
+    }
+    Ok(QemuRun { stdout, success: status.success() })
+}
+
+fn check_qemu_output(out: &QemuRun) -> Result<(), String> {
+    let expected_path = repo_root().join("firmware/qemu/expected.txt");
+    let expected = fs::read_to_string(&expected_path).map_err(|e| format!("{}: {e}", expected_path.display()))?;
+    // The icount line carries measured numbers and is checked by value in its own stage.
+    let got: Vec<&str> = out.stdout.lines().filter(|l| !l.starts_with("icount:")).collect();
+    let want: Vec<&str> = expected.lines().collect();
+    if got != want {
+        let first = got
+            .iter()
+            .zip(&want)
+            .position(|(g, w)| g != w)
+            .unwrap_or(got.len().min(want.len()));
+        return Err(format!(
+            "output differs from firmware/qemu/expected.txt at line {}: got {:?}, want {:?}",
+            first + 1,
+            got.get(first),
+            want.get(first)
+        ));
+    }
+    if !out.success {
+        return Err("qemu exited with a failure status".into());
+    }
+    Ok(())
+}
+
+fn check_icount(stdout: &str) -> Result<u32, String> {
+    let line = stdout.lines().find(|l| l.starts_with("icount:")).ok_or("no icount line in the qemu output")?;
+    let n = line
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("pend_to_stop="))
+        .and_then(|v| v.parse::<u32>().ok())
+        .ok_or_else(|| format!("no pend_to_stop in {line:?}"))?;
+    if n == 0 {
+        return Err("pend_to_stop = 0: SysTick did not advance (is -icount on?)".into());
+    }
+    if n > ICOUNT_LIMIT {
+        return Err(format!("pend_to_stop = {n} > {ICOUNT_LIMIT} instructions"));
+    }
+    Ok(n)
+}
+
+struct Size {
+    flash: u64,
+    ram: u64,
+}
+
+/// Flash and static RAM from the ELF's section headers, as `size` counts them: every allocated
+/// section with contents is in flash (`.vector_table`, `.text`, `.rodata`, and `.data`'s initial
+/// values), every allocated section in RAM (address 0x2000_0000 and up: `.data`, `.bss`, `.uninit`)
+/// is static RAM. The stack is not counted: it takes what RAM is left.
+fn elf_size(path: &Path) -> Result<Size, String> {
+    let b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let rd = |off: usize, n: usize| -> Result<u64, String> {
+        let s = b.get(off..off + n).ok_or_else(|| format!("{}: truncated ELF", path.display()))?;
+        Ok(s.iter().rev().fold(0u64, |acc, &x| (acc << 8) | u64::from(x)))
+    };
+    if b.get(0..4) != Some(b"\x7fELF") || b.get(4) != Some(&1) || b.get(5) != Some(&1) {
+        return Err(format!("{}: not a 32-bit little-endian ELF", path.display()));
+    }
+    let shoff = rd(0x20, 4)? as usize;
+    let shentsize = rd(0x2E, 2)? as usize;
+    let shnum = rd(0x30, 2)? as usize;
+    const SHT_NOBITS: u64 = 8;
+    const SHF_ALLOC: u64 = 2;
+    let (mut flash, mut ram) = (0, 0);
+    for i in 0..shnum {
+        let sh = shoff + i * shentsize;
+        let (typ, flags, addr, size) = (rd(sh + 4, 4)?, rd(sh + 8, 4)?, rd(sh + 12, 4)?, rd(sh + 20, 4)?);
+        if flags & SHF_ALLOC == 0 {
+            continue;
+        }
+        if typ != SHT_NOBITS {
+            flash += size;
+        }
+        if addr >= 0x2000_0000 {
+            ram += size;
+        }
+    }
+    Ok(Size { flash, ram })
+}
+
+fn check_size(s: &Size) -> Result<(), String> {
+    if s.flash > FLASH_LIMIT {
+        return Err(format!("flash {} B > {} B", s.flash, FLASH_LIMIT));
+    }
+    if s.ram > RAM_LIMIT {
+        return Err(format!("static RAM {} B > {} B", s.ram, RAM_LIMIT));
+    }
+    Ok(())
+}

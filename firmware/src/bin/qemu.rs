@@ -173,6 +173,7 @@ mod qemu {
 
     // ---- Scenarios: each returns Ok or the first failed check ------------------------------------
     type Check = Result<(), &'static str>;
+    type Scenario = (&'static str, fn() -> Check);
     fn ensure(cond: bool, what: &'static str) -> Check {
         if cond {
             Ok(())
@@ -490,7 +491,7 @@ mod qemu {
         cp.SYST.enable_counter();
 
         hprintln!("flinch firmware self-test on mps2-an386");
-        let scenarios: [(&str, fn() -> Check); 10] = [
+        let scenarios: [Scenario; 10] = [
             ("trip on the edge, latch, reset by input", trip_latch_reset),
             ("automatic reset across the u32 wrap", auto_reset_across_the_wrap),
             ("stuck input fails the start-up test", stuck_input_at_start_up),
@@ -536,7 +537,7 @@ mod qemu {
                 hprintln!("FAIL detect-to-stop measurement: {}", what);
             }
         }
-        hprintln!("self-test: {} passed, {} failed", passed, failed);
+        hprintln!("self-test done: {} ok, {} failed", passed, failed);
         exit(if failed == 0 { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE })
     }
 
