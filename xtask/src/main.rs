@@ -77,6 +77,7 @@ fn test() -> ExitCode {
             Err(e) => Outcome::Fail(e),
         }
     } else {
+        println!("SKIPPED on-target part: target {TARGET} not installed (rustup target add {TARGET})");
         Outcome::Skip(format!("target {TARGET} not installed (rustup target add {TARGET})"))
     };
     let built_ok = matches!(built, Outcome::Pass(_));
