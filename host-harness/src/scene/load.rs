@@ -103,7 +103,11 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         Ok(text) => parse(&text, &file),
         Err(e) => Err(SceneError {
             file,
-            issues: vec![SceneIssue { line: None, key: String::new(), message: format!("cannot read the scene file: {e}") }],
+            issues: vec![SceneIssue {
+                line: None,
+                key: String::new(),
+                message: format!("cannot read the scene file: {e}"),
+            }],
         }),
     }
 }
@@ -115,24 +119,44 @@ pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
         Err(e) => {
             let line = Some(line_at(text, e.span().map_or(0, |s| s.start)));
             let message = format!("not valid TOML: {}", e.message().trim());
-            return Err(SceneError { file: file.to_string(), issues: vec![SceneIssue { line, key: String::new(), message }] });
+            return Err(SceneError {
+                file: file.to_string(),
+                issues: vec![SceneIssue {
+                    line,
+                    key: String::new(),
+                    message,
+                }],
+            });
         }
     };
-    let mut cx = Ctx { text, issues: Vec::new() };
+    let mut cx = Ctx {
+        text,
+        issues: Vec::new(),
+    };
     let scene = scene(&mut cx, doc.as_table());
     match scene {
         Some(scene) if cx.issues.is_empty() => Ok(scene),
         _ => {
-            debug_assert!(!cx.issues.is_empty(), "a scene part failed without saying why");
+            debug_assert!(
+                !cx.issues.is_empty(),
+                "a scene part failed without saying why"
+            );
             cx.issues.sort_by_key(|i| i.line);
-            Err(SceneError { file: file.to_string(), issues: cx.issues })
+            Err(SceneError {
+                file: file.to_string(),
+                issues: cx.issues,
+            })
         }
     }
 }
 
 fn line_at(text: &str, offset: usize) -> usize {
     let end = offset.min(text.len());
-    text.as_bytes()[..end].iter().filter(|&&b| b == b'\n').count() + 1
+    text.as_bytes()[..end]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
 }
 
 /// A derived value for messages, to 6 significant digits.
@@ -159,17 +183,33 @@ struct Rule {
 
 impl Rule {
     fn gt(lo: f64, unit: &'static str) -> Self {
-        Rule { lo: Some((lo, false)), hi: None, unit }
+        Rule {
+            lo: Some((lo, false)),
+            hi: None,
+            unit,
+        }
     }
     fn ge(lo: f64, unit: &'static str) -> Self {
-        Rule { lo: Some((lo, true)), hi: None, unit }
+        Rule {
+            lo: Some((lo, true)),
+            hi: None,
+            unit,
+        }
     }
     fn any(unit: &'static str) -> Self {
-        Rule { lo: None, hi: None, unit }
+        Rule {
+            lo: None,
+            hi: None,
+            unit,
+        }
     }
     /// `[lo, hi]` when `hi_incl`, else `[lo, hi)`.
     fn within(lo: f64, hi: f64, hi_incl: bool, unit: &'static str) -> Self {
-        Rule { lo: Some((lo, true)), hi: Some((hi, hi_incl)), unit }
+        Rule {
+            lo: Some((lo, true)),
+            hi: Some((hi, hi_incl)),
+            unit,
+        }
     }
     fn ok(&self, x: f64) -> bool {
         let lo = match self.lo {
@@ -185,10 +225,21 @@ impl Rule {
         lo && hi
     }
     fn describe(&self) -> String {
-        let unit = if self.unit.is_empty() { String::new() } else { format!(" {}", self.unit) };
+        let unit = if self.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", self.unit)
+        };
         match (self.lo, self.hi) {
-            (Some((l, true)), Some((h, hi))) => format!("in [{}, {}{}{unit}", num(l), num(h), if hi { "]" } else { ")" }),
-            (Some((l, incl)), None) => format!("{} {}{unit}", if incl { ">=" } else { ">" }, num(l)),
+            (Some((l, true)), Some((h, hi))) => format!(
+                "in [{}, {}{}{unit}",
+                num(l),
+                num(h),
+                if hi { "]" } else { ")" }
+            ),
+            (Some((l, incl)), None) => {
+                format!("{} {}{unit}", if incl { ">=" } else { ">" }, num(l))
+            }
             _ => format!("a finite number{unit}"),
         }
     }
@@ -239,7 +290,11 @@ impl Ctx<'_> {
             if !allowed.contains(&key) {
                 let line = self.key_line(tab, key);
                 let list = allowed.join(", ");
-                self.err(line, tab.key(key), format!("unknown key{what}; allowed keys: {list}"));
+                self.err(
+                    line,
+                    tab.key(key),
+                    format!("unknown key{what}; allowed keys: {list}"),
+                );
             }
         }
     }
@@ -251,7 +306,11 @@ impl Ctx<'_> {
 
     fn wrong_type(&mut self, tab: &Tab, key: &str, what: &str, item: &Item) {
         let line = self.key_line(tab, key);
-        self.err(line, tab.key(key), format!("must be {what}, got {}", item.type_name()));
+        self.err(
+            line,
+            tab.key(key),
+            format!("must be {what}, got {}", item.type_name()),
+        );
     }
 
     fn bad(&mut self, tab: &Tab, key: &str, message: String) {
@@ -276,11 +335,19 @@ impl Ctx<'_> {
             }
         };
         if !x.is_finite() {
-            self.bad(tab, key, format!("must be a finite number {}, got {x}", rule.describe()));
+            self.bad(
+                tab,
+                key,
+                format!("must be a finite number {}, got {x}", rule.describe()),
+            );
             return None;
         }
         if !rule.ok(x) {
-            self.bad(tab, key, format!("must be {}, got {}", rule.describe(), num(x)));
+            self.bad(
+                tab,
+                key,
+                format!("must be {}, got {}", rule.describe(), num(x)),
+            );
             return None;
         }
         Some(x)
@@ -304,7 +371,14 @@ impl Ctx<'_> {
                 }
             },
             Some(Value::Float(f)) => {
-                self.bad(tab, key, format!("must be {what} (write it without a decimal point), got {:?}", f.value()));
+                self.bad(
+                    tab,
+                    key,
+                    format!(
+                        "must be {what} (write it without a decimal point), got {:?}",
+                        f.value()
+                    ),
+                );
                 None
             }
             _ => {
@@ -315,7 +389,9 @@ impl Ctx<'_> {
     }
 
     fn boolean(&mut self, tab: &Tab, key: &str) -> Option<Option<bool>> {
-        let Some(item) = tab.t.get(key) else { return Some(None) };
+        let Some(item) = tab.t.get(key) else {
+            return Some(None);
+        };
         match item.as_value().and_then(Value::as_bool) {
             Some(b) => Some(Some(b)),
             None => {
@@ -347,8 +423,18 @@ impl Ctx<'_> {
     }
 
     /// One of the strings in `options`.
-    fn choice<T: Copy>(&mut self, tab: &Tab, key: &str, options: &[(&str, T)], required: bool) -> Option<T> {
-        let list = options.iter().map(|(s, _)| format!("\"{s}\"")).collect::<Vec<_>>().join(" | ");
+    fn choice<T: Copy>(
+        &mut self,
+        tab: &Tab,
+        key: &str,
+        options: &[(&str, T)],
+        required: bool,
+    ) -> Option<T> {
+        let list = options
+            .iter()
+            .map(|(s, _)| format!("\"{s}\""))
+            .collect::<Vec<_>>()
+            .join(" | ");
         let what = format!("one of {list}");
         let Some(item) = tab.t.get(key) else {
             if required {
@@ -370,7 +456,13 @@ impl Ctx<'_> {
     }
 
     /// A sub-table (`[a.b]`, `b = { ... }` or dotted keys).
-    fn table<'d>(&mut self, tab: &Tab<'d>, key: &str, required: bool, what: &str) -> Option<Tab<'d>> {
+    fn table<'d>(
+        &mut self,
+        tab: &Tab<'d>,
+        key: &str,
+        required: bool,
+        what: &str,
+    ) -> Option<Tab<'d>> {
         let Some(item) = tab.t.get(key) else {
             if required {
                 self.missing(tab, key, &format!("a table ({what})"));
@@ -378,7 +470,11 @@ impl Ctx<'_> {
             return None;
         };
         match item.as_table_like() {
-            Some(t) => Some(Tab { path: tab.key(key), t, line: self.key_line(tab, key) }),
+            Some(t) => Some(Tab {
+                path: tab.key(key),
+                t,
+                line: self.key_line(tab, key),
+            }),
             None => {
                 self.wrong_type(tab, key, &format!("a table ({what})"), item);
                 None
@@ -387,7 +483,18 @@ impl Ctx<'_> {
     }
 }
 
-const ROOT_KEYS: &[&str] = &["name", "duration", "motion", "robot", "tool", "decoupler", "target", "sensor", "solver", "controller"];
+const ROOT_KEYS: &[&str] = &[
+    "name",
+    "duration",
+    "motion",
+    "robot",
+    "tool",
+    "decoupler",
+    "target",
+    "sensor",
+    "solver",
+    "controller",
+];
 
 const LAWS: &[(&str, DampingLaw)] = &[
     ("hunt-crossley", DampingLaw::HuntCrossley),
@@ -398,25 +505,48 @@ const LAWS: &[(&str, DampingLaw)] = &[
 ];
 
 fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
-    let root = Tab { path: String::new(), t: root, line: Some(1) };
+    let root = Tab {
+        path: String::new(),
+        t: root,
+        line: Some(1),
+    };
     cx.check_keys(&root, ROOT_KEYS, "");
     let name = cx.string(&root, "name", true);
     let duration_s = cx.number(&root, "duration", Rule::gt(0.0, "s"), true);
 
     let motion_tab = cx.table(&root, "motion", true, "the commanded flange motion");
     let motion = motion_tab.as_ref().and_then(|t| motion(cx, t));
-    let robot = match cx.table(&root, "robot", false, "the robot compliance; omit it for a rigid robot") {
+    let robot = match cx.table(
+        &root,
+        "robot",
+        false,
+        "the robot compliance; omit it for a rigid robot",
+    ) {
         Some(t) => robot(cx, &t).map(Some),
         None if root.t.contains_key("robot") => None,
         None => Some(None),
     };
-    let tool = cx.table(&root, "tool", true, "the tool").and_then(|t| tool(cx, &t));
+    let tool = cx
+        .table(&root, "tool", true, "the tool")
+        .and_then(|t| tool(cx, &t));
     let gravity = motion.map(|m| m.gravity);
-    let decoupler_tab = cx.table(&root, "decoupler", true, "what holds the tool on the flange");
-    let decoupler = decoupler_tab.as_ref().and_then(|t| decoupler(cx, t, tool.map(|t| t.mass), gravity));
+    let decoupler_tab = cx.table(
+        &root,
+        "decoupler",
+        true,
+        "what holds the tool on the flange",
+    );
+    let decoupler = decoupler_tab
+        .as_ref()
+        .and_then(|t| decoupler(cx, t, tool.map(|t| t.mass), gravity));
     let target_tab = cx.table(&root, "target", true, "what the tool runs into");
     let target = target_tab.as_ref().and_then(|t| target(cx, t));
-    let sensor_tab = cx.table(&root, "sensor", false, "the collision detector; omit it and the robot never brakes");
+    let sensor_tab = cx.table(
+        &root,
+        "sensor",
+        false,
+        "the collision detector; omit it and the robot never brakes",
+    );
     let sensor = match &sensor_tab {
         Some(t) => sensor(cx, t, decoupler.as_ref()).map(Some),
         None if root.t.contains_key("sensor") => None,
@@ -427,7 +557,12 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
         None if root.t.contains_key("solver") => None,
         None => Some(default_solver()),
     };
-    let controller = match cx.table(&root, "controller", false, "the robot controller for `flinch hil`") {
+    let controller = match cx.table(
+        &root,
+        "controller",
+        false,
+        "the robot controller for `flinch hil`",
+    ) {
         Some(t) => controller(cx, &t).map(Some),
         None if root.t.contains_key("controller") => None,
         None => Some(None),
@@ -479,7 +614,18 @@ fn cruise_travel(m: &Motion, t: f64) -> f64 {
 }
 
 fn motion(cx: &mut Ctx, t: &Tab) -> Option<Motion> {
-    cx.check_keys(t, &["speed", "accel", "decel", "dead_time", "gravity", "start_at_speed"], "");
+    cx.check_keys(
+        t,
+        &[
+            "speed",
+            "accel",
+            "decel",
+            "dead_time",
+            "gravity",
+            "start_at_speed",
+        ],
+        "",
+    );
     let speed = cx.number(t, "speed", Rule::gt(0.0, "m/s"), true);
     let accel = cx.number(t, "accel", Rule::gt(0.0, "m/s^2"), true);
     let decel = cx.number(t, "decel", Rule::gt(0.0, "m/s^2"), true);
@@ -501,12 +647,18 @@ fn robot(cx: &mut Ctx, t: &Tab) -> Option<Robot> {
     let mass = cx.number(t, "mass", Rule::gt(0.0, "kg"), true);
     let stiffness = cx.number(t, "stiffness", Rule::gt(0.0, "N/m"), true);
     let damping = cx.number(t, "damping", Rule::ge(0.0, "N s/m"), true);
-    Some(Robot { mass: mass?, stiffness: stiffness?, damping: damping? })
+    Some(Robot {
+        mass: mass?,
+        stiffness: stiffness?,
+        damping: damping?,
+    })
 }
 
 fn tool(cx: &mut Ctx, t: &Tab) -> Option<Tool> {
     cx.check_keys(t, &["mass"], "");
-    Some(Tool { mass: cx.number(t, "mass", Rule::gt(0.0, "kg"), true)? })
+    Some(Tool {
+        mass: cx.number(t, "mass", Rule::gt(0.0, "kg"), true)?,
+    })
 }
 
 const RIGID_KEYS: &[&str] = &["kind"];
@@ -548,7 +700,12 @@ enum DecKind {
     Hydraulic,
 }
 
-fn decoupler(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>, gravity: Option<f64>) -> Option<Decoupler> {
+fn decoupler(
+    cx: &mut Ctx,
+    t: &Tab,
+    tool_mass: Option<f64>,
+    gravity: Option<f64>,
+) -> Option<Decoupler> {
     let kinds = [
         ("rigid", DecKind::Rigid),
         ("linear", DecKind::Linear),
@@ -565,7 +722,10 @@ fn decoupler(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>, gravity: Option<f64>
             cx.check_keys(t, LINEAR_KEYS, " for kind = \"linear\"");
             let stiffness = cx.number(t, "stiffness", Rule::ge(0.0, "N/m"), true);
             let damping_ratio = cx.number(t, "damping_ratio", Rule::ge(0.0, ""), true);
-            Some(Decoupler::Linear(LinearDecoupler { stiffness: stiffness?, damping_ratio: damping_ratio? }))
+            Some(Decoupler::Linear(LinearDecoupler {
+                stiffness: stiffness?,
+                damping_ratio: damping_ratio?,
+            }))
         }
         DecKind::Bistable => {
             cx.check_keys(t, BISTABLE_KEYS, " for kind = \"bistable\"");
@@ -578,18 +738,38 @@ fn decoupler(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>, gravity: Option<f64>
     }
 }
 
-fn bistable(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>, gravity: Option<f64>) -> Option<Bistable> {
+fn bistable(
+    cx: &mut Ctx,
+    t: &Tab,
+    tool_mass: Option<f64>,
+    gravity: Option<f64>,
+) -> Option<Bistable> {
     let springs = cx.integer(t, "springs", 1, true);
     let spring_rate = cx.number(t, "spring_rate", Rule::gt(0.0, "N/m"), true);
     let free_length = cx.number(t, "free_length", Rule::gt(0.0, "m"), true);
     let height = cx.number(t, "height", Rule::gt(0.0, "m"), true);
     let front_stroke = cx.number(t, "front_stroke", Rule::gt(0.0, "m"), true);
     let back_stroke = cx.number(t, "back_stroke", Rule::gt(0.0, "m"), true);
-    let front_stop = cx.table(t, "front_stop", true, "{ stiffness, damping } or { stiffness, restitution }");
+    let front_stop = cx.table(
+        t,
+        "front_stop",
+        true,
+        "{ stiffness, damping } or { stiffness, restitution }",
+    );
     let front_stop = front_stop.and_then(|s| linear_stop(cx, &s, tool_mass));
-    let back_stop = cx.table(t, "back_stop", true, "{ stiffness, restitution, damping_law } or { stiffness, chi }");
+    let back_stop = cx.table(
+        t,
+        "back_stop",
+        true,
+        "{ stiffness, restitution, damping_law } or { stiffness, chi }",
+    );
     let back_stop = back_stop.and_then(|s| nonlinear_stop(cx, &s));
-    let friction = match cx.table(t, "friction", false, "{ mu, v0 }; omit it for a frictionless slide") {
+    let friction = match cx.table(
+        t,
+        "friction",
+        false,
+        "{ mu, v0 }; omit it for a frictionless slide",
+    ) {
         Some(f) => {
             cx.check_keys(&f, &["mu", "v0"], "");
             let mu = cx.number(&f, "mu", Rule::ge(0.0, ""), true);
@@ -601,9 +781,15 @@ fn bistable(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>, gravity: Option<f64>)
     };
 
     // At t = 0 the tool rests on the front stop: spring force at s = C1 plus its weight must push it there.
-    if let (Some(n), Some(kb), Some(l0), Some(h), Some(c1), Some(mt), Some(gravity)) =
-        (springs, spring_rate, free_length, height, front_stroke, tool_mass, gravity)
-    {
+    if let (Some(n), Some(kb), Some(l0), Some(h), Some(c1), Some(mt), Some(gravity)) = (
+        springs,
+        spring_rate,
+        free_length,
+        height,
+        front_stroke,
+        tool_mass,
+        gravity,
+    ) {
         let l1 = (h * h + c1 * c1).sqrt();
         let f_spring = f64::from(n) * kb * (l0 - l1) * c1 / l1;
         let weight = mt * gravity;
@@ -647,21 +833,44 @@ fn hydraulic(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<Hydraulic>
     let viscous_friction = cx.number(t, "viscous_friction", Rule::ge(0.0, "N s/m"), true);
     // 1 is isothermal, 5/3 a monatomic gas: nothing outside is a gas.
     let adiabatic_exponent = match t.t.contains_key("adiabatic_exponent") {
-        true => cx.number(t, "adiabatic_exponent", Rule::within(1.0, 5.0 / 3.0, true, ""), false),
+        true => cx.number(
+            t,
+            "adiabatic_exponent",
+            Rule::within(1.0, 5.0 / 3.0, true, ""),
+            false,
+        ),
         false => Some(DEFAULT_ADIABATIC_EXPONENT),
     };
     let friction_v0 = match t.t.contains_key("friction_v0") {
         true => cx.number(t, "friction_v0", Rule::gt(0.0, "m/s"), false),
         false => Some(DEFAULT_HYDRAULIC_FRICTION_V0),
     };
-    let front_stop = cx.table(t, "front_stop", true, "{ stiffness, damping } or { stiffness, restitution }");
+    let front_stop = cx.table(
+        t,
+        "front_stop",
+        true,
+        "{ stiffness, damping } or { stiffness, restitution }",
+    );
     let front_stop = front_stop.and_then(|s| linear_stop(cx, &s, tool_mass));
-    let back_stop = cx.table(t, "back_stop", true, "{ stiffness, restitution, damping_law } or { stiffness, chi }");
+    let back_stop = cx.table(
+        t,
+        "back_stop",
+        true,
+        "{ stiffness, restitution, damping_law } or { stiffness, chi }",
+    );
     let back_stop = back_stop.and_then(|s| nonlinear_stop(cx, &s));
 
     if let (Some(rp), Some(ro)) = (piston_radius, orifice_radius) {
         if ro >= rp {
-            cx.bad(t, "orifice_radius", format!("must be < decoupler.piston_radius = {} m, got {}", num(rp), num(ro)));
+            cx.bad(
+                t,
+                "orifice_radius",
+                format!(
+                    "must be < decoupler.piston_radius = {} m, got {}",
+                    num(rp),
+                    num(ro)
+                ),
+            );
             return None;
         }
     }
@@ -711,42 +920,71 @@ fn linear_stop(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<LinearSt
     let stiffness = cx.number(t, "stiffness", Rule::gt(0.0, "N/m"), true);
     match (t.t.contains_key("damping"), t.t.contains_key("restitution")) {
         (true, true) => {
-            cx.bad(t, "restitution", "give either damping (N s/m) or restitution, not both".into());
+            cx.bad(
+                t,
+                "restitution",
+                "give either damping (N s/m) or restitution, not both".into(),
+            );
             None
         }
         (false, false) => {
-            cx.missing(t, "damping", "damping (N s/m >= 0), or restitution in [0, 1] converted with the tool mass");
+            cx.missing(
+                t,
+                "damping",
+                "damping (N s/m >= 0), or restitution in [0, 1] converted with the tool mass",
+            );
             None
         }
         (true, false) => {
             let damping = cx.number(t, "damping", Rule::ge(0.0, "N s/m"), true);
-            Some(LinearStop { stiffness: stiffness?, damping: damping? })
+            Some(LinearStop {
+                stiffness: stiffness?,
+                damping: damping?,
+            })
         }
         (false, true) => {
             let e = cx.number(t, "restitution", Rule::within(0.0, 1.0, true, ""), true)?;
             let (k, m) = (stiffness?, tool_mass?);
             let damping = 2.0 * zeta_from_restitution(e) * (k * m).sqrt();
-            Some(LinearStop { stiffness: k, damping })
+            Some(LinearStop {
+                stiffness: k,
+                damping,
+            })
         }
     }
 }
 
 /// `restitution` + `damping_law` or `chi`; `default_law` is used when `damping_law` is absent
 /// (`None`: the law is required).
-fn contact_damping(cx: &mut Ctx, t: &Tab, default_law: Option<DampingLaw>) -> Option<ContactDamping> {
+fn contact_damping(
+    cx: &mut Ctx,
+    t: &Tab,
+    default_law: Option<DampingLaw>,
+) -> Option<ContactDamping> {
     let has_chi = t.t.contains_key("chi");
     let has_e = t.t.contains_key("restitution");
     let has_law = t.t.contains_key("damping_law");
     if has_chi {
         if has_e || has_law {
             let other = if has_e { "restitution" } else { "damping_law" };
-            cx.bad(t, other, "give either chi (a fixed damping) or restitution with damping_law, not both".into());
+            cx.bad(
+                t,
+                other,
+                "give either chi (a fixed damping) or restitution with damping_law, not both"
+                    .into(),
+            );
             return None;
         }
-        return cx.number(t, "chi", Rule::ge(0.0, "N s/m^2.5"), true).map(ContactDamping::FixedChi);
+        return cx
+            .number(t, "chi", Rule::ge(0.0, "N s/m^2.5"), true)
+            .map(ContactDamping::FixedChi);
     }
     if !has_e {
-        cx.missing(t, "restitution", "restitution in [0, 1] (with damping_law), or chi (N s/m^2.5 >= 0)");
+        cx.missing(
+            t,
+            "restitution",
+            "restitution in [0, 1] (with damping_law), or chi (N s/m^2.5 >= 0)",
+        );
         if has_law {
             cx.choice(t, "damping_law", LAWS, false);
         }
@@ -763,14 +1001,20 @@ fn contact_damping(cx: &mut Ctx, t: &Tab, default_law: Option<DampingLaw>) -> Op
         cx.bad(t, "restitution", "must be in (0, 1] with damping_law \"flores\" or \"gonthier\" (the law divides by e), got 0".into());
         return None;
     }
-    Some(ContactDamping::Restitution { restitution: e, law })
+    Some(ContactDamping::Restitution {
+        restitution: e,
+        law,
+    })
 }
 
 fn nonlinear_stop(cx: &mut Ctx, t: &Tab) -> Option<NonlinearStop> {
     cx.check_keys(t, &["stiffness", "restitution", "damping_law", "chi"], "");
     let stiffness = cx.number(t, "stiffness", Rule::gt(0.0, "N/m^1.5"), true);
     let damping = contact_damping(cx, t, Some(DEFAULT_BACK_STOP_LAW));
-    Some(NonlinearStop { stiffness: stiffness?, damping: damping? })
+    Some(NonlinearStop {
+        stiffness: stiffness?,
+        damping: damping?,
+    })
 }
 
 fn target(cx: &mut Ctx, t: &Tab) -> Option<Target> {
@@ -779,11 +1023,27 @@ fn target(cx: &mut Ctx, t: &Tab) -> Option<Target> {
         Obstacle,
         Object,
     }
-    let kind = cx.choice(t, "kind", &[("obstacle", K::Obstacle), ("object", K::Object)], true);
-    let common = ["kind", "gap", "stiffness", "restitution", "damping_law", "chi"];
+    let kind = cx.choice(
+        t,
+        "kind",
+        &[("obstacle", K::Obstacle), ("object", K::Object)],
+        true,
+    );
+    let common = [
+        "kind",
+        "gap",
+        "stiffness",
+        "restitution",
+        "damping_law",
+        "chi",
+    ];
     match kind {
         Some(K::Obstacle) => cx.check_keys(t, &common, " for kind = \"obstacle\""),
-        Some(K::Object) => cx.check_keys(t, &[&common[..], &["mass", "floor_friction"]].concat(), " for kind = \"object\""),
+        Some(K::Object) => cx.check_keys(
+            t,
+            &[&common[..], &["mass", "floor_friction"]].concat(),
+            " for kind = \"object\"",
+        ),
         None => {}
     }
     let gap = cx.number(t, "gap", Rule::gt(0.0, "m"), true);
@@ -797,10 +1057,18 @@ fn target(cx: &mut Ctx, t: &Tab) -> Option<Target> {
                 true => Some(cx.number(t, "floor_friction", Rule::ge(0.0, ""), false)?),
                 false => None,
             };
-            TargetKind::Object { mass: mass?, floor_friction }
+            TargetKind::Object {
+                mass: mass?,
+                floor_friction,
+            }
         }
     };
-    Some(Target { kind, gap: gap?, stiffness: stiffness?, damping: damping? })
+    Some(Target {
+        kind,
+        gap: gap?,
+        stiffness: stiffness?,
+        damping: damping?,
+    })
 }
 
 fn sensor(cx: &mut Ctx, t: &Tab, decoupler: Option<&Decoupler>) -> Option<Sensor> {
@@ -810,7 +1078,12 @@ fn sensor(cx: &mut Ctx, t: &Tab, decoupler: Option<&Decoupler>) -> Option<Sensor
         Force,
     }
     cx.check_keys(t, &["kind", "threshold"], "");
-    let kind = cx.choice(t, "kind", &[("travel", K::Travel), ("force", K::Force)], true);
+    let kind = cx.choice(
+        t,
+        "kind",
+        &[("travel", K::Travel), ("force", K::Force)],
+        true,
+    );
     let rule = match kind {
         Some(K::Travel) => Rule::gt(0.0, "m"),
         Some(K::Force) => Rule::gt(0.0, "N"),
@@ -826,13 +1099,24 @@ fn sensor(cx: &mut Ctx, t: &Tab, decoupler: Option<&Decoupler>) -> Option<Sensor
                     cx.bad(t, "kind", "must be \"force\" for decoupler.kind = \"rigid\" (a rigid tool has no travel), got \"travel\"".into());
                     return None;
                 }
-                Some(Decoupler::Bistable(b)) => Some((b.front_stroke + b.back_stroke, "total stroke front_stroke + back_stroke")),
+                Some(Decoupler::Bistable(b)) => Some((
+                    b.front_stroke + b.back_stroke,
+                    "total stroke front_stroke + back_stroke",
+                )),
                 Some(Decoupler::Hydraulic(h)) => Some((h.stroke, "stroke")),
                 Some(Decoupler::Linear(_)) | None => None,
             };
             if let Some((c, what)) = stroke {
                 if threshold >= c {
-                    cx.bad(t, "threshold", format!("must be < the decoupler's {what} = {} m, got {}", approx(c), num(threshold)));
+                    cx.bad(
+                        t,
+                        "threshold",
+                        format!(
+                            "must be < the decoupler's {what} = {} m, got {}",
+                            approx(c),
+                            num(threshold)
+                        ),
+                    );
                     return None;
                 }
             }
@@ -852,9 +1136,17 @@ fn default_solver() -> SolverSettings {
 }
 
 fn solver(cx: &mut Ctx, t: &Tab, duration: Option<f64>) -> Option<SolverSettings> {
-    cx.check_keys(t, &["method", "rtol", "atol", "max_step", "output_interval"], "");
+    cx.check_keys(
+        t,
+        &["method", "rtol", "atol", "max_step", "output_interval"],
+        "",
+    );
     let d = default_solver();
-    let methods = [("dopri5", Method::Dopri5), ("rk4", Method::Rk4), ("semi-implicit-euler", Method::SemiImplicitEuler)];
+    let methods = [
+        ("dopri5", Method::Dopri5),
+        ("rk4", Method::Rk4),
+        ("semi-implicit-euler", Method::SemiImplicitEuler),
+    ];
     let method = match t.t.contains_key("method") {
         true => cx.choice(t, "method", &methods, false),
         false => Some(d.method),
@@ -863,27 +1155,54 @@ fn solver(cx: &mut Ctx, t: &Tab, duration: Option<f64>) -> Option<SolverSettings
         true => cx.number(t, key, rule, false),
         false => Some(default),
     };
-    let rtol = opt("rtol", Rule::within(RTOL_RANGE.0, RTOL_RANGE.1, true, ""), d.rtol);
-    let atol = opt("atol", Rule::within(ATOL_RANGE.0, ATOL_RANGE.1, true, ""), d.atol);
+    let rtol = opt(
+        "rtol",
+        Rule::within(RTOL_RANGE.0, RTOL_RANGE.1, true, ""),
+        d.rtol,
+    );
+    let atol = opt(
+        "atol",
+        Rule::within(ATOL_RANGE.0, ATOL_RANGE.1, true, ""),
+        d.atol,
+    );
     let max_step = opt("max_step", Rule::gt(0.0, "s"), d.max_step);
     let output_interval = opt("output_interval", Rule::ge(0.0, "s"), d.output_interval);
     if let Some(dur) = duration {
         for (key, v) in [("max_step", max_step), ("output_interval", output_interval)] {
             if let Some(v) = v.filter(|&v| v > dur) {
-                cx.bad(t, key, format!("must be <= duration = {} s, got {}", num(dur), num(v)));
+                cx.bad(
+                    t,
+                    key,
+                    format!("must be <= duration = {} s, got {}", num(dur), num(v)),
+                );
                 return None;
             }
         }
     }
-    Some(SolverSettings { method: method?, rtol: rtol?, atol: atol?, max_step: max_step?, output_interval: output_interval? })
+    Some(SolverSettings {
+        method: method?,
+        rtol: rtol?,
+        atol: atol?,
+        max_step: max_step?,
+        output_interval: output_interval?,
+    })
 }
 
 fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
     cx.check_keys(t, &["scan_cycle", "phase", "firmware_tick"], "");
     let scan_cycle = cx.number(t, "scan_cycle", Rule::gt(0.0, "s"), true);
-    let phase = cx.number(t, "phase", Rule::within(0.0, 1.0, false, "of a scan cycle"), true);
+    let phase = cx.number(
+        t,
+        "phase",
+        Rule::within(0.0, 1.0, false, "of a scan cycle"),
+        true,
+    );
     let firmware_tick = cx.number(t, "firmware_tick", Rule::gt(0.0, "s"), true);
-    Some(Controller { scan_cycle: scan_cycle?, phase: phase?, firmware_tick: firmware_tick? })
+    Some(Controller {
+        scan_cycle: scan_cycle?,
+        phase: phase?,
+        firmware_tick: firmware_tick?,
+    })
 }
 
 #[cfg(test)]
@@ -981,12 +1300,27 @@ threshold = 0.0015
     /// Expects `text` refused with an issue on `key`, at the line of `at`, whose message holds `allowed`.
     fn refused(text: &str, key: &str, at: &str, allowed: &str) {
         let err = parse(text, "bad.toml").expect_err("scene should be refused");
-        let line = line_at(text, text.find(at).unwrap_or_else(|| panic!("{at:?} not in the text")));
+        let line = line_at(
+            text,
+            text.find(at)
+                .unwrap_or_else(|| panic!("{at:?} not in the text")),
+        );
         let shown = err.to_string();
-        let issue = err.issues.iter().find(|i| i.key == key).unwrap_or_else(|| panic!("no issue on {key}:\n{shown}"));
+        let issue = err
+            .issues
+            .iter()
+            .find(|i| i.key == key)
+            .unwrap_or_else(|| panic!("no issue on {key}:\n{shown}"));
         assert_eq!(issue.line, Some(line), "{shown}");
-        assert!(issue.message.contains(allowed), "{:?} lacks {allowed:?}", issue.message);
-        assert!(shown.contains(&format!("bad.toml:{line}: {key}: ")), "{shown}");
+        assert!(
+            issue.message.contains(allowed),
+            "{:?} lacks {allowed:?}",
+            issue.message
+        );
+        assert!(
+            shown.contains(&format!("bad.toml:{line}: {key}: ")),
+            "{shown}"
+        );
     }
 
     /// One test per error path: replace `from` by `to` in `base`, expect `key` refused at `at`.
@@ -1003,49 +1337,94 @@ threshold = 0.0015
     fn bases_load() {
         let s = parse(BASE, "base.toml").unwrap();
         assert_eq!(s.solver.method, Method::Rk4);
-        assert_eq!(s.controller, Some(Controller { scan_cycle: 0.016, phase: 0.5, firmware_tick: 1e-4 }));
+        assert_eq!(
+            s.controller,
+            Some(Controller {
+                scan_cycle: 0.016,
+                phase: 0.5,
+                firmware_tick: 1e-4
+            })
+        );
         let h = parse(HYD, "hyd.toml").unwrap();
-        let Decoupler::Hydraulic(d) = h.decoupler else { panic!("not hydraulic") };
+        let Decoupler::Hydraulic(d) = h.decoupler else {
+            panic!("not hydraulic")
+        };
         assert_eq!(d.adiabatic_exponent, DEFAULT_ADIABATIC_EXPONENT);
         assert_eq!(d.friction_v0, DEFAULT_HYDRAULIC_FRICTION_V0);
         assert_eq!(d.back_stop.damping, ContactDamping::FixedChi(2e5));
-        assert_eq!(h.target.kind, TargetKind::Object { mass: 0.246, floor_friction: None });
+        assert_eq!(
+            h.target.kind,
+            TargetKind::Object {
+                mass: 0.246,
+                floor_friction: None
+            }
+        );
         assert_eq!(h.robot, None);
     }
 
     #[test]
     fn optional_elements_and_defaults() {
         let text = mutate(BASE, "[sensor]\nkind = \"travel\"\nthreshold = 0.005\n", "");
-        let text = mutate(&text, "method = \"rk4\"\nrtol = 1e-6\natol = 1e-9\nmax_step = 1e-4\noutput_interval = 1e-3\n", "");
+        let text = mutate(
+            &text,
+            "method = \"rk4\"\nrtol = 1e-6\natol = 1e-9\nmax_step = 1e-4\noutput_interval = 1e-3\n",
+            "",
+        );
         let text = mutate(&text, "friction = { mu = 0.12, v0 = 0.001 }\n", "");
-        let text = mutate(&text, "[controller]\nscan_cycle = 0.016\nphase = 0.5\nfirmware_tick = 1e-4\n", "");
+        let text = mutate(
+            &text,
+            "[controller]\nscan_cycle = 0.016\nphase = 0.5\nfirmware_tick = 1e-4\n",
+            "",
+        );
         let s = parse(&text, "opt.toml").unwrap();
         assert_eq!(s.sensor, None);
         assert_eq!(s.controller, None);
         assert_eq!(s.solver, default_solver());
         assert_eq!(s.solver.rtol, DEFAULT_RTOL);
         assert!(!s.motion.start_at_speed);
-        let Decoupler::Bistable(b) = s.decoupler else { panic!("not bistable") };
+        let Decoupler::Bistable(b) = s.decoupler else {
+            panic!("not bistable")
+        };
         assert_eq!(b.friction, None);
-        assert_eq!(b.back_stop.damping, ContactDamping::Restitution { restitution: 0.6, law: DEFAULT_BACK_STOP_LAW });
+        assert_eq!(
+            b.back_stop.damping,
+            ContactDamping::Restitution {
+                restitution: 0.6,
+                law: DEFAULT_BACK_STOP_LAW
+            }
+        );
     }
 
     #[test]
     fn integers_are_accepted_as_numbers() {
-        let s = parse(&mutate(BASE, "stiffness = 1e8", "stiffness = 100000000"), "int.toml").unwrap();
+        let s = parse(
+            &mutate(BASE, "stiffness = 1e8", "stiffness = 100000000"),
+            "int.toml",
+        )
+        .unwrap();
         assert_eq!(s.target.stiffness, 1e8);
     }
 
     #[test]
     fn front_stop_restitution_converts_with_the_tool_mass() {
         let with = |e: &str| {
-            let s = parse(&mutate(BASE, "damping = 278.0 }", &format!("restitution = {e} }}")), "e.toml").unwrap();
-            let Decoupler::Bistable(b) = s.decoupler else { panic!("not bistable") };
+            let s = parse(
+                &mutate(BASE, "damping = 278.0 }", &format!("restitution = {e} }}")),
+                "e.toml",
+            )
+            .unwrap();
+            let Decoupler::Bistable(b) = s.decoupler else {
+                panic!("not bistable")
+            };
             b.front_stop.damping
         };
         let crit = 2.0 * (1e6_f64 * 0.75).sqrt();
         // e = 0.4: zeta = -ln 0.4 / sqrt(pi^2 + ln^2 0.4) = 0.27999...
-        assert!((with("0.4") / crit - 0.279_997).abs() < 1e-5, "{}", with("0.4") / crit);
+        assert!(
+            (with("0.4") / crit - 0.279_997).abs() < 1e-5,
+            "{}",
+            with("0.4") / crit
+        );
         assert_eq!(with("0.0"), crit);
         assert_eq!(with("1.0"), 0.0);
         assert!((zeta_from_restitution(0.5) - 0.215_454).abs() < 1e-6);
@@ -1053,11 +1432,20 @@ threshold = 0.0015
 
     #[test]
     fn start_at_speed_travel() {
-        let text = mutate(BASE, "gravity = 0.0\n", "gravity = 0.0\nstart_at_speed = true\n");
+        let text = mutate(
+            BASE,
+            "gravity = 0.0\n",
+            "gravity = 0.0\nstart_at_speed = true\n",
+        );
         assert!(parse(&text, "s.toml").unwrap().motion.start_at_speed);
         // Cruising from t = 0, 0.6 s at 0.05 m/s covers 0.03 m: a 0.029 m gap is reached, 0.031 m is not.
         assert!(parse(&mutate(&text, "gap = 0.01", "gap = 0.029"), "s.toml").is_ok());
-        refused(&mutate(&text, "gap = 0.01", "gap = 0.031"), "target.gap", "gap = 0.031", "covers only 0.03 m");
+        refused(
+            &mutate(&text, "gap = 0.01", "gap = 0.031"),
+            "target.gap",
+            "gap = 0.031",
+            "covers only 0.03 m",
+        );
     }
 
     #[test]
@@ -1078,7 +1466,10 @@ threshold = 0.0015
         let err = parse(&text, "syntax.toml").unwrap_err();
         assert_eq!(err.issues.len(), 1);
         assert_eq!(err.issues[0].line, Some(6));
-        assert!(err.to_string().starts_with("syntax.toml:6: not valid TOML"), "{err}");
+        assert!(
+            err.to_string().starts_with("syntax.toml:6: not valid TOML"),
+            "{err}"
+        );
     }
 
     #[test]
@@ -1094,7 +1485,11 @@ threshold = 0.0015
         let err = load(Path::new("/nonexistent/flinch/none.toml")).unwrap_err();
         assert_eq!(err.file, "/nonexistent/flinch/none.toml");
         assert_eq!(err.issues[0].line, None);
-        assert!(err.to_string().starts_with("/nonexistent/flinch/none.toml: cannot read"), "{err}");
+        assert!(
+            err.to_string()
+                .starts_with("/nonexistent/flinch/none.toml: cannot read"),
+            "{err}"
+        );
     }
 
     #[test]
@@ -1107,149 +1502,1101 @@ threshold = 0.0015
     }
 
     // Top level.
-    case!(root_unknown_key, BASE, "duration = 0.6\n", "duration = 0.6\ncolour = 1\n", "colour", "colour", "allowed keys: name, duration, motion");
-    case!(name_missing, BASE, "name = \"base\"\n", "", "name", "duration", "missing required key: a non-empty string");
-    case!(name_empty, BASE, "name = \"base\"", "name = \" \"", "name", "name", "must be a non-empty string");
-    case!(name_wrong_type, BASE, "name = \"base\"", "name = 3", "name", "name", "must be a non-empty string, got integer");
-    case!(duration_missing, BASE, "duration = 0.6\n", "", "duration", "name", "missing required key: a number > 0 s");
-    case!(duration_zero, BASE, "duration = 0.6", "duration = 0", "duration", "duration", "must be > 0 s, got 0");
-    case!(duration_nan, BASE, "duration = 0.6", "duration = nan", "duration", "duration", "must be a finite number > 0 s, got NaN");
-    case!(duration_inf, BASE, "duration = 0.6", "duration = inf", "duration", "duration", "must be a finite number > 0 s, got inf");
-    case!(duration_string, BASE, "duration = 0.6", "duration = \"0.6\"", "duration", "duration", "must be a number > 0 s, got string");
-    case!(motion_missing, BASE, "[motion]\nspeed = 0.05\naccel = 1.0\ndecel = 2.0\ndead_time = 0.016\ngravity = 0.0\n", "", "motion", "name", "missing required key: a table");
-    case!(tool_not_a_table, BASE, "[tool]\nmass = 0.75\n", "", "tool", "name", "missing required key: a table");
-    case!(tool_array_of_tables, BASE, "[tool]\n", "[[tool]]\n", "tool", "[[tool]]", "must be a table (the tool), got array of tables");
+    case!(
+        root_unknown_key,
+        BASE,
+        "duration = 0.6\n",
+        "duration = 0.6\ncolour = 1\n",
+        "colour",
+        "colour",
+        "allowed keys: name, duration, motion"
+    );
+    case!(
+        name_missing,
+        BASE,
+        "name = \"base\"\n",
+        "",
+        "name",
+        "duration",
+        "missing required key: a non-empty string"
+    );
+    case!(
+        name_empty,
+        BASE,
+        "name = \"base\"",
+        "name = \" \"",
+        "name",
+        "name",
+        "must be a non-empty string"
+    );
+    case!(
+        name_wrong_type,
+        BASE,
+        "name = \"base\"",
+        "name = 3",
+        "name",
+        "name",
+        "must be a non-empty string, got integer"
+    );
+    case!(
+        duration_missing,
+        BASE,
+        "duration = 0.6\n",
+        "",
+        "duration",
+        "name",
+        "missing required key: a number > 0 s"
+    );
+    case!(
+        duration_zero,
+        BASE,
+        "duration = 0.6",
+        "duration = 0",
+        "duration",
+        "duration",
+        "must be > 0 s, got 0"
+    );
+    case!(
+        duration_nan,
+        BASE,
+        "duration = 0.6",
+        "duration = nan",
+        "duration",
+        "duration",
+        "must be a finite number > 0 s, got NaN"
+    );
+    case!(
+        duration_inf,
+        BASE,
+        "duration = 0.6",
+        "duration = inf",
+        "duration",
+        "duration",
+        "must be a finite number > 0 s, got inf"
+    );
+    case!(
+        duration_string,
+        BASE,
+        "duration = 0.6",
+        "duration = \"0.6\"",
+        "duration",
+        "duration",
+        "must be a number > 0 s, got string"
+    );
+    case!(
+        motion_missing,
+        BASE,
+        "[motion]\nspeed = 0.05\naccel = 1.0\ndecel = 2.0\ndead_time = 0.016\ngravity = 0.0\n",
+        "",
+        "motion",
+        "name",
+        "missing required key: a table"
+    );
+    case!(
+        tool_not_a_table,
+        BASE,
+        "[tool]\nmass = 0.75\n",
+        "",
+        "tool",
+        "name",
+        "missing required key: a table"
+    );
+    case!(
+        tool_array_of_tables,
+        BASE,
+        "[tool]\n",
+        "[[tool]]\n",
+        "tool",
+        "[[tool]]",
+        "must be a table (the tool), got array of tables"
+    );
     case!(target_inline_wrong_type, BASE, "[target]\nkind = \"obstacle\"\ngap = 0.01\nstiffness = 1e8\nrestitution = 0.65\ndamping_law = \"hunt-crossley\"\n", "", "target", "name", "missing required key: a table");
-    case!(robot_not_a_table, HYD, "duration = 0.8\n", "duration = 0.8\nrobot = 5\n", "robot", "robot = 5", "must be a table");
+    case!(
+        robot_not_a_table,
+        HYD,
+        "duration = 0.8\n",
+        "duration = 0.8\nrobot = 5\n",
+        "robot",
+        "robot = 5",
+        "must be a table"
+    );
 
     // Motion.
-    case!(motion_unknown_key, BASE, "gravity = 0.0\n", "gravity = 0.0\njerk = 3\n", "motion.jerk", "jerk", "allowed keys: speed, accel, decel, dead_time, gravity, start_at_speed");
-    case!(speed_zero, BASE, "speed = 0.05", "speed = 0", "motion.speed", "speed", "must be > 0 m/s, got 0");
-    case!(speed_missing, BASE, "speed = 0.05\n", "", "motion.speed", "[motion]", "missing required key: a number > 0 m/s");
-    case!(accel_negative, BASE, "accel = 1.0", "accel = -1", "motion.accel", "accel", "must be > 0 m/s^2, got -1");
-    case!(decel_zero, BASE, "decel = 2.0", "decel = 0.0", "motion.decel", "decel", "must be > 0 m/s^2, got 0");
-    case!(dead_time_negative, BASE, "dead_time = 0.016", "dead_time = -0.01", "motion.dead_time", "dead_time", "must be >= 0 s, got -0.01");
-    case!(gravity_missing, BASE, "gravity = 0.0\n", "", "motion.gravity", "[motion]", "a finite number m/s^2");
-    case!(gravity_inf, BASE, "gravity = 0.0", "gravity = -inf", "motion.gravity", "gravity", "must be a finite number");
-    case!(start_at_speed_wrong_type, BASE, "gravity = 0.0\n", "gravity = 0.0\nstart_at_speed = 1\n", "motion.start_at_speed", "start_at_speed", "must be true or false, got integer");
+    case!(
+        motion_unknown_key,
+        BASE,
+        "gravity = 0.0\n",
+        "gravity = 0.0\njerk = 3\n",
+        "motion.jerk",
+        "jerk",
+        "allowed keys: speed, accel, decel, dead_time, gravity, start_at_speed"
+    );
+    case!(
+        speed_zero,
+        BASE,
+        "speed = 0.05",
+        "speed = 0",
+        "motion.speed",
+        "speed",
+        "must be > 0 m/s, got 0"
+    );
+    case!(
+        speed_missing,
+        BASE,
+        "speed = 0.05\n",
+        "",
+        "motion.speed",
+        "[motion]",
+        "missing required key: a number > 0 m/s"
+    );
+    case!(
+        accel_negative,
+        BASE,
+        "accel = 1.0",
+        "accel = -1",
+        "motion.accel",
+        "accel",
+        "must be > 0 m/s^2, got -1"
+    );
+    case!(
+        decel_zero,
+        BASE,
+        "decel = 2.0",
+        "decel = 0.0",
+        "motion.decel",
+        "decel",
+        "must be > 0 m/s^2, got 0"
+    );
+    case!(
+        dead_time_negative,
+        BASE,
+        "dead_time = 0.016",
+        "dead_time = -0.01",
+        "motion.dead_time",
+        "dead_time",
+        "must be >= 0 s, got -0.01"
+    );
+    case!(
+        gravity_missing,
+        BASE,
+        "gravity = 0.0\n",
+        "",
+        "motion.gravity",
+        "[motion]",
+        "a finite number m/s^2"
+    );
+    case!(
+        gravity_inf,
+        BASE,
+        "gravity = 0.0",
+        "gravity = -inf",
+        "motion.gravity",
+        "gravity",
+        "must be a finite number"
+    );
+    case!(
+        start_at_speed_wrong_type,
+        BASE,
+        "gravity = 0.0\n",
+        "gravity = 0.0\nstart_at_speed = 1\n",
+        "motion.start_at_speed",
+        "start_at_speed",
+        "must be true or false, got integer"
+    );
 
     // Robot and tool.
-    case!(robot_unknown_key, BASE, "damping = 71.0\n", "damping = 71.0\ninertia = 2\n", "robot.inertia", "inertia", "allowed keys: mass, stiffness, damping");
-    case!(robot_mass_zero, BASE, "mass = 8.4", "mass = 0", "robot.mass", "mass = 0", "must be > 0 kg, got 0");
-    case!(robot_stiffness_negative, BASE, "stiffness = 2.3e5", "stiffness = -2.3e5", "robot.stiffness", "stiffness = -2.3e5", "must be > 0 N/m, got -230000");
-    case!(robot_damping_negative, BASE, "damping = 71.0", "damping = -71", "robot.damping", "damping = -71", "must be >= 0 N s/m, got -71");
-    case!(robot_damping_missing, BASE, "damping = 71.0\n", "", "robot.damping", "[robot]", "missing required key: a number >= 0 N s/m");
-    case!(tool_mass_negative, BASE, "mass = 0.75", "mass = -1", "tool.mass", "mass = -1", "must be > 0 kg, got -1");
-    case!(tool_mass_missing, BASE, "mass = 0.75\n", "", "tool.mass", "[tool]", "missing required key: a number > 0 kg");
-    case!(tool_unknown_key, BASE, "mass = 0.75\n", "mass = 0.75\nlength = 1\n", "tool.length", "length", "allowed keys: mass");
+    case!(
+        robot_unknown_key,
+        BASE,
+        "damping = 71.0\n",
+        "damping = 71.0\ninertia = 2\n",
+        "robot.inertia",
+        "inertia",
+        "allowed keys: mass, stiffness, damping"
+    );
+    case!(
+        robot_mass_zero,
+        BASE,
+        "mass = 8.4",
+        "mass = 0",
+        "robot.mass",
+        "mass = 0",
+        "must be > 0 kg, got 0"
+    );
+    case!(
+        robot_stiffness_negative,
+        BASE,
+        "stiffness = 2.3e5",
+        "stiffness = -2.3e5",
+        "robot.stiffness",
+        "stiffness = -2.3e5",
+        "must be > 0 N/m, got -230000"
+    );
+    case!(
+        robot_damping_negative,
+        BASE,
+        "damping = 71.0",
+        "damping = -71",
+        "robot.damping",
+        "damping = -71",
+        "must be >= 0 N s/m, got -71"
+    );
+    case!(
+        robot_damping_missing,
+        BASE,
+        "damping = 71.0\n",
+        "",
+        "robot.damping",
+        "[robot]",
+        "missing required key: a number >= 0 N s/m"
+    );
+    case!(
+        tool_mass_negative,
+        BASE,
+        "mass = 0.75",
+        "mass = -1",
+        "tool.mass",
+        "mass = -1",
+        "must be > 0 kg, got -1"
+    );
+    case!(
+        tool_mass_missing,
+        BASE,
+        "mass = 0.75\n",
+        "",
+        "tool.mass",
+        "[tool]",
+        "missing required key: a number > 0 kg"
+    );
+    case!(
+        tool_unknown_key,
+        BASE,
+        "mass = 0.75\n",
+        "mass = 0.75\nlength = 1\n",
+        "tool.length",
+        "length",
+        "allowed keys: mass"
+    );
 
     // Decoupler kinds.
-    case!(decoupler_kind_bad, BASE, "kind = \"bistable\"", "kind = \"springy\"", "decoupler.kind", "springy", "must be one of \"rigid\" | \"linear\" | \"bistable\" | \"hydraulic\", got \"springy\"");
-    case!(decoupler_kind_missing, BASE, "kind = \"bistable\"\n", "", "decoupler.kind", "[decoupler]", "missing required key: one of \"rigid\" | \"linear\"");
-    case!(decoupler_missing, BASE, "[decoupler]\nkind = \"bistable\"\n", "[decoupler2]\n", "decoupler", "name", "missing required key: a table");
-    case!(rigid_with_bistable_keys, BASE, "kind = \"bistable\"", "kind = \"rigid\"", "decoupler.springs", "springs", "unknown key for kind = \"rigid\"; allowed keys: kind");
+    case!(
+        decoupler_kind_bad,
+        BASE,
+        "kind = \"bistable\"",
+        "kind = \"springy\"",
+        "decoupler.kind",
+        "springy",
+        "must be one of \"rigid\" | \"linear\" | \"bistable\" | \"hydraulic\", got \"springy\""
+    );
+    case!(
+        decoupler_kind_missing,
+        BASE,
+        "kind = \"bistable\"\n",
+        "",
+        "decoupler.kind",
+        "[decoupler]",
+        "missing required key: one of \"rigid\" | \"linear\""
+    );
+    case!(
+        decoupler_missing,
+        BASE,
+        "[decoupler]\nkind = \"bistable\"\n",
+        "[decoupler2]\n",
+        "decoupler",
+        "name",
+        "missing required key: a table"
+    );
+    case!(
+        rigid_with_bistable_keys,
+        BASE,
+        "kind = \"bistable\"",
+        "kind = \"rigid\"",
+        "decoupler.springs",
+        "springs",
+        "unknown key for kind = \"rigid\"; allowed keys: kind"
+    );
     case!(linear_stiffness_negative, BASE, "kind = \"bistable\"\nsprings = 2\nspring_rate = 200.0\nfree_length = 0.05\nheight = 0.03\nfront_stroke = 0.015\nback_stroke = 0.015\nfront_stop = { stiffness = 1e6, damping = 278.0 }\nback_stop = { stiffness = 1e6, restitution = 0.6 }\nfriction = { mu = 0.12, v0 = 0.001 }\n", "kind = \"linear\"\nstiffness = -5\ndamping_ratio = 1\n", "decoupler.stiffness", "stiffness = -5", "must be >= 0 N/m, got -5");
     case!(linear_damping_ratio_negative, BASE, "kind = \"bistable\"\nsprings = 2\nspring_rate = 200.0\nfree_length = 0.05\nheight = 0.03\nfront_stroke = 0.015\nback_stroke = 0.015\nfront_stop = { stiffness = 1e6, damping = 278.0 }\nback_stop = { stiffness = 1e6, restitution = 0.6 }\nfriction = { mu = 0.12, v0 = 0.001 }\n", "kind = \"linear\"\nstiffness = 50\ndamping_ratio = -1\n", "decoupler.damping_ratio", "damping_ratio", "must be >= 0, got -1");
-    case!(linear_unknown_key, BASE, "kind = \"bistable\"", "kind = \"linear\"", "decoupler.springs", "springs", "unknown key for kind = \"linear\"; allowed keys: kind, stiffness, damping_ratio");
+    case!(
+        linear_unknown_key,
+        BASE,
+        "kind = \"bistable\"",
+        "kind = \"linear\"",
+        "decoupler.springs",
+        "springs",
+        "unknown key for kind = \"linear\"; allowed keys: kind, stiffness, damping_ratio"
+    );
 
     // Bi-stable.
-    case!(springs_float, BASE, "springs = 2", "springs = 2.0", "decoupler.springs", "springs", "must be an integer >= 1 (write it without a decimal point), got 2.0");
-    case!(springs_zero, BASE, "springs = 2", "springs = 0", "decoupler.springs", "springs", "must be an integer >= 1, got 0");
-    case!(springs_string, BASE, "springs = 2", "springs = \"two\"", "decoupler.springs", "springs", "must be an integer >= 1, got string");
-    case!(springs_missing, BASE, "springs = 2\n", "", "decoupler.springs", "[decoupler]", "missing required key: an integer >= 1");
-    case!(spring_rate_zero, BASE, "spring_rate = 200.0", "spring_rate = 0", "decoupler.spring_rate", "spring_rate", "must be > 0 N/m, got 0");
-    case!(free_length_negative, BASE, "free_length = 0.05", "free_length = -0.05", "decoupler.free_length", "free_length", "must be > 0 m, got -0.05");
-    case!(height_zero, BASE, "height = 0.03", "height = 0", "decoupler.height", "height", "must be > 0 m, got 0");
-    case!(front_stroke_zero, BASE, "front_stroke = 0.015", "front_stroke = 0", "decoupler.front_stroke", "front_stroke", "must be > 0 m, got 0");
-    case!(back_stroke_zero, BASE, "back_stroke = 0.015", "back_stroke = 0.0", "decoupler.back_stroke", "back_stroke", "must be > 0 m, got 0");
-    case!(bistable_unknown_key, BASE, "springs = 2\n", "springs = 2\nstroke = 0.02\n", "decoupler.stroke", "stroke", "unknown key for kind = \"bistable\"; allowed keys: kind, springs, spring_rate");
-    case!(springs_do_not_hold_the_tool, BASE, "free_length = 0.05", "free_length = 0.03", "decoupler.free_length", "free_length", "need free_length > sqrt(height^2 + front_stroke^2) = 0.033541 m");
-    case!(front_stop_missing, BASE, "front_stop = { stiffness = 1e6, damping = 278.0 }\n", "", "decoupler.front_stop", "[decoupler]", "missing required key: a table ({ stiffness, damping } or { stiffness, restitution })");
-    case!(front_stop_not_table, BASE, "front_stop = { stiffness = 1e6, damping = 278.0 }", "front_stop = 1e6", "decoupler.front_stop", "front_stop", "must be a table ({ stiffness, damping } or { stiffness, restitution }), got float");
-    case!(front_stop_damping_negative, BASE, "damping = 278.0 }", "damping = -278.0 }", "decoupler.front_stop.damping", "front_stop", "must be >= 0 N s/m, got -278");
-    case!(front_stop_stiffness_zero, BASE, "front_stop = { stiffness = 1e6", "front_stop = { stiffness = 0", "decoupler.front_stop.stiffness", "front_stop", "must be > 0 N/m, got 0");
-    case!(front_stop_both, BASE, "damping = 278.0 }", "damping = 278.0, restitution = 0.4 }", "decoupler.front_stop.restitution", "front_stop", "give either damping (N s/m) or restitution, not both");
-    case!(front_stop_neither, BASE, ", damping = 278.0 }", " }", "decoupler.front_stop.damping", "front_stop", "missing required key: damping (N s/m >= 0), or restitution in [0, 1]");
-    case!(front_stop_restitution_high, BASE, "damping = 278.0 }", "restitution = 1.5 }", "decoupler.front_stop.restitution", "front_stop", "must be in [0, 1], got 1.5");
-    case!(front_stop_unknown_key, BASE, "damping = 278.0 }", "damping = 278.0, chi = 3 }", "decoupler.front_stop.chi", "front_stop", "allowed keys: stiffness, damping, restitution");
-    case!(back_stop_stiffness_negative, BASE, "back_stop = { stiffness = 1e6", "back_stop = { stiffness = -1", "decoupler.back_stop.stiffness", "back_stop", "must be > 0 N/m^1.5, got -1");
-    case!(back_stop_restitution_negative, BASE, "restitution = 0.6 }", "restitution = -0.6 }", "decoupler.back_stop.restitution", "back_stop", "must be in [0, 1], got -0.6");
-    case!(back_stop_chi_and_restitution, BASE, "restitution = 0.6 }", "restitution = 0.6, chi = 5.0 }", "decoupler.back_stop.restitution", "back_stop", "give either chi (a fixed damping) or restitution with damping_law, not both");
-    case!(back_stop_chi_and_law, BASE, "restitution = 0.6 }", "damping_law = \"flores\", chi = 5.0 }", "decoupler.back_stop.damping_law", "back_stop", "give either chi");
-    case!(back_stop_chi_negative, BASE, "restitution = 0.6 }", "chi = -5.0 }", "decoupler.back_stop.chi", "back_stop", "must be >= 0 N s/m^2.5, got -5");
-    case!(back_stop_no_damping, BASE, ", restitution = 0.6 }", " }", "decoupler.back_stop.restitution", "back_stop", "missing required key: restitution in [0, 1] (with damping_law), or chi");
+    case!(
+        springs_float,
+        BASE,
+        "springs = 2",
+        "springs = 2.0",
+        "decoupler.springs",
+        "springs",
+        "must be an integer >= 1 (write it without a decimal point), got 2.0"
+    );
+    case!(
+        springs_zero,
+        BASE,
+        "springs = 2",
+        "springs = 0",
+        "decoupler.springs",
+        "springs",
+        "must be an integer >= 1, got 0"
+    );
+    case!(
+        springs_string,
+        BASE,
+        "springs = 2",
+        "springs = \"two\"",
+        "decoupler.springs",
+        "springs",
+        "must be an integer >= 1, got string"
+    );
+    case!(
+        springs_missing,
+        BASE,
+        "springs = 2\n",
+        "",
+        "decoupler.springs",
+        "[decoupler]",
+        "missing required key: an integer >= 1"
+    );
+    case!(
+        spring_rate_zero,
+        BASE,
+        "spring_rate = 200.0",
+        "spring_rate = 0",
+        "decoupler.spring_rate",
+        "spring_rate",
+        "must be > 0 N/m, got 0"
+    );
+    case!(
+        free_length_negative,
+        BASE,
+        "free_length = 0.05",
+        "free_length = -0.05",
+        "decoupler.free_length",
+        "free_length",
+        "must be > 0 m, got -0.05"
+    );
+    case!(
+        height_zero,
+        BASE,
+        "height = 0.03",
+        "height = 0",
+        "decoupler.height",
+        "height",
+        "must be > 0 m, got 0"
+    );
+    case!(
+        front_stroke_zero,
+        BASE,
+        "front_stroke = 0.015",
+        "front_stroke = 0",
+        "decoupler.front_stroke",
+        "front_stroke",
+        "must be > 0 m, got 0"
+    );
+    case!(
+        back_stroke_zero,
+        BASE,
+        "back_stroke = 0.015",
+        "back_stroke = 0.0",
+        "decoupler.back_stroke",
+        "back_stroke",
+        "must be > 0 m, got 0"
+    );
+    case!(
+        bistable_unknown_key,
+        BASE,
+        "springs = 2\n",
+        "springs = 2\nstroke = 0.02\n",
+        "decoupler.stroke",
+        "stroke",
+        "unknown key for kind = \"bistable\"; allowed keys: kind, springs, spring_rate"
+    );
+    case!(
+        springs_do_not_hold_the_tool,
+        BASE,
+        "free_length = 0.05",
+        "free_length = 0.03",
+        "decoupler.free_length",
+        "free_length",
+        "need free_length > sqrt(height^2 + front_stroke^2) = 0.033541 m"
+    );
+    case!(
+        front_stop_missing,
+        BASE,
+        "front_stop = { stiffness = 1e6, damping = 278.0 }\n",
+        "",
+        "decoupler.front_stop",
+        "[decoupler]",
+        "missing required key: a table ({ stiffness, damping } or { stiffness, restitution })"
+    );
+    case!(
+        front_stop_not_table,
+        BASE,
+        "front_stop = { stiffness = 1e6, damping = 278.0 }",
+        "front_stop = 1e6",
+        "decoupler.front_stop",
+        "front_stop",
+        "must be a table ({ stiffness, damping } or { stiffness, restitution }), got float"
+    );
+    case!(
+        front_stop_damping_negative,
+        BASE,
+        "damping = 278.0 }",
+        "damping = -278.0 }",
+        "decoupler.front_stop.damping",
+        "front_stop",
+        "must be >= 0 N s/m, got -278"
+    );
+    case!(
+        front_stop_stiffness_zero,
+        BASE,
+        "front_stop = { stiffness = 1e6",
+        "front_stop = { stiffness = 0",
+        "decoupler.front_stop.stiffness",
+        "front_stop",
+        "must be > 0 N/m, got 0"
+    );
+    case!(
+        front_stop_both,
+        BASE,
+        "damping = 278.0 }",
+        "damping = 278.0, restitution = 0.4 }",
+        "decoupler.front_stop.restitution",
+        "front_stop",
+        "give either damping (N s/m) or restitution, not both"
+    );
+    case!(
+        front_stop_neither,
+        BASE,
+        ", damping = 278.0 }",
+        " }",
+        "decoupler.front_stop.damping",
+        "front_stop",
+        "missing required key: damping (N s/m >= 0), or restitution in [0, 1]"
+    );
+    case!(
+        front_stop_restitution_high,
+        BASE,
+        "damping = 278.0 }",
+        "restitution = 1.5 }",
+        "decoupler.front_stop.restitution",
+        "front_stop",
+        "must be in [0, 1], got 1.5"
+    );
+    case!(
+        front_stop_unknown_key,
+        BASE,
+        "damping = 278.0 }",
+        "damping = 278.0, chi = 3 }",
+        "decoupler.front_stop.chi",
+        "front_stop",
+        "allowed keys: stiffness, damping, restitution"
+    );
+    case!(
+        back_stop_stiffness_negative,
+        BASE,
+        "back_stop = { stiffness = 1e6",
+        "back_stop = { stiffness = -1",
+        "decoupler.back_stop.stiffness",
+        "back_stop",
+        "must be > 0 N/m^1.5, got -1"
+    );
+    case!(
+        back_stop_restitution_negative,
+        BASE,
+        "restitution = 0.6 }",
+        "restitution = -0.6 }",
+        "decoupler.back_stop.restitution",
+        "back_stop",
+        "must be in [0, 1], got -0.6"
+    );
+    case!(
+        back_stop_chi_and_restitution,
+        BASE,
+        "restitution = 0.6 }",
+        "restitution = 0.6, chi = 5.0 }",
+        "decoupler.back_stop.restitution",
+        "back_stop",
+        "give either chi (a fixed damping) or restitution with damping_law, not both"
+    );
+    case!(
+        back_stop_chi_and_law,
+        BASE,
+        "restitution = 0.6 }",
+        "damping_law = \"flores\", chi = 5.0 }",
+        "decoupler.back_stop.damping_law",
+        "back_stop",
+        "give either chi"
+    );
+    case!(
+        back_stop_chi_negative,
+        BASE,
+        "restitution = 0.6 }",
+        "chi = -5.0 }",
+        "decoupler.back_stop.chi",
+        "back_stop",
+        "must be >= 0 N s/m^2.5, got -5"
+    );
+    case!(
+        back_stop_no_damping,
+        BASE,
+        ", restitution = 0.6 }",
+        " }",
+        "decoupler.back_stop.restitution",
+        "back_stop",
+        "missing required key: restitution in [0, 1] (with damping_law), or chi"
+    );
     case!(back_stop_law_bad, BASE, "restitution = 0.6 }", "restitution = 0.6, damping_law = \"hertz\" }", "decoupler.back_stop.damping_law", "back_stop", "must be one of \"hunt-crossley\" | \"lankarani-nikravesh\" | \"flores\" | \"gonthier\" | \"exact\", got \"hertz\"");
-    case!(back_stop_law_without_restitution, BASE, "restitution = 0.6 }", "damping_law = \"hertz\" }", "decoupler.back_stop.damping_law", "back_stop", "must be one of");
-    case!(back_stop_unknown_key, BASE, "restitution = 0.6 }", "restitution = 0.6, damping = 3 }", "decoupler.back_stop.damping", "back_stop", "allowed keys: stiffness, restitution, damping_law, chi");
-    case!(back_stop_gonthier_zero, BASE, "restitution = 0.6 }", "restitution = 0, damping_law = \"gonthier\" }", "decoupler.back_stop.restitution", "back_stop", "must be in (0, 1] with damping_law \"flores\" or \"gonthier\"");
-    case!(friction_unknown_key, BASE, "v0 = 0.001 }", "v0 = 0.001, static = 0.2 }", "decoupler.friction.static", "friction", "allowed keys: mu, v0");
-    case!(friction_mu_negative, BASE, "mu = 0.12", "mu = -0.12", "decoupler.friction.mu", "friction", "must be >= 0, got -0.12");
-    case!(friction_v0_negative, BASE, "v0 = 0.001 }", "v0 = -0.001 }", "decoupler.friction.v0", "friction", "must be >= 0 m/s, got -0.001");
-    case!(friction_v0_missing, BASE, ", v0 = 0.001 }", " }", "decoupler.friction.v0", "friction", "missing required key: a number >= 0 m/s");
-    case!(friction_not_table, BASE, "friction = { mu = 0.12, v0 = 0.001 }", "friction = 0.12", "decoupler.friction", "friction", "must be a table ({ mu, v0 }");
+    case!(
+        back_stop_law_without_restitution,
+        BASE,
+        "restitution = 0.6 }",
+        "damping_law = \"hertz\" }",
+        "decoupler.back_stop.damping_law",
+        "back_stop",
+        "must be one of"
+    );
+    case!(
+        back_stop_unknown_key,
+        BASE,
+        "restitution = 0.6 }",
+        "restitution = 0.6, damping = 3 }",
+        "decoupler.back_stop.damping",
+        "back_stop",
+        "allowed keys: stiffness, restitution, damping_law, chi"
+    );
+    case!(
+        back_stop_gonthier_zero,
+        BASE,
+        "restitution = 0.6 }",
+        "restitution = 0, damping_law = \"gonthier\" }",
+        "decoupler.back_stop.restitution",
+        "back_stop",
+        "must be in (0, 1] with damping_law \"flores\" or \"gonthier\""
+    );
+    case!(
+        friction_unknown_key,
+        BASE,
+        "v0 = 0.001 }",
+        "v0 = 0.001, static = 0.2 }",
+        "decoupler.friction.static",
+        "friction",
+        "allowed keys: mu, v0"
+    );
+    case!(
+        friction_mu_negative,
+        BASE,
+        "mu = 0.12",
+        "mu = -0.12",
+        "decoupler.friction.mu",
+        "friction",
+        "must be >= 0, got -0.12"
+    );
+    case!(
+        friction_v0_negative,
+        BASE,
+        "v0 = 0.001 }",
+        "v0 = -0.001 }",
+        "decoupler.friction.v0",
+        "friction",
+        "must be >= 0 m/s, got -0.001"
+    );
+    case!(
+        friction_v0_missing,
+        BASE,
+        ", v0 = 0.001 }",
+        " }",
+        "decoupler.friction.v0",
+        "friction",
+        "missing required key: a number >= 0 m/s"
+    );
+    case!(
+        friction_not_table,
+        BASE,
+        "friction = { mu = 0.12, v0 = 0.001 }",
+        "friction = 0.12",
+        "decoupler.friction",
+        "friction",
+        "must be a table ({ mu, v0 }"
+    );
 
     // Hydraulic.
-    case!(stroke_zero, HYD, "stroke = 0.023", "stroke = 0", "decoupler.stroke", "stroke = 0", "must be > 0 m, got 0");
-    case!(piston_radius_negative, HYD, "piston_radius = 0.020", "piston_radius = -0.02", "decoupler.piston_radius", "piston_radius", "must be > 0 m, got -0.02");
-    case!(orifice_radius_zero, HYD, "orifice_radius = 0.008", "orifice_radius = 0", "decoupler.orifice_radius", "orifice_radius", "must be > 0 m, got 0");
-    case!(orifice_not_smaller, HYD, "orifice_radius = 0.008", "orifice_radius = 0.02", "decoupler.orifice_radius", "orifice_radius", "must be < decoupler.piston_radius = 0.02 m, got 0.02");
-    case!(gas_pressure_zero, HYD, "gas_pressure = 1000.0", "gas_pressure = 0", "decoupler.gas_pressure", "gas_pressure", "must be > 0 Pa, got 0");
-    case!(gas_volume_negative, HYD, "gas_volume = 7.63e-5", "gas_volume = -1", "decoupler.gas_volume", "gas_volume", "must be > 0 m^3, got -1");
-    case!(gas_driven_to_zero, HYD, "gas_volume = 7.63e-5", "gas_volume = 2.8e-5", "decoupler.gas_volume", "gas_volume", "must be > the volume the piston sweeps, pi * piston_radius^2 * stroke = 2.89027e-5 m^3");
-    case!(discharge_coefficient_zero, HYD, "discharge_coefficient = 3.0", "discharge_coefficient = 0", "decoupler.discharge_coefficient", "discharge_coefficient", "must be > 0, got 0");
-    case!(liquid_density_zero, HYD, "liquid_density = 900.0", "liquid_density = 0", "decoupler.liquid_density", "liquid_density", "must be > 0 kg/m^3, got 0");
-    case!(dry_friction_negative, HYD, "dry_friction = 0.0", "dry_friction = -1", "decoupler.dry_friction", "dry_friction", "must be >= 0 N, got -1");
-    case!(viscous_friction_negative, HYD, "viscous_friction = 0.5", "viscous_friction = -0.5", "decoupler.viscous_friction", "viscous_friction", "must be >= 0 N s/m, got -0.5");
-    case!(adiabatic_exponent_out_of_range, HYD, "viscous_friction = 0.5\n", "viscous_friction = 0.5\nadiabatic_exponent = 2\n", "decoupler.adiabatic_exponent", "adiabatic_exponent", "must be in [1, 1.6666666666666667], got 2");
-    case!(friction_v0_zero, HYD, "viscous_friction = 0.5\n", "viscous_friction = 0.5\nfriction_v0 = 0\n", "decoupler.friction_v0", "friction_v0", "must be > 0 m/s, got 0");
-    case!(hydraulic_missing_key, HYD, "liquid_density = 900.0\n", "", "decoupler.liquid_density", "[decoupler]", "missing required key: a number > 0 kg/m^3");
-    case!(hydraulic_unknown_key, HYD, "stroke = 0.023\n", "stroke = 0.023\nsprings = 1\n", "decoupler.springs", "springs", "unknown key for kind = \"hydraulic\"; allowed keys: kind, stroke, piston_radius");
+    case!(
+        stroke_zero,
+        HYD,
+        "stroke = 0.023",
+        "stroke = 0",
+        "decoupler.stroke",
+        "stroke = 0",
+        "must be > 0 m, got 0"
+    );
+    case!(
+        piston_radius_negative,
+        HYD,
+        "piston_radius = 0.020",
+        "piston_radius = -0.02",
+        "decoupler.piston_radius",
+        "piston_radius",
+        "must be > 0 m, got -0.02"
+    );
+    case!(
+        orifice_radius_zero,
+        HYD,
+        "orifice_radius = 0.008",
+        "orifice_radius = 0",
+        "decoupler.orifice_radius",
+        "orifice_radius",
+        "must be > 0 m, got 0"
+    );
+    case!(
+        orifice_not_smaller,
+        HYD,
+        "orifice_radius = 0.008",
+        "orifice_radius = 0.02",
+        "decoupler.orifice_radius",
+        "orifice_radius",
+        "must be < decoupler.piston_radius = 0.02 m, got 0.02"
+    );
+    case!(
+        gas_pressure_zero,
+        HYD,
+        "gas_pressure = 1000.0",
+        "gas_pressure = 0",
+        "decoupler.gas_pressure",
+        "gas_pressure",
+        "must be > 0 Pa, got 0"
+    );
+    case!(
+        gas_volume_negative,
+        HYD,
+        "gas_volume = 7.63e-5",
+        "gas_volume = -1",
+        "decoupler.gas_volume",
+        "gas_volume",
+        "must be > 0 m^3, got -1"
+    );
+    case!(
+        gas_driven_to_zero,
+        HYD,
+        "gas_volume = 7.63e-5",
+        "gas_volume = 2.8e-5",
+        "decoupler.gas_volume",
+        "gas_volume",
+        "must be > the volume the piston sweeps, pi * piston_radius^2 * stroke = 2.89027e-5 m^3"
+    );
+    case!(
+        discharge_coefficient_zero,
+        HYD,
+        "discharge_coefficient = 3.0",
+        "discharge_coefficient = 0",
+        "decoupler.discharge_coefficient",
+        "discharge_coefficient",
+        "must be > 0, got 0"
+    );
+    case!(
+        liquid_density_zero,
+        HYD,
+        "liquid_density = 900.0",
+        "liquid_density = 0",
+        "decoupler.liquid_density",
+        "liquid_density",
+        "must be > 0 kg/m^3, got 0"
+    );
+    case!(
+        dry_friction_negative,
+        HYD,
+        "dry_friction = 0.0",
+        "dry_friction = -1",
+        "decoupler.dry_friction",
+        "dry_friction",
+        "must be >= 0 N, got -1"
+    );
+    case!(
+        viscous_friction_negative,
+        HYD,
+        "viscous_friction = 0.5",
+        "viscous_friction = -0.5",
+        "decoupler.viscous_friction",
+        "viscous_friction",
+        "must be >= 0 N s/m, got -0.5"
+    );
+    case!(
+        adiabatic_exponent_out_of_range,
+        HYD,
+        "viscous_friction = 0.5\n",
+        "viscous_friction = 0.5\nadiabatic_exponent = 2\n",
+        "decoupler.adiabatic_exponent",
+        "adiabatic_exponent",
+        "must be in [1, 1.6666666666666667], got 2"
+    );
+    case!(
+        friction_v0_zero,
+        HYD,
+        "viscous_friction = 0.5\n",
+        "viscous_friction = 0.5\nfriction_v0 = 0\n",
+        "decoupler.friction_v0",
+        "friction_v0",
+        "must be > 0 m/s, got 0"
+    );
+    case!(
+        hydraulic_missing_key,
+        HYD,
+        "liquid_density = 900.0\n",
+        "",
+        "decoupler.liquid_density",
+        "[decoupler]",
+        "missing required key: a number > 0 kg/m^3"
+    );
+    case!(
+        hydraulic_unknown_key,
+        HYD,
+        "stroke = 0.023\n",
+        "stroke = 0.023\nsprings = 1\n",
+        "decoupler.springs",
+        "springs",
+        "unknown key for kind = \"hydraulic\"; allowed keys: kind, stroke, piston_radius"
+    );
     case!(hydraulic_back_stop_missing, HYD, "back_stop = { stiffness = 1e6, chi = 2e5 }\n", "", "decoupler.back_stop", "[decoupler]", "missing required key: a table ({ stiffness, restitution, damping_law } or { stiffness, chi })");
 
     // Target.
-    case!(target_kind_bad, BASE, "kind = \"obstacle\"", "kind = \"wall\"", "target.kind", "wall", "must be one of \"obstacle\" | \"object\", got \"wall\"");
-    case!(target_gap_zero, BASE, "gap = 0.01", "gap = 0", "target.gap", "gap", "must be > 0 m, got 0");
+    case!(
+        target_kind_bad,
+        BASE,
+        "kind = \"obstacle\"",
+        "kind = \"wall\"",
+        "target.kind",
+        "wall",
+        "must be one of \"obstacle\" | \"object\", got \"wall\""
+    );
+    case!(
+        target_gap_zero,
+        BASE,
+        "gap = 0.01",
+        "gap = 0",
+        "target.gap",
+        "gap",
+        "must be > 0 m, got 0"
+    );
     case!(target_gap_never_closed, BASE, "gap = 0.01", "gap = 1", "target.gap", "gap", "the commanded motion covers only 0.02875 m in duration = 0.6 s, so the tool never reaches the target; must be < 0.02875 m, got 1");
-    case!(target_stiffness_zero, BASE, "stiffness = 1e8", "stiffness = 0", "target.stiffness", "stiffness = 0", "must be > 0 N/m^1.5, got 0");
-    case!(target_restitution_high, BASE, "restitution = 0.65", "restitution = 1.2", "target.restitution", "restitution = 1.2", "must be in [0, 1], got 1.2");
-    case!(target_law_missing, BASE, "damping_law = \"hunt-crossley\"\n", "", "target.damping_law", "[target]", "missing required key: one of \"hunt-crossley\" | \"lankarani-nikravesh\"");
-    case!(target_law_bad, BASE, "damping_law = \"hunt-crossley\"", "damping_law = \"kelvin\"", "target.damping_law", "kelvin", "must be one of \"hunt-crossley\"");
-    case!(target_flores_zero, BASE, "restitution = 0.65\ndamping_law = \"hunt-crossley\"", "restitution = 0\ndamping_law = \"flores\"", "target.restitution", "restitution = 0\n", "the law divides by e");
-    case!(target_chi_and_restitution, HYD, "chi = 1.35e6", "chi = 1.35e6\nrestitution = 0.5", "target.restitution", "restitution", "give either chi");
-    case!(target_chi_negative, HYD, "chi = 1.35e6", "chi = -1.35e6", "target.chi", "chi = -1.35e6", "must be >= 0 N s/m^2.5, got -1.35e6");
-    case!(target_no_damping, HYD, "chi = 1.35e6\n", "", "target.restitution", "[target]", "missing required key: restitution in [0, 1] (with damping_law), or chi");
+    case!(
+        target_stiffness_zero,
+        BASE,
+        "stiffness = 1e8",
+        "stiffness = 0",
+        "target.stiffness",
+        "stiffness = 0",
+        "must be > 0 N/m^1.5, got 0"
+    );
+    case!(
+        target_restitution_high,
+        BASE,
+        "restitution = 0.65",
+        "restitution = 1.2",
+        "target.restitution",
+        "restitution = 1.2",
+        "must be in [0, 1], got 1.2"
+    );
+    case!(
+        target_law_missing,
+        BASE,
+        "damping_law = \"hunt-crossley\"\n",
+        "",
+        "target.damping_law",
+        "[target]",
+        "missing required key: one of \"hunt-crossley\" | \"lankarani-nikravesh\""
+    );
+    case!(
+        target_law_bad,
+        BASE,
+        "damping_law = \"hunt-crossley\"",
+        "damping_law = \"kelvin\"",
+        "target.damping_law",
+        "kelvin",
+        "must be one of \"hunt-crossley\""
+    );
+    case!(
+        target_flores_zero,
+        BASE,
+        "restitution = 0.65\ndamping_law = \"hunt-crossley\"",
+        "restitution = 0\ndamping_law = \"flores\"",
+        "target.restitution",
+        "restitution = 0\n",
+        "the law divides by e"
+    );
+    case!(
+        target_chi_and_restitution,
+        HYD,
+        "chi = 1.35e6",
+        "chi = 1.35e6\nrestitution = 0.5",
+        "target.restitution",
+        "restitution",
+        "give either chi"
+    );
+    case!(
+        target_chi_negative,
+        HYD,
+        "chi = 1.35e6",
+        "chi = -1.35e6",
+        "target.chi",
+        "chi = -1.35e6",
+        "must be >= 0 N s/m^2.5, got -1.35e6"
+    );
+    case!(
+        target_no_damping,
+        HYD,
+        "chi = 1.35e6\n",
+        "",
+        "target.restitution",
+        "[target]",
+        "missing required key: restitution in [0, 1] (with damping_law), or chi"
+    );
     case!(obstacle_with_mass, BASE, "kind = \"obstacle\"\n", "kind = \"obstacle\"\nmass = 1\n", "target.mass", "mass = 1", "unknown key for kind = \"obstacle\"; allowed keys: kind, gap, stiffness, restitution, damping_law, chi");
-    case!(obstacle_with_floor_friction, BASE, "kind = \"obstacle\"\n", "kind = \"obstacle\"\nfloor_friction = 0.3\n", "target.floor_friction", "floor_friction", "unknown key for kind = \"obstacle\"");
-    case!(object_mass_missing, HYD, "mass = 0.246\n", "", "target.mass", "[target]", "missing required key: a number > 0 kg");
-    case!(object_mass_zero, HYD, "mass = 0.246", "mass = 0", "target.mass", "mass = 0\n", "must be > 0 kg, got 0");
-    case!(object_floor_friction_negative, HYD, "mass = 0.246\n", "mass = 0.246\nfloor_friction = -0.2\n", "target.floor_friction", "floor_friction", "must be >= 0, got -0.2");
-    case!(object_unknown_key, HYD, "mass = 0.246\n", "mass = 0.246\nradius = 0.02\n", "target.radius", "radius = 0.02\n", "allowed keys: kind, gap, stiffness, restitution, damping_law, chi, mass, floor_friction");
+    case!(
+        obstacle_with_floor_friction,
+        BASE,
+        "kind = \"obstacle\"\n",
+        "kind = \"obstacle\"\nfloor_friction = 0.3\n",
+        "target.floor_friction",
+        "floor_friction",
+        "unknown key for kind = \"obstacle\""
+    );
+    case!(
+        object_mass_missing,
+        HYD,
+        "mass = 0.246\n",
+        "",
+        "target.mass",
+        "[target]",
+        "missing required key: a number > 0 kg"
+    );
+    case!(
+        object_mass_zero,
+        HYD,
+        "mass = 0.246",
+        "mass = 0",
+        "target.mass",
+        "mass = 0\n",
+        "must be > 0 kg, got 0"
+    );
+    case!(
+        object_floor_friction_negative,
+        HYD,
+        "mass = 0.246\n",
+        "mass = 0.246\nfloor_friction = -0.2\n",
+        "target.floor_friction",
+        "floor_friction",
+        "must be >= 0, got -0.2"
+    );
+    case!(
+        object_unknown_key,
+        HYD,
+        "mass = 0.246\n",
+        "mass = 0.246\nradius = 0.02\n",
+        "target.radius",
+        "radius = 0.02\n",
+        "allowed keys: kind, gap, stiffness, restitution, damping_law, chi, mass, floor_friction"
+    );
 
     // Sensor.
-    case!(sensor_kind_bad, BASE, "kind = \"travel\"", "kind = \"camera\"", "sensor.kind", "camera", "must be one of \"travel\" | \"force\", got \"camera\"");
-    case!(sensor_threshold_zero, BASE, "threshold = 0.005", "threshold = 0", "sensor.threshold", "threshold", "must be > 0 m, got 0");
-    case!(sensor_force_threshold_negative, BASE, "kind = \"travel\"\nthreshold = 0.005", "kind = \"force\"\nthreshold = -25", "sensor.threshold", "threshold", "must be > 0 N, got -25");
-    case!(sensor_threshold_missing, BASE, "threshold = 0.005\n", "", "sensor.threshold", "[sensor]", "missing required key: a number > 0 m");
-    case!(sensor_beyond_bistable_stroke, BASE, "threshold = 0.005", "threshold = 0.03", "sensor.threshold", "threshold", "must be < the decoupler's total stroke front_stroke + back_stroke = 0.03 m, got 0.03");
-    case!(sensor_beyond_hydraulic_stroke, HYD, "threshold = 0.0015", "threshold = 0.03", "sensor.threshold", "threshold", "must be < the decoupler's stroke = 0.023 m, got 0.03");
+    case!(
+        sensor_kind_bad,
+        BASE,
+        "kind = \"travel\"",
+        "kind = \"camera\"",
+        "sensor.kind",
+        "camera",
+        "must be one of \"travel\" | \"force\", got \"camera\""
+    );
+    case!(
+        sensor_threshold_zero,
+        BASE,
+        "threshold = 0.005",
+        "threshold = 0",
+        "sensor.threshold",
+        "threshold",
+        "must be > 0 m, got 0"
+    );
+    case!(
+        sensor_force_threshold_negative,
+        BASE,
+        "kind = \"travel\"\nthreshold = 0.005",
+        "kind = \"force\"\nthreshold = -25",
+        "sensor.threshold",
+        "threshold",
+        "must be > 0 N, got -25"
+    );
+    case!(
+        sensor_threshold_missing,
+        BASE,
+        "threshold = 0.005\n",
+        "",
+        "sensor.threshold",
+        "[sensor]",
+        "missing required key: a number > 0 m"
+    );
+    case!(
+        sensor_beyond_bistable_stroke,
+        BASE,
+        "threshold = 0.005",
+        "threshold = 0.03",
+        "sensor.threshold",
+        "threshold",
+        "must be < the decoupler's total stroke front_stroke + back_stroke = 0.03 m, got 0.03"
+    );
+    case!(
+        sensor_beyond_hydraulic_stroke,
+        HYD,
+        "threshold = 0.0015",
+        "threshold = 0.03",
+        "sensor.threshold",
+        "threshold",
+        "must be < the decoupler's stroke = 0.023 m, got 0.03"
+    );
     case!(sensor_travel_on_rigid_tool, BASE, "kind = \"bistable\"\nsprings = 2\nspring_rate = 200.0\nfree_length = 0.05\nheight = 0.03\nfront_stroke = 0.015\nback_stroke = 0.015\nfront_stop = { stiffness = 1e6, damping = 278.0 }\nback_stop = { stiffness = 1e6, restitution = 0.6 }\nfriction = { mu = 0.12, v0 = 0.001 }\n", "kind = \"rigid\"\n", "sensor.kind", "kind = \"travel\"", "must be \"force\" for decoupler.kind = \"rigid\"");
-    case!(sensor_unknown_key, BASE, "threshold = 0.005\n", "threshold = 0.005\nhysteresis = 0.001\n", "sensor.hysteresis", "hysteresis", "allowed keys: kind, threshold");
+    case!(
+        sensor_unknown_key,
+        BASE,
+        "threshold = 0.005\n",
+        "threshold = 0.005\nhysteresis = 0.001\n",
+        "sensor.hysteresis",
+        "hysteresis",
+        "allowed keys: kind, threshold"
+    );
 
     // Solver.
-    case!(solver_method_bad, BASE, "method = \"rk4\"", "method = \"euler\"", "solver.method", "euler", "must be one of \"dopri5\" | \"rk4\" | \"semi-implicit-euler\", got \"euler\"");
-    case!(solver_rtol_too_loose, BASE, "rtol = 1e-6", "rtol = 0.5", "solver.rtol", "rtol", "must be in [1e-13, 0.1], got 0.5");
-    case!(solver_rtol_zero, BASE, "rtol = 1e-6", "rtol = 0", "solver.rtol", "rtol", "must be in [1e-13, 0.1], got 0");
-    case!(solver_atol_negative, BASE, "atol = 1e-9", "atol = -1e-9", "solver.atol", "atol", "must be in [1e-15, 0.01], got -1e-9");
-    case!(solver_max_step_zero, BASE, "max_step = 1e-4", "max_step = 0", "solver.max_step", "max_step", "must be > 0 s, got 0");
-    case!(solver_max_step_beyond_duration, BASE, "max_step = 1e-4", "max_step = 1", "solver.max_step", "max_step", "must be <= duration = 0.6 s, got 1");
-    case!(solver_output_interval_negative, BASE, "output_interval = 1e-3", "output_interval = -1", "solver.output_interval", "output_interval", "must be >= 0 s, got -1");
-    case!(solver_output_interval_beyond_duration, BASE, "output_interval = 1e-3", "output_interval = 2", "solver.output_interval", "output_interval", "must be <= duration = 0.6 s, got 2");
-    case!(solver_unknown_key, BASE, "method = \"rk4\"\n", "method = \"rk4\"\norder = 4\n", "solver.order", "order", "allowed keys: method, rtol, atol, max_step, output_interval");
+    case!(
+        solver_method_bad,
+        BASE,
+        "method = \"rk4\"",
+        "method = \"euler\"",
+        "solver.method",
+        "euler",
+        "must be one of \"dopri5\" | \"rk4\" | \"semi-implicit-euler\", got \"euler\""
+    );
+    case!(
+        solver_rtol_too_loose,
+        BASE,
+        "rtol = 1e-6",
+        "rtol = 0.5",
+        "solver.rtol",
+        "rtol",
+        "must be in [1e-13, 0.1], got 0.5"
+    );
+    case!(
+        solver_rtol_zero,
+        BASE,
+        "rtol = 1e-6",
+        "rtol = 0",
+        "solver.rtol",
+        "rtol",
+        "must be in [1e-13, 0.1], got 0"
+    );
+    case!(
+        solver_atol_negative,
+        BASE,
+        "atol = 1e-9",
+        "atol = -1e-9",
+        "solver.atol",
+        "atol",
+        "must be in [1e-15, 0.01], got -1e-9"
+    );
+    case!(
+        solver_max_step_zero,
+        BASE,
+        "max_step = 1e-4",
+        "max_step = 0",
+        "solver.max_step",
+        "max_step",
+        "must be > 0 s, got 0"
+    );
+    case!(
+        solver_max_step_beyond_duration,
+        BASE,
+        "max_step = 1e-4",
+        "max_step = 1",
+        "solver.max_step",
+        "max_step",
+        "must be <= duration = 0.6 s, got 1"
+    );
+    case!(
+        solver_output_interval_negative,
+        BASE,
+        "output_interval = 1e-3",
+        "output_interval = -1",
+        "solver.output_interval",
+        "output_interval",
+        "must be >= 0 s, got -1"
+    );
+    case!(
+        solver_output_interval_beyond_duration,
+        BASE,
+        "output_interval = 1e-3",
+        "output_interval = 2",
+        "solver.output_interval",
+        "output_interval",
+        "must be <= duration = 0.6 s, got 2"
+    );
+    case!(
+        solver_unknown_key,
+        BASE,
+        "method = \"rk4\"\n",
+        "method = \"rk4\"\norder = 4\n",
+        "solver.order",
+        "order",
+        "allowed keys: method, rtol, atol, max_step, output_interval"
+    );
 
     // Controller.
-    case!(controller_scan_cycle_zero, BASE, "scan_cycle = 0.016", "scan_cycle = 0", "controller.scan_cycle", "scan_cycle", "must be > 0 s, got 0");
-    case!(controller_phase_one, BASE, "phase = 0.5", "phase = 1.0", "controller.phase", "phase", "must be in [0, 1) of a scan cycle, got 1");
-    case!(controller_phase_negative, BASE, "phase = 0.5", "phase = -0.1", "controller.phase", "phase", "must be in [0, 1) of a scan cycle, got -0.1");
-    case!(controller_tick_missing, BASE, "firmware_tick = 1e-4\n", "", "controller.firmware_tick", "[controller]", "missing required key: a number > 0 s");
-    case!(controller_unknown_key, BASE, "phase = 0.5\n", "phase = 0.5\nlatency = 0.01\n", "controller.latency", "latency", "allowed keys: scan_cycle, phase, firmware_tick");
+    case!(
+        controller_scan_cycle_zero,
+        BASE,
+        "scan_cycle = 0.016",
+        "scan_cycle = 0",
+        "controller.scan_cycle",
+        "scan_cycle",
+        "must be > 0 s, got 0"
+    );
+    case!(
+        controller_phase_one,
+        BASE,
+        "phase = 0.5",
+        "phase = 1.0",
+        "controller.phase",
+        "phase",
+        "must be in [0, 1) of a scan cycle, got 1"
+    );
+    case!(
+        controller_phase_negative,
+        BASE,
+        "phase = 0.5",
+        "phase = -0.1",
+        "controller.phase",
+        "phase",
+        "must be in [0, 1) of a scan cycle, got -0.1"
+    );
+    case!(
+        controller_tick_missing,
+        BASE,
+        "firmware_tick = 1e-4\n",
+        "",
+        "controller.firmware_tick",
+        "[controller]",
+        "missing required key: a number > 0 s"
+    );
+    case!(
+        controller_unknown_key,
+        BASE,
+        "phase = 0.5\n",
+        "phase = 0.5\nlatency = 0.01\n",
+        "controller.latency",
+        "latency",
+        "allowed keys: scan_cycle, phase, firmware_tick"
+    );
 }
