@@ -4,6 +4,8 @@
 //! `solver` integrates; `sim` runs a scene and summarises it; `report` prints, plots and writes
 //! what a run produced; `avoid` is collision avoidance (Ch. 5).
 pub mod avoid;
+pub mod check;
+pub mod hil;
 pub mod plant;
 pub mod report;
 pub mod scene;

@@ -228,6 +228,13 @@ impl Hybrid<N, E> for Simulation {
             }
         }
         let (k, f) = self.observe(t1, y1);
+        // Peaks fall between step ends: while a contact is active, search the step's interpolant too
+        // (golden-section on the contact force, a few samples for the robot force).
+        if t1 > t0 && (self.in_contact || self.on_back) {
+            let (c, r) = self.peaks_inside(t0, t1, dense);
+            self.peak_contact = self.peak_contact.max(c);
+            self.peak_robot = self.peak_robot.max(r);
+        }
         self.peak_contact = self.peak_contact.max(f.contact);
         self.peak_robot = self.peak_robot.max(f.robot.abs());
         self.peak_object_v = self.peak_object_v.max(k.vp);
@@ -306,6 +313,30 @@ impl Simulation {
         sim
     }
 
+    /// The largest contact force and robot-force magnitude inside the step [t0, t1], N.
+    fn peaks_inside(&self, t0: f64, t1: f64, dense: &dyn Fn(f64) -> State) -> (f64, f64) {
+        let forces = |t: f64| self.observe(t, &dense(t)).1;
+        let (mut best_c, mut best_t, mut best_r) = (0.0_f64, t0, 0.0_f64);
+        for i in 1..8 {
+            let t = t0 + (t1 - t0) * i as f64 / 8.0;
+            let f = forces(t);
+            best_r = best_r.max(f.robot.abs());
+            if f.contact > best_c {
+                (best_c, best_t) = (f.contact, t);
+            }
+        }
+        // Refine the contact-force maximum around the best sample (golden section).
+        let h = (t1 - t0) / 8.0;
+        let (mut a, mut b) = ((best_t - h).max(t0), (best_t + h).min(t1));
+        let g = 0.618_033_988_75;
+        for _ in 0..20 {
+            let (c, d) = (b - g * (b - a), a + g * (b - a));
+            if forces(c).contact > forces(d).contact { b = d } else { a = c }
+        }
+        let f = forces(0.5 * (a + b));
+        (best_c.max(f.contact), best_r.max(f.robot.abs()))
+    }
+
     /// Kinematics and forces at (t, y).
     pub fn observe(&self, t: f64, y: &State) -> (Kinematics, Forces) {
         let k = self.plant.kinematics(t, y);
@@ -362,6 +393,11 @@ impl Run {
     pub fn sensor_tripped(&self) -> Option<bool> {
         let (k, f) = self.now();
         self.sim.plant.detector.map(|d| d.tripped(k.s, f.contact))
+    }
+
+    /// When the sensor's threshold was crossed (located event), s.
+    pub fn switch_time(&self) -> Option<f64> {
+        self.sim.t_detect
     }
 
     /// Travel back from the front stop now, m.

@@ -1,0 +1,80 @@
+//! Firmware in the loop: the dead time that comes out of a scan-cycle controller (issue 3).
+//!
+//! Over the phases of the scan cycle the dead time spans [firmware latency, scan cycle + latency]
+//! and is uniform; its worst case is the thesis's assumption DT = one scan cycle (Ch. 3.1.2), so
+//! `flinch hil` at the worst phase must give the reaction time `flinch run` gives with DT = 16 ms.
+
+use flinch_harness::scene::{self, Controller, Scene};
+use flinch_harness::{hil, sim};
+use flinch_tests::scene_path;
+
+const SCAN: f64 = 0.016;
+
+fn bistable() -> Scene {
+    scene::load(&scene_path("tables5-7_bistable.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn hil_at(scene: &Scene, phase: f64) -> hil::HilReport {
+    let ctl = Controller { scan_cycle: SCAN, phase, firmware_tick: 1e-4 };
+    hil::run(scene, &ctl, hil::DEFAULT_STEP, false).unwrap_or_else(|e| panic!("{e}")).0
+}
+
+#[test]
+fn worst_phase_reproduces_flinch_run_with_one_scan_cycle_of_dead_time() {
+    let sc = bistable();
+    assert_eq!(sc.motion.dead_time, SCAN, "the scene's DT is the Viper's scan cycle");
+    let plain = sim::run(&sc, false).unwrap().0;
+    let t_sw = plain.t_detect.unwrap();
+    // The controller sampled just before the switch fired: it sees the stop one cycle later.
+    let phase = ((t_sw - 1e-6) / SCAN).fract();
+    let h = hil_at(&sc, phase);
+    let f = &h.firmware;
+    assert!((f.switch_time.unwrap() - t_sw).abs() < 1e-9, "same plant, same crossing");
+    let latency = f.firmware_latency.unwrap();
+    // The firmware's clock counts whole microseconds: its timestamp is within 1 us of the edge.
+    assert!(latency.abs() <= 1e-6, "edge to timestamp: {latency}");
+    let dt = f.observed_dead_time.unwrap();
+    assert!((dt - SCAN).abs() < 2e-6, "worst-case dead time {dt}");
+    let dr = h.summary.reaction_time.unwrap() - plain.reaction_time.unwrap();
+    assert!(dr.abs() < 2e-6, "reaction time differs by {dr} s");
+    assert!((h.summary.peak_contact_force - plain.peak_contact_force).abs() / plain.peak_contact_force < 1e-3);
+    assert_eq!(h.summary.mode, plain.mode);
+    assert_eq!(f.event_log.len(), 1);
+    assert_eq!(f.event_log[0].cause, "Trip");
+    assert!(!f.category0, "5 mm + 1.2 mm stopping distance fits in 30 mm of stroke");
+}
+
+#[test]
+fn dead_time_spans_latency_to_one_scan_cycle_uniformly_over_phases() {
+    let sc = bistable();
+    let n = 32;
+    let mut dts: Vec<f64> = (0..n).map(|i| hil_at(&sc, (i as f64 + 0.5) / n as f64).firmware.observed_dead_time.unwrap()).collect();
+    dts.sort_by(f64::total_cmp);
+    let latency_max = 2e-6;
+    assert!(dts[0] >= -1e-6, "never negative: {:?}", dts);
+    assert!(dts[n - 1] <= SCAN + latency_max, "never beyond one scan cycle: {:?}", dts);
+    // Uniform: phases (i + 0.5) / n hit the cycle at evenly spaced points, so the sorted dead times
+    // are evenly spaced by SCAN / n too.
+    for w in dts.windows(2) {
+        assert!(((w[1] - w[0]) - SCAN / n as f64).abs() < 1e-5, "{:?}", dts);
+    }
+    let mean = dts.iter().sum::<f64>() / n as f64;
+    assert!((mean - SCAN / 2.0).abs() < SCAN / n as f64, "mean {mean}");
+}
+
+#[test]
+fn a_stroke_too_short_for_the_stopping_distance_escalates_to_category_0() {
+    // V_c = 0.25 m/s with a 70 ms scan cycle: v DT + v^2/2d = 17.5 + 15.6 mm > 30 - 5 mm left.
+    let sc = scene::load(&scene_path("tables5-7_bistable_v025.toml")).unwrap();
+    let ctl = Controller { scan_cycle: 0.07, phase: 0.0, firmware_tick: 1e-4 };
+    let h = hil::run(&sc, &ctl, hil::DEFAULT_STEP, false).unwrap().0;
+    assert!(h.firmware.category0, "{:?}", h.firmware);
+}
+
+#[test]
+fn a_rigid_tool_is_refused_with_a_reason() {
+    let sc = scene::load(&scene_path("tables5-7_rigid.toml")).unwrap();
+    let ctl = Controller { scan_cycle: SCAN, phase: 0.0, firmware_tick: 1e-4 };
+    let e = hil::run(&sc, &ctl, hil::DEFAULT_STEP, false).unwrap_err();
+    assert!(e.contains("sensor.kind") && e.contains("travel"), "{e}");
+}
