@@ -21,7 +21,7 @@ pub mod gauss;
 pub mod num;
 pub mod receiver;
 
-pub use control::{Command, Controller, Gains, Watchdog};
+pub use control::{Command, Controller, Gains, Repulsion, Watchdog};
 pub use field::{sample, FieldSample, Grid, MAX_AXIS, MAX_CENTRES, MAX_WINDOW, TRUNC_SIGMAS};
 pub use frame::{encode_frame, frame_len, FrameHeader};
 pub use gauss::{Gauss, GaussLibm, GaussLut, GaussMicromath};

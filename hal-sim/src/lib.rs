@@ -47,6 +47,7 @@ use flinch_firmware::{Adc, Clock, Micros};
 
 mod rig;
 pub use rig::{SimRig, SIM_LOG};
+pub mod serial;
 
 /// A fault injected into a [`SimPin`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]

@@ -20,6 +20,8 @@ enum Command {
     Hil(HilArgs),
     /// Check that the decoupler's stroke absorbs the stopping distance, and confirm by simulation.
     Check(CheckArgs),
+    /// Collision avoidance (Ch. 5): fit the depth image, run the potential field, report the path.
+    Avoid(flinch_harness::avoid::AvoidArgs),
 }
 
 #[derive(clap::Args)]
@@ -157,6 +159,7 @@ fn main() -> ExitCode {
         Command::Run(a) => run(a).map(|_| true),
         Command::Hil(a) => hil_cmd(a).map(|_| true),
         Command::Check(a) => check_cmd(a),
+        Command::Avoid(a) => flinch_harness::avoid::run(a).map(|_| true),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

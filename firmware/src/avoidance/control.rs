@@ -16,9 +16,24 @@
 use super::field::FieldSample;
 use super::num::Real;
 
+/// Which repulsion the step uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Repulsion {
+    /// Eq 76: the vortex `s k_r [df*/dy, -df*/dx]`; `sign` 0 chooses it from the motion (see module
+    /// docs), +1 or -1 fixes it.
+    Vortex {
+        /// 0 = from the direction of motion, otherwise the fixed sign.
+        sign: i8,
+    },
+    /// Eq 75: `-k_r grad f*` (radial; has local minima, kept for comparison).
+    Gradient,
+}
+
 /// Gains and thresholds of the step.
 #[derive(Clone, Copy, Debug)]
 pub struct Gains<R> {
+    /// Repulsion law.
+    pub repulsion: Repulsion,
     /// `k_a`, the cruise speed towards the goal, m/s (eq 74).
     pub k_att: R,
     /// `k_r`, m/s per unit gradient (eq 76).
@@ -114,12 +129,24 @@ impl<R: Real> Controller<R> {
             (R::ZERO, R::ZERO)
         };
 
+        if g.repulsion == Repulsion::Gradient {
+            let scale = self.height_scale(f.height).mul(watchdog);
+            let rx = fax.sub(g.k_rep.mul(f.grad_x));
+            let ry = fay.sub(g.k_rep.mul(f.grad_y));
+            return Command { vx: rx.mul(scale), vy: ry.mul(scale), scale, vortex_sign: 0 };
+        }
+        let fixed_sign = match g.repulsion {
+            Repulsion::Vortex { sign } => sign.signum(),
+            Repulsion::Gradient => 0,
+        };
         // Vortex direction [df/dy, -df/dx] (eq 76) and its sign from the direction of motion.
         let vx = f.grad_y;
         let vy = f.grad_x.neg();
         let along = vx.mul(ex).add(vy.mul(ey));
         let fresh: i8 = if along < R::ZERO { -1 } else { 1 };
-        let sign = if f.height > g.latch_height_m {
+        let sign = if fixed_sign != 0 {
+            fixed_sign
+        } else if f.height > g.latch_height_m {
             if self.latched == 0 {
                 self.latched = fresh;
             }
@@ -148,6 +175,7 @@ mod tests {
 
     fn gains() -> Gains<f64> {
         Gains {
+            repulsion: Repulsion::Vortex { sign: 0 },
             k_att: 0.2,
             k_rep: 0.5,
             capture_radius_m: 0.02,
@@ -183,6 +211,12 @@ mod tests {
         assert_eq!(c.command(0.0, 0.0, 1.0, 0.0, &f2, 1.0).vortex_sign, first);
         let off = FieldSample { height: 0.0, grad_x: 1.0, grad_y: -0.2 };
         assert_eq!(c.command(0.0, 0.0, 1.0, 0.0, &off, 1.0).vortex_sign, -first);
+        // A fixed sign is kept whatever the motion; the radial law of eq 75 pushes down the gradient.
+        let mut fixed = Controller::new(Gains { repulsion: Repulsion::Vortex { sign: -1 }, ..gains() });
+        assert_eq!(fixed.command(0.0, 0.0, 1.0, 0.0, &off, 1.0).vortex_sign, -1);
+        let mut radial = Controller::new(Gains { repulsion: Repulsion::Gradient, ..gains() });
+        let r = radial.command(0.0, 0.0, 1.0, 0.0, &f, 1.0);
+        assert!((r.vx - (0.2 - 0.5)).abs() < 1e-12 && (r.vy + 0.1).abs() < 1e-12);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! Fixed-point types saturate instead of overflowing (the `fixed` crate's `saturating_*`), divisions
 //! by zero saturate, and nothing here panics. `f32`/`f64` use `libm` so the code stays `no_std`.
 
-use fixed::types::{I16F16, I20F12, I8F24};
+pub use fixed::types::{I16F16, I20F12, I8F24};
 
 /// A real number as the avoidance step needs it: saturating arithmetic, no panics.
 pub trait Real: Copy + PartialOrd {

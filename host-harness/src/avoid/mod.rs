@@ -1,1 +1,125 @@
 //! Collision avoidance (Ch. 5): RBF interpolation of depth images and the potential field.
+//!
+//! `depth` reads 16-bit depth images, generates synthetic ones and pre-processes them (5.1); `rbf`
+//! fits the Gaussian grid, filters the weights and evaluates the field and its gradient (5.2);
+//! `calib` removes the robot by calibration (5.2.1); `path` closes the loop with the firmware's
+//! potential-field step (5.3); `scene` reads `[avoid]` scene files; `plot` draws Fig. 88-90.
+//! `flinch avoid SCENE.toml` is [`run`].
+
+pub mod calib;
+pub mod depth;
+pub mod path;
+pub mod plot;
+pub mod rbf;
+pub mod scene;
+
+use std::path::PathBuf;
+
+use path::{Engine, PathResult, Setup};
+
+/// `flinch avoid`: simulate an avoidance scene and report the path.
+#[derive(clap::Args, Debug)]
+pub struct AvoidArgs {
+    /// Scene file with an `[avoid]` table (see docs/avoidance.md).
+    pub scene: PathBuf,
+    /// Draw the path over the interpolated field (`.svg` or `.png`).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Print the metrics as JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Run the firmware step (I16F16, lookup-table Gaussian, serial frames) instead of the f64 reference.
+    #[arg(long)]
+    pub mcu: bool,
+    /// Use this robot calibration file instead of running the calibration pass.
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<PathBuf>,
+    /// Save the calibration used to this file.
+    #[arg(long, value_name = "FILE")]
+    pub save_calibration: Option<PathBuf>,
+    /// Write the first synthetic depth frame (16-bit, `.png` or `.pgm`) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub save_depth: Option<PathBuf>,
+}
+
+/// Metrics of one run, as printed.
+pub fn metrics_json(res: &PathResult, engine: Engine) -> serde_json::Value {
+    serde_json::json!({
+        "engine": match engine { Engine::Reference => "reference-f64", Engine::Mcu => "mcu-i16f16" },
+        "reached_goal": res.time_to_goal_s.is_some(),
+        "time_to_goal_s": res.time_to_goal_s,
+        "min_clearance_m": res.min_clearance_m,
+        "path_length_m": res.path_length_m,
+        "stalls": res.stalls,
+        "steps": res.points.len() - 1,
+        "frames": res.frames,
+        "final_m": res.points.last(),
+        "rx": res.rx.map(|s| serde_json::json!({
+            "good": s.good, "bad_crc": s.bad_crc, "bad_header": s.bad_header,
+            "short": s.short, "stale": s.stale, "skipped_bytes": s.skipped_bytes })),
+    })
+}
+
+/// Entry point of `flinch avoid`.
+pub fn run(args: &AvoidArgs) -> Result<(), String> {
+    let scene = scene::Avoid::load(&args.scene)?;
+    let cal = match &args.calibration {
+        Some(p) => Some(calib::Calibration::load(p)?),
+        None => None,
+    };
+    let setup = Setup::new(&scene, cal).map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    if let Some(p) = &args.save_calibration {
+        setup.calibration.save(p)?;
+    }
+    if let Some(p) = &args.save_depth {
+        let mut rng = depth::Rng::new(scene.camera.seed);
+        let img = depth::render(
+            &scene.camera(),
+            Some((&scene.robot_shape(), scene.start_m)),
+            Some((&scene.operator_shape(), scene.hand_at(0.0))),
+            &mut rng,
+        );
+        img.save(p)?;
+    }
+    let engine = if args.mcu { Engine::Mcu } else { Engine::Reference };
+    let res = path::simulate(&scene, &setup, engine).map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    if let Some(p) = &args.plot {
+        plot::plot(&scene, &res, p)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&metrics_json(&res, engine)).map_err(|e| e.to_string())?);
+    } else {
+        let name = args.scene.display();
+        println!("avoid {name}: engine {}", if args.mcu { "mcu (I16F16, LUT, serial frames)" } else { "reference (f64)" });
+        println!(
+            "  grid {} x {}, fit sigma = {:.3} x spacing/2, eval sigma x {:.2}; {} frames, {} steps of {} s",
+            setup.fitter.grid.nx,
+            setup.fitter.grid.ny,
+            scene.fit.sigma_factor,
+            scene.fit.eval_sigma_factor,
+            res.frames,
+            res.points.len() - 1,
+            res.dt_s
+        );
+        match res.time_to_goal_s {
+            Some(t) => println!("  time to goal      {t:.3} s"),
+            None => println!("  time to goal      not reached in {} s (final {:?})", scene.max_time_s, res.points.last()),
+        }
+        println!("  min clearance     {:.1} mm (at t = {:.2} s)", res.min_clearance_m * 1e3, res.snapshot.t_s);
+        println!("  path length       {:.3} m (straight line {:.3} m)", res.path_length_m, {
+            let (a, b) = (scene.start_m, scene.goal_m);
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+        });
+        println!("  stalls            {}", res.stalls);
+        if let Some(s) = res.rx {
+            println!(
+                "  frames received   {} good, {} bad CRC, {} bad header, {} short, {} stale",
+                s.good, s.bad_crc, s.bad_header, s.short, s.stale
+            );
+        }
+        if let Some(p) = &args.plot {
+            println!("  plot              {}", p.display());
+        }
+    }
+    Ok(())
+}

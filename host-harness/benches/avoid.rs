@@ -1,0 +1,2 @@
+//! Avoidance benchmarks (filled below).
+fn main() {}

@@ -1,0 +1,117 @@
+//! The path over the interpolated field, like the thesis's Fig. 88-90: `f*` (evaluation sigma) at the
+//! moment of minimum clearance as a colour map, the operator's outline then, the whole path, start and
+//! goal. SVG or PNG by the file extension.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::path::PathResult;
+use super::scene::Avoid;
+
+fn colour(v: f64, max: f64) -> RGBColor {
+    // Dark blue (plane) -> teal -> yellow (top of the hill).
+    let a = if max > 0.0 { (v / max).clamp(0.0, 1.0) } else { 0.0 };
+    let lerp = |x: f64, y: f64, t: f64| (x + (y - x) * t) as u8;
+    if a < 0.5 {
+        let t = a / 0.5;
+        RGBColor(lerp(20.0, 30.0, t), lerp(30.0, 150.0, t), lerp(90.0, 140.0, t))
+    } else {
+        let t = (a - 0.5) / 0.5;
+        RGBColor(lerp(30.0, 250.0, t), lerp(150.0, 230.0, t), lerp(140.0, 40.0, t))
+    }
+}
+
+/// Draw `res` for `scene` into `out` (`.svg` or `.png`).
+pub fn plot(scene: &Avoid, res: &PathResult, out: &Path) -> Result<(), String> {
+    let is_svg = match out.extension().and_then(|e| e.to_str()) {
+        Some("svg") => true,
+        Some("png") => false,
+        _ => return Err(format!("{}: --plot wants a .svg or .png file", out.display())),
+    };
+    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", out.display());
+    if is_svg {
+        let root = SVGBackend::new(out, (900, 820)).into_drawing_area();
+        draw(scene, res, root).map_err(|e| err(&e))
+    } else {
+        let root = BitMapBackend::new(out, (900, 820)).into_drawing_area();
+        draw(scene, res, root).map_err(|e| err(&e))
+    }
+}
+
+fn draw<DB: DrawingBackend>(scene: &Avoid, res: &PathResult, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let (w, h) = scene.extent_m();
+    let snap = &res.snapshot;
+    let title = format!(
+        "f* (sigma' = {:.2} sigma) at t = {:.2} s, min clearance {:.0} mm",
+        scene.fit.eval_sigma_factor,
+        snap.t_s,
+        res.min_clearance_m * 1e3
+    );
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..w, 0.0..h)
+        .map_err(e)?;
+    chart.configure_mesh().x_desc("x [m]").y_desc("y [m]").disable_mesh().draw().map_err(e)?;
+
+    // Field as cells of a raster at most 105 px a side (enough for the eye, small SVG).
+    let n = 105usize;
+    let (cw, ch) = (w / n as f64, h / n as f64);
+    let mut max = 0.0f64;
+    let mut vals = Vec::with_capacity(n * n);
+    for r in 0..n {
+        for c in 0..n {
+            let v = snap.field.sample((c as f64 + 0.5) * cw, (r as f64 + 0.5) * ch).0;
+            max = max.max(v);
+            vals.push(v);
+        }
+    }
+    chart
+        .draw_series((0..n * n).map(|k| {
+            let (r, c) = (k / n, k % n);
+            let (x, y) = (c as f64 * cw, r as f64 * ch);
+            Rectangle::new([(x, y), (x + cw, y + ch)], colour(vals[k], max).filled())
+        }))
+        .map_err(e)?;
+
+    // Operator outline at the snapshot: forearm segment and hand circle.
+    let op = scene.operator_shape();
+    let red = RGBColor(230, 40, 40);
+    chart
+        .draw_series(std::iter::once(PathElement::new(vec![(op.entry_m[0], op.entry_m[1]), (snap.hand_m[0], snap.hand_m[1])], red.stroke_width(3))))
+        .map_err(e)?;
+    let circle: Vec<(f64, f64)> = (0..=48)
+        .map(|k| {
+            let a = k as f64 / 48.0 * std::f64::consts::TAU;
+            (snap.hand_m[0] + op.hand_radius_m * a.cos(), snap.hand_m[1] + op.hand_radius_m * a.sin())
+        })
+        .collect();
+    chart.draw_series(std::iter::once(PathElement::new(circle, red.stroke_width(2)))).map_err(e)?.label("operator at min clearance").legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2)));
+
+    // The path, start, goal, tool at the snapshot.
+    chart
+        .draw_series(std::iter::once(PathElement::new(res.points.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(), WHITE.stroke_width(2))))
+        .map_err(e)?
+        .label("tool path")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(2)));
+    chart.draw_series(std::iter::once(Circle::new((scene.start_m[0], scene.start_m[1]), 6, GREEN.filled()))).map_err(e)?.label("start").legend(|(x, y)| Circle::new((x + 9, y), 5, GREEN.filled()));
+    chart.draw_series(std::iter::once(Cross::new((scene.goal_m[0], scene.goal_m[1]), 8, MAGENTA.stroke_width(3)))).map_err(e)?.label("goal").legend(|(x, y)| Cross::new((x + 9, y), 5, MAGENTA.stroke_width(2)));
+    chart.draw_series(std::iter::once(Circle::new((snap.tool_m[0], snap.tool_m[1]), 5, WHITE.stroke_width(2)))).map_err(e)?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}

@@ -1,0 +1,301 @@
+//! The avoidance scene file (TOML, table `[avoid]`): documented key by key in `docs/avoidance.md`.
+
+use serde::Deserialize;
+use std::path::Path;
+
+use super::depth::{Camera, OperatorShape, RobotShape};
+
+/// `[avoid]`: the task, the potential field and the simulation.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Avoid {
+    /// Start of the tool, m.
+    pub start_m: [f64; 2],
+    /// Goal of the tool, m.
+    pub goal_m: [f64; 2],
+    /// `k_a` of eq 74: cruise speed, m/s.
+    pub speed_mps: f64,
+    /// `k_r` of eq 75/76, m/s per unit gradient.
+    pub k_rep: f64,
+    /// `"vortex"` (eq 76, sign from the motion), `"vortex_cw"`, `"vortex_ccw"` or `"gradient"` (eq 75).
+    #[serde(default = "default_repulsion")]
+    pub repulsion: String,
+    /// Control period `dt` of eq 79, s.
+    pub dt_s: f64,
+    /// Camera frame period (a new fit every frame), s.
+    pub frame_period_s: f64,
+    /// Give up after this long, s.
+    pub max_time_s: f64,
+    /// Goal reached within this distance, m.
+    pub goal_tolerance_m: f64,
+    /// Attraction falls off linearly inside this radius, m.
+    pub capture_radius_m: f64,
+    /// Vortex sign latched while `f*` is above this, m.
+    #[serde(default = "default_latch")]
+    pub latch_height_m: f64,
+    /// Speed scaling starts at this height of `f*`, m.
+    pub slow_height_m: f64,
+    /// Speed is zero at this height of `f*`, m.
+    pub stop_height_m: f64,
+    /// A stall: the tool moved less than `stall_move_m` in `stall_window_s` away from the goal.
+    #[serde(default = "default_stall_window")]
+    pub stall_window_s: f64,
+    /// See `stall_window_s`, m.
+    #[serde(default = "default_stall_move")]
+    pub stall_move_m: f64,
+    /// The camera.
+    pub camera: CameraCfg,
+    /// The fit.
+    pub fit: FitCfg,
+    /// The robot as the camera sees it, and its calibration pass.
+    pub robot: RobotCfg,
+    /// The operator and its motion.
+    pub operator: OperatorCfg,
+}
+
+fn default_repulsion() -> String {
+    "vortex".into()
+}
+fn default_latch() -> f64 {
+    0.02
+}
+fn default_stall_window() -> f64 {
+    0.5
+}
+fn default_stall_move() -> f64 {
+    0.005
+}
+
+/// `[avoid.camera]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraCfg {
+    /// Image columns.
+    pub width_px: usize,
+    /// Image rows.
+    pub height_px: usize,
+    /// Pixel size on the plane, m.
+    pub m_per_px: f64,
+    /// Camera above the plane, m.
+    pub camera_height_m: f64,
+    /// Depth noise standard deviation, mm.
+    pub noise_mm: f64,
+    /// Fraction of null pixels.
+    pub null_fraction: f64,
+    /// RNG seed.
+    pub seed: u64,
+}
+
+/// `[avoid.fit]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FitCfg {
+    /// Centres across the width (15 or 30 in the thesis).
+    pub grid: usize,
+    /// Fit sigma in units of eq 70 (`spacing / 2`).
+    pub sigma_factor: f64,
+    /// Evaluation sigma in units of the fit sigma (1.5 in Fig. 90).
+    pub eval_sigma_factor: f64,
+    /// Raise before fitting, m (about 0.065 in the thesis).
+    pub offset_m: f64,
+}
+
+/// `[avoid.robot]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotCfg {
+    /// Base position, m.
+    pub base_m: [f64; 2],
+    /// Wrist/tool radius, m.
+    pub wrist_radius_m: f64,
+    /// Wrist/tool top above the plane, m.
+    pub wrist_height_m: f64,
+    /// Link width, m.
+    pub link_width_m: f64,
+    /// Link top above the plane, m.
+    pub link_height_m: f64,
+    /// Zig-zag step `d` of Fig. 84, m.
+    pub calibration_step_m: f64,
+    /// Cut height of the interpolated robot (Fig. 85), m.
+    pub calibration_threshold_m: f64,
+    /// Growth of each mask, m (0 = the thesis's plain cut).
+    #[serde(default)]
+    pub calibration_dilate_m: f64,
+}
+
+/// `[avoid.operator]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OperatorCfg {
+    /// Where the forearm enters the image, m.
+    pub entry_m: [f64; 2],
+    /// Hand radius, m.
+    pub hand_radius_m: f64,
+    /// Hand top, m.
+    pub hand_height_m: f64,
+    /// Forearm width, m.
+    pub forearm_width_m: f64,
+    /// Forearm top, m.
+    pub forearm_height_m: f64,
+    /// Hand position over time: linear between key frames, held after the last.
+    pub keyframes: Vec<Keyframe>,
+}
+
+/// One key frame of the hand.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Keyframe {
+    /// Time, s.
+    pub t_s: f64,
+    /// Hand centre, m.
+    pub hand_m: [f64; 2],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    avoid: Avoid,
+}
+
+impl Avoid {
+    /// Read and validate a scene file; errors name the file and the key.
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        Self::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Parse and validate scene text.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let f: File = toml::from_str(text).map_err(|e| e.to_string().trim_end().to_string())?;
+        f.avoid.validate()?;
+        Ok(f.avoid)
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let pos = |k: &str, v: f64| if v > 0.0 && v.is_finite() { Ok(()) } else { Err(format!("avoid.{k} = {v}: must be > 0")) };
+        pos("speed_mps", self.speed_mps)?;
+        pos("dt_s", self.dt_s)?;
+        pos("frame_period_s", self.frame_period_s)?;
+        pos("max_time_s", self.max_time_s)?;
+        pos("goal_tolerance_m", self.goal_tolerance_m)?;
+        pos("capture_radius_m", self.capture_radius_m)?;
+        pos("stall_window_s", self.stall_window_s)?;
+        pos("camera.m_per_px", self.camera.m_per_px)?;
+        pos("camera.camera_height_m", self.camera.camera_height_m)?;
+        pos("fit.sigma_factor", self.fit.sigma_factor)?;
+        pos("fit.eval_sigma_factor", self.fit.eval_sigma_factor)?;
+        pos("robot.calibration_step_m", self.robot.calibration_step_m)?;
+        if self.k_rep < 0.0 {
+            return Err(format!("avoid.k_rep = {}: must be >= 0", self.k_rep));
+        }
+        if self.stop_height_m <= self.slow_height_m {
+            return Err(format!(
+                "avoid.stop_height_m = {} must be above avoid.slow_height_m = {}",
+                self.stop_height_m, self.slow_height_m
+            ));
+        }
+        if self.max_time_s / self.dt_s > 1e6 {
+            return Err("avoid.max_time_s / avoid.dt_s: more than 1e6 steps".into());
+        }
+        if !(1..=30).contains(&self.fit.grid) {
+            return Err(format!("avoid.fit.grid = {}: must be 1..=30", self.fit.grid));
+        }
+        if !(8..=2000).contains(&self.camera.width_px) || !(8..=2000).contains(&self.camera.height_px) {
+            return Err("avoid.camera.width_px / height_px: must be 8..=2000".into());
+        }
+        if !(0.0..1.0).contains(&self.camera.null_fraction) {
+            return Err(format!("avoid.camera.null_fraction = {}: must be in [0, 1)", self.camera.null_fraction));
+        }
+        let (w, h) = self.extent_m();
+        for (k, p) in [("start_m", self.start_m), ("goal_m", self.goal_m)] {
+            if !(0.0..=w).contains(&p[0]) || !(0.0..=h).contains(&p[1]) {
+                return Err(format!("avoid.{k} = {p:?}: outside the image (0..{w} x 0..{h} m)"));
+            }
+        }
+        self.repulsion_law()?;
+        if self.operator.keyframes.is_empty() {
+            return Err("avoid.operator.keyframes: at least one key frame".into());
+        }
+        if self.operator.keyframes.windows(2).any(|k| k[1].t_s <= k[0].t_s) {
+            return Err("avoid.operator.keyframes: t_s must increase".into());
+        }
+        Ok(())
+    }
+
+    /// Image extent on the plane, m.
+    pub fn extent_m(&self) -> (f64, f64) {
+        (self.camera.width_px as f64 * self.camera.m_per_px, self.camera.height_px as f64 * self.camera.m_per_px)
+    }
+
+    /// The repulsion law named by `repulsion`.
+    pub fn repulsion_law(&self) -> Result<flinch_firmware::avoidance::Repulsion, String> {
+        use flinch_firmware::avoidance::Repulsion;
+        Ok(match self.repulsion.as_str() {
+            "vortex" => Repulsion::Vortex { sign: 0 },
+            "vortex_cw" => Repulsion::Vortex { sign: 1 },
+            "vortex_ccw" => Repulsion::Vortex { sign: -1 },
+            "gradient" => Repulsion::Gradient,
+            other => {
+                return Err(format!(
+                    "avoid.repulsion = {other:?}: expected \"vortex\", \"vortex_cw\", \"vortex_ccw\" or \"gradient\""
+                ))
+            }
+        })
+    }
+
+    /// The synthetic camera.
+    pub fn camera(&self) -> Camera {
+        let c = &self.camera;
+        Camera {
+            width_px: c.width_px,
+            height_px: c.height_px,
+            m_per_px: c.m_per_px,
+            camera_height_m: c.camera_height_m,
+            noise_mm: c.noise_mm,
+            null_fraction: c.null_fraction,
+        }
+    }
+
+    /// The robot's shape.
+    pub fn robot_shape(&self) -> RobotShape {
+        let r = &self.robot;
+        RobotShape {
+            base_m: r.base_m,
+            wrist_radius_m: r.wrist_radius_m,
+            wrist_height_m: r.wrist_height_m,
+            link_width_m: r.link_width_m,
+            link_height_m: r.link_height_m,
+        }
+    }
+
+    /// The operator's shape.
+    pub fn operator_shape(&self) -> OperatorShape {
+        let o = &self.operator;
+        OperatorShape {
+            entry_m: o.entry_m,
+            hand_radius_m: o.hand_radius_m,
+            hand_height_m: o.hand_height_m,
+            forearm_width_m: o.forearm_width_m,
+            forearm_height_m: o.forearm_height_m,
+        }
+    }
+
+    /// Hand position at time `t`.
+    pub fn hand_at(&self, t: f64) -> [f64; 2] {
+        let k = &self.operator.keyframes;
+        let first = &k[0];
+        if t <= first.t_s {
+            return first.hand_m;
+        }
+        for w in k.windows(2) {
+            if t <= w[1].t_s {
+                let a = (t - w[0].t_s) / (w[1].t_s - w[0].t_s);
+                return [
+                    w[0].hand_m[0] + a * (w[1].hand_m[0] - w[0].hand_m[0]),
+                    w[0].hand_m[1] + a * (w[1].hand_m[1] - w[0].hand_m[1]),
+                ];
+            }
+        }
+        k[k.len() - 1].hand_m
+    }
+}
