@@ -24,6 +24,86 @@ pub enum Engine {
     Mcu,
 }
 
+/// A command source for [`simulate_with`]: gets every new field, answers every control step.
+pub trait StepEngine {
+    /// A new fit is available (frame `seq` at `now_ms`).
+    fn new_field(&mut self, field: &Field, seq: u32, now_ms: u32) -> Result<(), String>;
+    /// Velocity command at `p`, m/s.
+    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32) -> [f64; 2];
+    /// Receiver counters, if there is a receiver.
+    fn rx_stats(&self) -> Option<RxStats> {
+        None
+    }
+}
+
+/// The `f64` reference: full-sum field, firmware controller in `f64`.
+pub struct RefEngine {
+    ctl: Controller<f64>,
+    field: Option<Field>,
+}
+
+impl RefEngine {
+    /// For a scene.
+    pub fn new(scene: &Avoid) -> Result<Self, String> {
+        Ok(RefEngine { ctl: Controller::new(gains(scene)?), field: None })
+    }
+}
+
+impl StepEngine for RefEngine {
+    fn new_field(&mut self, field: &Field, _: u32, _: u32) -> Result<(), String> {
+        self.field = Some(field.clone());
+        Ok(())
+    }
+    fn command(&mut self, p: [f64; 2], goal: [f64; 2], _: u32) -> [f64; 2] {
+        let (h, fx, fy) = self.field.as_ref().map_or((0.0, 0.0, 0.0), |f| f.sample(p[0], p[1]));
+        let s = fw::FieldSample { height: h, grad_x: fx, grad_y: fy };
+        let c = self.ctl.command(p[0], p[1], goal[0], goal[1], &s, 1.0);
+        [c.vx, c.vy]
+    }
+}
+
+/// The firmware as on the target, in number type `R` with Gaussian `G`: frames through a
+/// [`Receiver`], truncated-window field, controller, weights-age watchdog.
+pub struct FwEngine<R, G> {
+    ctl: Controller<R>,
+    rx: Box<Receiver<R>>,
+    gauss: G,
+    watchdog: Watchdog,
+}
+
+impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
+    /// For a scene.
+    pub fn new(scene: &Avoid, gauss: G) -> Result<Self, String> {
+        Ok(FwEngine {
+            ctl: Controller::new(gains(scene)?),
+            rx: Box::new(Receiver::new(200, 20)),
+            gauss,
+            watchdog: Watchdog {
+                slow_after_ms: (3.0 * scene.frame_period_s * 1e3) as u32,
+                stop_after_ms: (10.0 * scene.frame_period_s * 1e3) as u32,
+            },
+        })
+    }
+}
+
+impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
+    fn new_field(&mut self, field: &Field, seq: u32, now_ms: u32) -> Result<(), String> {
+        self.rx.feed(&field.to_frame(seq, 0)?, now_ms);
+        Ok(())
+    }
+    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32) -> [f64; 2] {
+        self.rx.tick(now_ms);
+        let q = R::from_f64;
+        let s = fw::sample(self.rx.grid(), &self.gauss, q(p[0]), q(p[1]));
+        let wd = self.watchdog.factor::<R>(self.rx.weights_age_ms(now_ms));
+        let c = self.ctl.command(q(p[0]), q(p[1]), q(goal[0]), q(goal[1]), &s, wd);
+        [c.vx.to_f64(), c.vy.to_f64()]
+    }
+    fn rx_stats(&self) -> Option<RxStats> {
+        Some(self.rx.stats)
+    }
+}
+
 /// What is computed once per scene: the pseudo-inverses and the calibration.
 pub struct Setup {
     /// Separable fitter.
@@ -148,19 +228,21 @@ pub fn count_stalls(points: &[[f64; 2]], goal: [f64; 2], window: usize, move_m: 
     stalls
 }
 
-/// Simulate the scene.
+/// Simulate the scene with the reference or the on-target (I16F16, lookup table) engine.
 pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResult, String> {
+    match engine {
+        Engine::Reference => simulate_with(scene, setup, &mut RefEngine::new(scene)?),
+        Engine::Mcu => simulate_with(scene, setup, &mut FwEngine::<I16F16, _>::new(scene, fw::GaussLut::new())?),
+    }
+}
+
+/// Simulate the scene with any command source.
+pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) -> Result<PathResult, String> {
     let op = scene.operator_shape();
     let mut rng = Rng::new(scene.camera.seed);
     let dt = scene.dt_s;
     let steps = (scene.max_time_s / dt).ceil() as usize;
     let goal = scene.goal_m;
-
-    let mut ctl64 = Controller::<f64>::new(gains(scene)?);
-    let mut ctlq = Controller::<I16F16>::new(gains(scene)?);
-    let mut rx = Box::new(Receiver::<I16F16>::new(200, 20));
-    let lut = fw::GaussLut::<I16F16>::new();
-    let watchdog = Watchdog { slow_after_ms: (3.0 * scene.frame_period_s * 1e3) as u32, stop_after_ms: (10.0 * scene.frame_period_s * 1e3) as u32 };
 
     let mut p = scene.start_m;
     let mut points = vec![p];
@@ -168,9 +250,7 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResu
     let mut field = fit_frame(scene, setup, p, scene.hand_at(0.0), &mut rng);
     let mut frames = 1;
     let mut seq: u32 = 0;
-    if engine == Engine::Mcu {
-        rx.feed(&field.to_frame(seq, 0)?, 0);
-    }
+    engine.new_field(&field, seq, 0)?;
     let mut next_frame = scene.frame_period_s;
     let mut best = Snapshot { t_s: 0.0, tool_m: p, hand_m: scene.hand_at(0.0), field: field.clone() };
     let mut min_c = clearance[0];
@@ -179,32 +259,15 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResu
     for k in 1..=steps {
         let t = k as f64 * dt;
         let t_prev = t - dt;
+        let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
             field = fit_frame(scene, setup, p, scene.hand_at(t_prev), &mut rng);
             frames += 1;
             next_frame += scene.frame_period_s;
-            if engine == Engine::Mcu {
-                seq = seq.wrapping_add(1);
-                rx.feed(&field.to_frame(seq, 0)?, (t_prev * 1e3) as u32);
-            }
+            seq = seq.wrapping_add(1);
+            engine.new_field(&field, seq, now)?;
         }
-        let (vx, vy) = match engine {
-            Engine::Reference => {
-                let (h, fx, fy) = field.sample(p[0], p[1]);
-                let s = fw::FieldSample { height: h, grad_x: fx, grad_y: fy };
-                let c = ctl64.command(p[0], p[1], goal[0], goal[1], &s, 1.0);
-                (c.vx, c.vy)
-            }
-            Engine::Mcu => {
-                let now = (t_prev * 1e3) as u32;
-                rx.tick(now);
-                let q = |v: f64| I16F16::from_f64(v);
-                let s = fw::sample(rx.grid(), &lut, q(p[0]), q(p[1]));
-                let wd = watchdog.factor::<I16F16>(rx.weights_age_ms(now));
-                let c = ctlq.command(q(p[0]), q(p[1]), q(goal[0]), q(goal[1]), &s, wd);
-                (c.vx.to_f64(), c.vy.to_f64())
-            }
-        };
+        let [vx, vy] = engine.command(p, goal, now);
         // Eq 79.
         p = [p[0] + vx * dt, p[1] + vy * dt];
         let hand = scene.hand_at(t);
@@ -233,7 +296,75 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResu
         stalls,
         frames,
         dt_s: dt,
-        rx: (engine == Engine::Mcu).then_some(rx.stats),
+        rx: engine.rx_stats(),
         snapshot: best,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shipped scene made small and fast: 105 px at 1 cm, the hand static on the straight line.
+    pub(crate) fn small_scene(repulsion: &str, hand: [f64; 2]) -> Avoid {
+        let text = include_str!("../../../scenes/avoid_operator_hand.toml");
+        let mut s = Avoid::parse(text).unwrap();
+        s.camera.width_px = 105;
+        s.camera.height_px = 105;
+        s.camera.m_per_px = 0.01;
+        s.robot.calibration_step_m = 0.06;
+        s.robot.calibration_dilate_m = 0.045;
+        s.repulsion = repulsion.into();
+        s.max_time_s = 8.0;
+        s.operator.keyframes = vec![super::super::scene::Keyframe { t_s: 0.0, hand_m: hand }];
+        s
+    }
+
+    #[test]
+    fn path_goes_around_the_hand_and_reaches_the_goal() {
+        let scene = small_scene("vortex", [0.52, 0.47]);
+        let setup = Setup::new(&scene, None).unwrap();
+        let res = simulate(&scene, &setup, Engine::Reference).unwrap();
+        let t = res.time_to_goal_s.expect("reaches the goal");
+        assert!(t < 6.0, "{t}");
+        assert!(res.min_clearance_m > 0.02, "never enters the operator: {}", res.min_clearance_m);
+        assert_eq!(res.stalls, 0);
+        // It went around: somewhere off the straight line by more than the hand's radius.
+        let off = res.points.iter().map(|p| (p[1] - 0.5).abs()).fold(0.0, f64::max);
+        assert!(off > 0.05, "deviation {off}");
+        // Without repulsion the straight line runs through the hand.
+        let mut blind = scene.clone();
+        blind.k_rep = 0.0;
+        blind.stop_height_m = 10.0;
+        blind.slow_height_m = 9.0;
+        let straight = simulate(&blind, &setup, Engine::Reference).unwrap();
+        assert_eq!(straight.min_clearance_m, 0.0);
+
+        // The firmware step (I16F16, table, frames) follows the same path closely.
+        let mcu = simulate(&scene, &setup, Engine::Mcu).unwrap();
+        assert!(mcu.time_to_goal_s.is_some());
+        assert_eq!(mcu.rx.map(|s| s.good), Some(mcu.frames as u32));
+        let dev = res.points.iter().zip(&mcu.points).map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()).fold(0.0, f64::max);
+        assert!(dev < 0.01, "I16F16 path within 10 mm of f64: {dev}");
+    }
+
+    #[test]
+    fn radial_repulsion_head_on_stalls_and_is_counted() {
+        // Fig. 87: a hill symmetric about the line of motion (the forearm lies along it, beyond the
+        // hand) so attraction and radial repulsion cancel in front of it.
+        let mut scene = small_scene("gradient", [0.55, 0.5]);
+        scene.operator.entry_m = [1.05, 0.5];
+        scene.k_rep = 1.5;
+        let setup = Setup::new(&scene, None).unwrap();
+        let res = simulate(&scene, &setup, Engine::Reference).unwrap();
+        assert!(res.time_to_goal_s.is_none());
+        assert!(res.stalls >= 1, "local minimum in front of the hand");
+        assert!(res.min_clearance_m > 0.0);
+        // The stall counter itself: moving, stopped, moving, stopped at the goal.
+        let mut pts: Vec<[f64; 2]> = (0..10).map(|k| [k as f64 * 0.01, 0.0]).collect();
+        pts.extend(std::iter::repeat([0.1, 0.0]).take(10));
+        pts.extend((0..10).map(|k| [0.1 + k as f64 * 0.01, 0.0]));
+        pts.extend(std::iter::repeat([0.5, 0.0]).take(10));
+        assert_eq!(count_stalls(&pts, [0.5, 0.0], 3, 0.005, 0.01), 1);
+    }
 }
