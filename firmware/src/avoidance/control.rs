@@ -124,7 +124,9 @@ impl<R: Real> Controller<R> {
         let dist = ex.mul(ex).add(ey.mul(ey)).sqrt();
         let denom = if dist > g.capture_radius_m { dist } else { g.capture_radius_m };
         let (fax, fay) = if denom > R::ZERO {
-            (g.k_att.mul(ex.div(denom)), g.k_att.mul(ey.div(denom)))
+            // One division: k_a / max(|e|, r_capture), then two products.
+            let k = g.k_att.div(denom);
+            (k.mul(ex), k.mul(ey))
         } else {
             (R::ZERO, R::ZERO)
         };

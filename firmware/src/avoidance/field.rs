@@ -174,12 +174,7 @@ pub fn sample<R: Real, G: Gauss<R>>(grid: &Grid<R>, gauss: &G, x: R, y: R) -> Fi
             Some(ws) => ws,
             None => continue,
         };
-        let mut a = zero;
-        let mut b = zero;
-        for ((w, g), h) in ws.iter().zip(gx.iter()).zip(hx.iter()) {
-            a = a.add(w.mul(*g));
-            b = b.add(w.mul(*h));
-        }
+        let (a, b) = R::dot2(ws, &gx, &hx);
         f = f.add(gy.mul(a));
         sx = sx.add(gy.mul(b));
         sy = sy.add(gy.mul(t).mul(a));

@@ -37,16 +37,27 @@ pub trait Real: Copy + PartialOrd {
     fn sqrt(self) -> Self;
     /// Largest integer not above `self`, clamped to `i32`.
     fn floor_int(self) -> i32;
+    /// `(sum w_k g_k, sum w_k h_k)` over the shortest of the three slices (the field's inner loop).
+    #[inline]
+    fn dot2(ws: &[Self], gs: &[Self], hs: &[Self]) -> (Self, Self) {
+        let (mut a, mut b) = (Self::ZERO, Self::ZERO);
+        for ((w, g), h) in ws.iter().zip(gs).zip(hs) {
+            a = a.add(w.mul(*g));
+            b = b.add(w.mul(*h));
+        }
+        (a, b)
+    }
 }
 
 /// Integer square root of a `u64`, bit by bit (64 iterations at most).
 const fn isqrt_u64(n: u64) -> u64 {
     let mut rem = n;
     let mut root: u64 = 0;
-    let mut bit: u64 = 1 << 62;
-    while bit > n {
-        bit >>= 2;
+    if n == 0 {
+        return 0;
     }
+    // Highest power of four not above n.
+    let mut bit: u64 = 1 << ((63 - n.leading_zeros()) & !1);
     while bit != 0 {
         if rem >= root + bit {
             rem -= root + bit;
@@ -140,6 +151,23 @@ macro_rules! impl_fixed {
             fn floor_int(self) -> i32 {
                 // Arithmetic shift right is floor for two's complement.
                 self.to_bits() >> <$t>::FRAC_NBITS
+            }
+            /// Accumulates the raw products in `i64` (one `smlal` each on the M4) and rounds once.
+            /// No overflow: `|w| < 2^31`, `|g|, |h| <= 8` so each product is below `2^(34 + FRAC)`
+            /// `<= 2^58`, and at most `MAX_WINDOW = 10` are summed (`< 2^62`); the result saturates.
+            #[inline]
+            fn dot2(ws: &[Self], gs: &[Self], hs: &[Self]) -> (Self, Self) {
+                let (mut a, mut b) = (0i64, 0i64);
+                for ((w, g), h) in ws.iter().zip(gs).zip(hs) {
+                    let w = w.to_bits() as i64;
+                    a = a.wrapping_add(w * (g.to_bits() as i64));
+                    b = b.wrapping_add(w * (h.to_bits() as i64));
+                }
+                let narrow = |v: i64| {
+                    let v = v >> <$t>::FRAC_NBITS;
+                    <$t>::from_bits(v.clamp(i32::MIN as i64, i32::MAX as i64) as i32)
+                };
+                (narrow(a), narrow(b))
             }
         }
     };

@@ -1,0 +1,154 @@
+//! Instructions per avoidance step on an emulated Cortex-M4 (QEMU `mps2-an386`).
+//!
+//! QEMU has no cycle model and DWT's cycle counter reads 0. With `-icount shift=6` each instruction
+//! takes 64 ns of virtual time and SysTick, clocked at the AN386's 25 MHz, counts every 40 ns, so
+//! `counts * 40 / 64` is an instruction count (an instruction-count proxy, not cycles: no wait states,
+//! no pipeline, FPU instructions count as one). The empty measurement (two SysTick reads) is
+//! subtracted.
+//!
+//! One step = `avoidance::sample` (field height and gradient over the truncated window) plus
+//! `Controller::command` (attraction, vortex, speed scaling, watchdog factor) at one tool position.
+//! Measured at 16 positions across a hill, for each number type and Gaussian, on a 15 x 15 grid
+//! (the thesis's) and a 30 x 30 one, both with the widened sigma' = 1.5 sigma of Fig. 90 (the
+//! largest window: 7 x 7 centres at 15 x 15). Prints max and mean, then exits through semihosting.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+use core::ptr::read_volatile;
+
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_semihosting::{debug, hprintln};
+use flinch_firmware::avoidance::{
+    num::{I16F16, I20F12, I8F24},
+    sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, Watchdog,
+};
+
+const SYST_CVR: u32 = 0xE000_E018;
+
+#[inline(always)]
+fn now() -> u32 {
+    // SAFETY: SysTick's current-value register is always readable; reading has no side effect.
+    unsafe { read_volatile(SYST_CVR as *const u32) }
+}
+
+/// SysTick counts down, 24 bits.
+fn counts(t0: u32, t1: u32) -> u32 {
+    t0.wrapping_sub(t1) & 0x00FF_FFFF
+}
+
+/// A hill of weights (0.2 m peak) around the middle of an `n x n` grid over 1.05 m.
+fn grid<R: Real>(g: &mut Grid<R>, n: usize) {
+    let s = 1.05 / n as f64;
+    let _ = g.set_geometry(n, n, R::from_f64(s / 2.0), R::from_f64(s / 2.0), R::from_f64(s), R::from_f64(0.75 * s));
+    let c = n as f64 / 2.0;
+    for j in 0..n {
+        for i in 0..n {
+            let d2 = (i as f64 - c) * (i as f64 - c) + (j as f64 - c) * (j as f64 - c);
+            let w = if d2 < (n * n) as f64 / 30.0 { 0.2 - 0.01 * d2 / (n as f64 / 15.0) } else { 0.0 };
+            if let Some(slot) = g.weights.get_mut(j * n + i) {
+                *slot = R::from_f64(if w > 0.0 { w } else { 0.0 });
+            }
+        }
+    }
+}
+
+
+fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32) {
+    let mut g = Grid::<R>::empty();
+    grid(&mut g, n);
+    let mut ctl = Controller::new(Gains {
+        repulsion: Repulsion::Vortex { sign: 0 },
+        k_att: R::from_f64(0.25),
+        k_rep: R::from_f64(0.6),
+        capture_radius_m: R::from_f64(0.03),
+        latch_height_m: R::from_f64(0.02),
+        slow_height_m: R::from_f64(0.05),
+        stop_height_m: R::from_f64(0.3),
+    });
+    let wd = Watchdog { slow_after_ms: 100, stop_after_ms: 330 };
+    let (mut max, mut sum) = (0u32, 0u32);
+    let mut check = R::ZERO;
+    for k in 0..16 {
+        let x = R::from_f64(0.30 + 0.028 * k as f64);
+        let y = R::from_f64(0.40 + 0.011 * k as f64);
+        let (gx, gy) = (R::from_f64(0.95), R::from_f64(0.5));
+        let t0 = now();
+        let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
+        let factor = wd.factor::<R>(black_box(Some(40)));
+        let c = ctl.command(x, y, gx, gy, &f, factor);
+        let t1 = now();
+        black_box(c);
+        check = check.add(c.vx.abs()).add(c.vy.abs());
+        let ins = (counts(t0, t1).saturating_sub(overhead)) * 40 / 64;
+        max = max.max(ins);
+        sum += ins;
+    }
+    hprintln!("avoid_cost grid={}x{} variant={} max={} mean={} (instructions) check={}", n, n, name, max, sum / 16, check.to_f64());
+}
+
+/// Exit QEMU through semihosting (and spin if not under a debugger).
+fn exit(code: debug::ExitStatus) -> ! {
+    debug::exit(code);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let mut cp = match cortex_m::Peripherals::take() {
+        Some(p) => p,
+        None => exit(debug::EXIT_FAILURE),
+    };
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(0x00FF_FFFF);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
+
+    // The cost of the measurement itself: two back-to-back SysTick reads.
+    let mut overhead = u32::MAX;
+    for _ in 0..8 {
+        let t0 = now();
+        let t1 = now();
+        overhead = overhead.min(counts(t0, t1));
+    }
+    hprintln!("avoid_cost: empty measurement {} counts subtracted; SysTick 25 MHz, -icount shift=6", overhead);
+
+    for n in [15usize, 30] {
+        measure::<I16F16, _>("I16F16-lut", n, &GaussLut::<I16F16>::new(), overhead);
+        measure::<I20F12, _>("I20F12-lut", n, &GaussLut::<I20F12>::new(), overhead);
+        measure::<I8F24, _>("I8F24-lut", n, &GaussLut::<I8F24>::new(), overhead);
+        measure::<f32, _>("f32-lut", n, &GaussLut::<f32>::new(), overhead);
+        measure::<f32, _>("f32-micromath", n, &GaussMicromath, overhead);
+        measure::<f32, _>("f32-libm", n, &GaussLibm, overhead);
+    }
+    exit(debug::EXIT_SUCCESS)
+}
+
+#[exception]
+unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
+    hprintln!("FAIL hard fault");
+    exit(debug::EXIT_FAILURE)
+}
+
+#[panic_handler]
+fn panic(_info: &core::panic::PanicInfo) -> ! {
+    hprintln!("FAIL panic");
+    exit(debug::EXIT_FAILURE)
+}
+
+// ---- Vector table: AN386's 32 interrupt lines, none used -------------------------------------
+#[derive(Copy, Clone)]
+#[repr(C)]
+pub union Vector {
+    handler: unsafe extern "C" fn(),
+    reserved: usize,
+}
+extern "C" {
+    fn DefaultHandler();
+}
+#[link_section = ".vector_table.interrupts"]
+#[no_mangle]
+pub static __INTERRUPTS: [Vector; 32] = [Vector { handler: DefaultHandler }; 32];
