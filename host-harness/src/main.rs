@@ -22,6 +22,8 @@ enum Command {
     Check(CheckArgs),
     /// Collision avoidance (Ch. 5): fit the depth image, run the potential field, report the path.
     Avoid(flinch_harness::avoid::AvoidArgs),
+    /// Run a scene over a grid of one or two of its keys (all cores): CSV and a line chart or heat map.
+    Sweep(flinch_harness::sweep::cli::SweepArgs),
 }
 
 #[derive(clap::Args)]
@@ -160,6 +162,7 @@ fn main() -> ExitCode {
         Command::Hil(a) => hil_cmd(a).map(|_| true),
         Command::Check(a) => check_cmd(a),
         Command::Avoid(a) => flinch_harness::avoid::run(a).map(|_| true),
+        Command::Sweep(a) => flinch_harness::sweep::cli::run(a).map(|_| true),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

@@ -1,0 +1,647 @@
+//! `flinch sweep`: run a scene over a grid of one or two of its keys, on all cores.
+//!
+//! A sweep edits the scene's parsed TOML document (a dotted key path such as `motion.speed`,
+//! `decoupler.spring_rate` or `decoupler.front_stop.stiffness`) and re-validates every edited
+//! text with [`scene::parse`], the same validator `flinch run` uses. Every point of the grid is
+//! built and checked *before* anything runs, so a bad key, a bad range or a value the validator
+//! refuses stops the sweep with a message naming what is wrong, and no time is spent simulating.
+//!
+//! Axes are `KEY=START:STOP:N` (linear steps) or `KEY=log:START:STOP:N` (geometric steps, START > 0);
+//! `--log KEY` makes an axis geometric too. Points are ordered with the first axis varying slowest
+//! (row-major), whatever the number of threads: the CSV is the same on one core or sixteen.
+//!
+//! The CSV has one row per point: the swept values, then every field of the run's [`Summary`] in
+//! its declaration order (found by serialising it, so a field added to `Summary` appears here
+//! without a change), then `error` (empty unless the solver failed at that point).
+
+pub mod cli;
+pub mod plot;
+
+use crate::scene::{self, Scene};
+use crate::sim::{self, Summary};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::de::{Deserialize, Deserializer, MapAccess, Visitor};
+use serde_json::Value as Json;
+use std::fmt;
+use std::io::{self, Write};
+use std::path::Path;
+use toml_edit::{DocumentMut, Item, Value};
+
+/// A sweep the user asked for that cannot run; the message names what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepError(pub String);
+
+impl fmt::Display for SweepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SweepError {}
+
+fn err<T>(msg: impl Into<String>) -> Result<T, SweepError> {
+    Err(SweepError(msg.into()))
+}
+
+/// How the values of an axis are spaced.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Spacing {
+    /// Equal steps.
+    Linear,
+    /// Equal ratios (START > 0).
+    Log,
+}
+
+/// One swept key and its values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// Dotted key path in the scene file, e.g. `motion.speed`.
+    pub key: String,
+    /// First value.
+    pub start: f64,
+    /// Last value.
+    pub stop: f64,
+    /// Number of values, >= 2.
+    pub n: usize,
+    /// Linear or geometric.
+    pub spacing: Spacing,
+}
+
+impl Axis {
+    /// A checked axis: finite `start < stop`, `n >= 2`, `start > 0` when geometric.
+    pub fn new(key: &str, start: f64, stop: f64, n: usize, spacing: Spacing) -> Result<Self, SweepError> {
+        let key = key.trim();
+        if key.is_empty() || key.split('.').any(|s| s.trim().is_empty()) {
+            return err(format!("--vary {key:?}: the key must be a dotted path such as motion.speed"));
+        }
+        if !start.is_finite() || !stop.is_finite() {
+            return err(format!("--vary {key}: START and STOP must be finite numbers, got {start} and {stop}"));
+        }
+        if n < 2 {
+            return err(format!("--vary {key}: N must be at least 2 (a sweep of one value is `flinch run`), got {n}"));
+        }
+        if n > 100_000 {
+            return err(format!("--vary {key}: N = {n} is more than 100000 points on one axis"));
+        }
+        if start >= stop {
+            return err(format!("--vary {key}: START must be below STOP, got {start} >= {stop}"));
+        }
+        if spacing == Spacing::Log && start <= 0.0 {
+            return err(format!("--vary {key}: a log axis needs START > 0, got {start}"));
+        }
+        Ok(Self { key: key.to_string(), start, stop, n, spacing })
+    }
+
+    /// Parses `KEY=START:STOP:N` or `KEY=log:START:STOP:N`; `log` forces geometric steps.
+    pub fn parse(spec: &str, log: bool) -> Result<Self, SweepError> {
+        let Some((key, range)) = spec.split_once('=') else {
+            return err(format!("--vary {spec:?}: expected KEY=START:STOP:N (or KEY=log:START:STOP:N), e.g. motion.speed=0.01:0.3:30"));
+        };
+        let mut parts: Vec<&str> = range.split(':').map(str::trim).collect();
+        let mut spacing = if log { Spacing::Log } else { Spacing::Linear };
+        if parts.first().is_some_and(|p| p.eq_ignore_ascii_case("log")) {
+            spacing = Spacing::Log;
+            parts.remove(0);
+        } else if parts.first().is_some_and(|p| p.eq_ignore_ascii_case("lin")) {
+            parts.remove(0);
+        }
+        let key = key.trim();
+        if parts.len() != 3 {
+            return err(format!("--vary {spec:?}: expected {key}=START:STOP:N (three fields after '=', optionally prefixed by log:), got {}", parts.len()));
+        }
+        let number = |what: &str, s: &str| s.parse::<f64>().map_err(|_| SweepError(format!("--vary {spec:?}: {what} {s:?} is not a number")));
+        let start = number("START", parts[0])?;
+        let stop = number("STOP", parts[1])?;
+        let n = parts[2].parse::<usize>().map_err(|_| SweepError(format!("--vary {spec:?}: N {:?} is not a whole number >= 2", parts[2])))?;
+        Self::new(key, start, stop, n, spacing)
+    }
+
+    /// The values, first and last exact.
+    pub fn values(&self) -> Vec<f64> {
+        let last = (self.n - 1) as f64;
+        (0..self.n)
+            .map(|i| match i {
+                0 => self.start,
+                i if i == self.n - 1 => self.stop,
+                i => {
+                    let f = i as f64 / last;
+                    match self.spacing {
+                        Spacing::Linear => self.start + (self.stop - self.start) * f,
+                        Spacing::Log => (self.start.ln() + (self.stop.ln() - self.start.ln()) * f).exp(),
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// A scene file's document, ready to have keys set and be re-validated.
+#[derive(Debug, Clone)]
+pub struct Template {
+    doc: DocumentMut,
+    file: String,
+    /// The validated scene as the file stands.
+    pub base: Scene,
+}
+
+/// What a dotted path finds in a document.
+enum Found<'a> {
+    Number(&'a Value),
+    Other(&'a Item),
+    Missing,
+}
+
+fn lookup<'a>(doc: &'a DocumentMut, key: &str) -> Found<'a> {
+    let mut item: &Item = doc.as_item();
+    for seg in key.split('.') {
+        let Some(next) = item.as_table_like().and_then(|t| t.get(seg)) else {
+            return Found::Missing;
+        };
+        item = next;
+    }
+    match item.as_value() {
+        Some(v @ (Value::Integer(_) | Value::Float(_))) => Found::Number(v),
+        _ => Found::Other(item),
+    }
+}
+
+/// Sets `key` to `x` in `doc`, creating missing tables (the validator then judges them). Integer
+/// keys stay integers when `x` is whole.
+fn set(doc: &mut DocumentMut, key: &str, x: f64) {
+    let segs: Vec<&str> = key.split('.').collect();
+    let mut item: &mut Item = doc.as_item_mut();
+    for (i, seg) in segs.iter().enumerate() {
+        let last = i + 1 == segs.len();
+        let inline = item.is_inline_table();
+        let Some(table) = item.as_table_like_mut() else {
+            // A number or string where the path needs a table: replace nothing, the validator
+            // will be shown a table it refuses. Build the path by overwriting is worse; stop here.
+            return;
+        };
+        if last {
+            let was_int = matches!(table.get(seg).and_then(Item::as_value), Some(Value::Integer(_)));
+            let decor = table.get(seg).and_then(Item::as_value).map(|v| v.decor().clone());
+            let mut v = if was_int && x.fract() == 0.0 && x.abs() < 9.0e15 { Value::from(x as i64) } else { Value::from(x) };
+            if let Some(d) = decor {
+                *v.decor_mut() = d;
+            }
+            table.insert(seg, Item::Value(v));
+            return;
+        }
+        if table.get(seg).is_none() {
+            let fresh = if inline { Item::Value(Value::InlineTable(Default::default())) } else { Item::Table(Default::default()) };
+            table.insert(seg, fresh);
+        }
+        item = table.get_mut(seg).expect("inserted above");
+    }
+}
+
+fn numeric_keys_of(item: &Item, prefix: &str, out: &mut Vec<String>) {
+    if let Some(t) = item.as_table_like() {
+        for (k, v) in t.iter() {
+            let path = if prefix.is_empty() { k.to_string() } else { format!("{prefix}.{k}") };
+            match v.as_value() {
+                Some(Value::Integer(_) | Value::Float(_)) => out.push(path),
+                _ => numeric_keys_of(v, &path, out),
+            }
+        }
+    }
+}
+
+/// Edit distance (Levenshtein), for "did you mean".
+fn distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+/// Keys of `candidates` close to `key`: a small edit distance on the whole path or on its last
+/// segment, best first, at most five.
+pub fn close_matches(key: &str, candidates: &[String]) -> Vec<String> {
+    let leaf = key.rsplit('.').next().unwrap_or(key);
+    let mut scored: Vec<(usize, &String)> = candidates
+        .iter()
+        .filter_map(|c| {
+            let d = distance(key, c);
+            let cl = c.rsplit('.').next().unwrap_or(c);
+            let dl = distance(leaf, cl);
+            let near = d <= (key.len() / 3).max(2) || dl <= (leaf.len() / 3).max(1) || (leaf.len() >= 3 && cl.contains(leaf));
+            near.then_some((d.min(dl + 1), c))
+        })
+        .collect();
+    scored.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(b.1)));
+    scored.into_iter().take(5).map(|(_, c)| c.clone()).collect()
+}
+
+impl Template {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Self, SweepError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SweepError(format!("{}: cannot read the scene file: {e}", path.display())))?;
+        Self::from_text(&text, &path.display().to_string())
+    }
+
+    /// A template from scene text; `file` names it in messages.
+    pub fn from_text(text: &str, file: &str) -> Result<Self, SweepError> {
+        let base = scene::parse(text, file).map_err(|e| SweepError(e.to_string()))?;
+        let doc: DocumentMut = text.parse().map_err(|e| SweepError(format!("{file}: {e}")))?;
+        Ok(Self { doc, file: file.to_string(), base })
+    }
+
+    /// The file name used in messages.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+
+    /// Every numeric key the file sets, as dotted paths, in file order.
+    pub fn numeric_keys(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        numeric_keys_of(self.doc.as_item(), "", &mut out);
+        out
+    }
+
+    /// The number a key holds in the file, if it holds one.
+    pub fn value(&self, key: &str) -> Option<f64> {
+        match lookup(&self.doc, key) {
+            Found::Number(Value::Integer(i)) => Some(*i.value() as f64),
+            Found::Number(Value::Float(f)) => Some(*f.value()),
+            _ => None,
+        }
+    }
+
+    /// Checks that `key` can be swept: a number the file sets, or a key the file leaves out that
+    /// the validator accepts when set to `probe`.
+    pub fn check_key(&self, key: &str, probe: f64) -> Result<(), SweepError> {
+        match lookup(&self.doc, key) {
+            Found::Number(_) => Ok(()),
+            Found::Other(item) => {
+                if let Some(t) = item.as_table_like() {
+                    let keys: Vec<String> = t.iter().filter(|(_, v)| matches!(v.as_value(), Some(Value::Integer(_) | Value::Float(_)))).map(|(k, _)| format!("{key}.{k}")).collect();
+                    err(format!("{}: {key} is a table, not a number; sweep one of its keys: {}", self.file, if keys.is_empty() { "(none is numeric)".into() } else { keys.join(", ") }))
+                } else {
+                    let shown = item.as_value().map_or_else(|| "?".to_string(), |v| {
+                        let mut v = v.clone();
+                        v.decor_mut().clear();
+                        v.to_string()
+                    });
+                    err(format!("{}: {key} = {shown} is not a number; only numeric keys can be swept", self.file))
+                }
+            }
+            Found::Missing => {
+                let mut doc = self.doc.clone();
+                set(&mut doc, key, probe);
+                match scene::parse(&doc.to_string(), &self.file) {
+                    Ok(_) => Ok(()),
+                    Err(e) => {
+                        let near = close_matches(key, &self.numeric_keys());
+                        let why = e.issues.iter().find(|i| i.key == key || key.ends_with(&format!(".{}", i.key)) || i.key.ends_with(key)).or(e.issues.first()).map(|i| i.message.clone()).unwrap_or_default();
+                        let hint = if near.is_empty() {
+                            format!("the numeric keys this scene sets: {}", self.numeric_keys().join(", "))
+                        } else {
+                            format!("close matches: {}", near.join(", "))
+                        };
+                        err(format!("{}: unknown key {key}: the scene does not set it and the validator refuses it ({why}); {hint}", self.file))
+                    }
+                }
+            }
+        }
+    }
+
+    /// The scene with `sets` applied, validated; the error names the values and the validator's
+    /// message.
+    pub fn with(&self, sets: &[(&str, f64)]) -> Result<Scene, SweepError> {
+        let mut doc = self.doc.clone();
+        for &(k, x) in sets {
+            set(&mut doc, k, x);
+        }
+        scene::parse(&doc.to_string(), &self.file).map_err(|e| {
+            let what: Vec<String> = sets.iter().map(|(k, x)| format!("{k} = {x}")).collect();
+            SweepError(format!("{}: the scene validator refuses it: {e}", what.join(", ")))
+        })
+    }
+}
+
+/// A sweep checked and built: every point's scene exists and is valid.
+pub struct Sweep {
+    /// The swept axes (one or two), first varying slowest.
+    pub axes: Vec<Axis>,
+    /// The values of each axis.
+    pub values: Vec<Vec<f64>>,
+    scenes: Vec<Scene>,
+    /// Scene name, for titles.
+    pub scene_name: String,
+}
+
+/// One point of a sweep and its outcome.
+#[derive(Debug, Clone)]
+pub struct Point {
+    /// The swept values, in axis order.
+    pub values: Vec<f64>,
+    /// Index of each value on its axis.
+    pub index: Vec<usize>,
+    /// The summary, or the solver's error.
+    pub outcome: Result<Summary, String>,
+}
+
+/// A finished sweep, points in row-major order (first axis slowest).
+#[derive(Debug, Clone)]
+pub struct SweepResult {
+    /// The axes.
+    pub axes: Vec<Axis>,
+    /// The values of each axis.
+    pub values: Vec<Vec<f64>>,
+    /// The points.
+    pub points: Vec<Point>,
+    /// Scene name.
+    pub scene_name: String,
+}
+
+/// Progress reporting: a bar on a terminal, nothing when piped or in tests.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Progress {
+    /// Draw an `indicatif` bar on stderr if stderr is a terminal.
+    Auto,
+    /// Never draw.
+    Hidden,
+}
+
+fn grid_index(sizes: &[usize], mut k: usize) -> Vec<usize> {
+    let mut idx = vec![0; sizes.len()];
+    for a in (0..sizes.len()).rev() {
+        idx[a] = k % sizes[a];
+        k /= sizes[a];
+    }
+    idx
+}
+
+impl Sweep {
+    /// Checks the axes against the template and builds every point's scene. Nothing runs.
+    pub fn new(template: &Template, axes: Vec<Axis>) -> Result<Self, SweepError> {
+        if axes.is_empty() {
+            return err("nothing to sweep: give --vary KEY=START:STOP:N once or twice");
+        }
+        if axes.len() > 2 {
+            return err(format!("{} --vary axes given: a sweep has one or two", axes.len()));
+        }
+        if axes.len() == 2 && axes[0].key == axes[1].key {
+            return err(format!("--vary {} is given twice: the two axes must be different keys", axes[0].key));
+        }
+        for a in &axes {
+            template.check_key(&a.key, a.start)?;
+        }
+        let values: Vec<Vec<f64>> = axes.iter().map(Axis::values).collect();
+        let sizes: Vec<usize> = values.iter().map(Vec::len).collect();
+        let total: usize = sizes.iter().product();
+        if total > 1_000_000 {
+            return err(format!("{total} points: more than a million; use fewer steps"));
+        }
+        let built: Vec<Result<Scene, SweepError>> = (0..total)
+            .into_par_iter()
+            .map(|k| {
+                let idx = grid_index(&sizes, k);
+                let sets: Vec<(&str, f64)> = axes.iter().zip(&idx).zip(&values).map(|((a, &i), v)| (a.key.as_str(), v[i])).collect();
+                template.with(&sets)
+            })
+            .collect();
+        let refused = built.iter().filter(|b| b.is_err()).count();
+        let mut scenes = Vec::with_capacity(total);
+        for b in built {
+            match b {
+                Ok(s) => scenes.push(s),
+                Err(e) => {
+                    let of = if total > 1 { format!("{refused} of {total} points refused; the first: ") } else { String::new() };
+                    return err(format!("{of}{e}"));
+                }
+            }
+        }
+        Ok(Self { axes, values, scenes, scene_name: template.base.name.clone() })
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.scenes.len()
+    }
+
+    /// True when there are no points (never, for a built sweep).
+    pub fn is_empty(&self) -> bool {
+        self.scenes.is_empty()
+    }
+
+    /// The scene of point `k` (row-major).
+    pub fn scene(&self, k: usize) -> &Scene {
+        &self.scenes[k]
+    }
+
+    /// Runs every point on the current rayon pool; the order of the result does not depend on it.
+    pub fn run(&self, progress: Progress) -> SweepResult {
+        use std::io::IsTerminal;
+        let bar = if progress == Progress::Auto && io::stderr().is_terminal() {
+            let b = ProgressBar::new(self.len() as u64);
+            if let Ok(style) = ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} points, {per_sec}, eta {eta}") {
+                b.set_style(style.progress_chars("=> "));
+            }
+            b
+        } else {
+            ProgressBar::hidden()
+        };
+        let sizes: Vec<usize> = self.values.iter().map(Vec::len).collect();
+        let points = self
+            .scenes
+            .par_iter()
+            .enumerate()
+            .map(|(k, sc)| {
+                let index = grid_index(&sizes, k);
+                let values = index.iter().zip(&self.values).map(|(&i, v)| v[i]).collect();
+                let outcome = sim::run(sc, false).map(|(s, _)| s).map_err(|e| e.to_string());
+                bar.inc(1);
+                Point { values, index, outcome }
+            })
+            .collect();
+        bar.finish_and_clear();
+        SweepResult { axes: self.axes.clone(), values: self.values.clone(), points, scene_name: self.scene_name.clone() }
+    }
+
+    /// Runs on a pool of `jobs` threads (None: all cores).
+    pub fn run_with_jobs(&self, progress: Progress, jobs: Option<usize>) -> Result<SweepResult, SweepError> {
+        match jobs {
+            None => Ok(self.run(progress)),
+            Some(0) => err("--jobs must be at least 1"),
+            Some(j) => {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(j).build().map_err(|e| SweepError(format!("--jobs {j}: {e}")))?;
+                Ok(pool.install(|| self.run(progress)))
+            }
+        }
+    }
+}
+
+/// A JSON object's entries in their serialised order (serde_json's map sorts without the
+/// `preserve_order` feature; this keeps the declaration order of `Summary`).
+struct Ordered(Vec<(String, Json)>);
+
+impl<'de> Deserialize<'de> for Ordered {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Ordered;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<Ordered, A::Error> {
+                let mut out = Vec::new();
+                while let Some(e) = m.next_entry::<String, Json>()? {
+                    out.push(e);
+                }
+                Ok(Ordered(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// Every field of a summary, in declaration order, as JSON values.
+pub fn summary_fields(s: &Summary) -> Vec<(String, Json)> {
+    serde_json::to_string(s).ok().and_then(|t| serde_json::from_str::<Ordered>(&t).ok()).map(|o| o.0).unwrap_or_default()
+}
+
+/// A numeric field of a summary by name (`None` when null, not numeric or unknown). Booleans are
+/// 0/1 so `stroke_exhausted` can be drawn.
+pub fn metric(s: &Summary, name: &str) -> Option<f64> {
+    summary_fields(s).into_iter().find(|(k, _)| k == name).and_then(|(_, v)| match v {
+        Json::Number(n) => n.as_f64(),
+        Json::Bool(b) => Some(f64::from(u8::from(b))),
+        _ => None,
+    })
+}
+
+/// The summary fields a heat map or line can show (numbers, or booleans as 0/1).
+pub const METRICS: &[&str] = &[
+    "t_contact", "t_detect", "t_brake", "detection_delay", "reaction_time", "peak_contact_force", "peak_robot_force",
+    "object_final_velocity", "mode", "stroke_exhausted", "achieved_restitution", "steps", "rhs_evals", "t_stop",
+    "approach_velocity", "contacts", "object_peak_velocity", "max_travel", "decoupler_impulse", "peak_gas_pressure",
+    "rejected_steps", "events",
+];
+
+/// Checks a metric name before anything runs.
+pub fn check_metric(name: &str) -> Result<(), SweepError> {
+    if METRICS.contains(&name) {
+        return Ok(());
+    }
+    let all: Vec<String> = METRICS.iter().map(|s| s.to_string()).collect();
+    let near = close_matches(name, &all);
+    err(format!("--metric {name}: not a numeric summary field; {}", if near.is_empty() { format!("one of: {}", METRICS.join(", ")) } else { format!("close matches: {}", near.join(", ")) }))
+}
+
+fn csv_cell(v: &Json) -> String {
+    match v {
+        Json::Null => String::new(),
+        Json::Bool(b) => b.to_string(),
+        Json::Number(n) => n.to_string(),
+        Json::String(s) => quote(s),
+        Json::Array(a) => quote(&a.iter().map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string)).collect::<Vec<_>>().join("; ")),
+        Json::Object(_) => quote(&v.to_string()),
+    }
+}
+
+fn quote(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+impl SweepResult {
+    /// Writes the CSV: the swept keys, every `Summary` field, `error`.
+    pub fn write_csv(&self, out: &mut dyn Write) -> io::Result<()> {
+        let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).collect()).unwrap_or_default();
+        let mut header: Vec<String> = self.axes.iter().map(|a| quote(&a.key)).collect();
+        header.extend(names.iter().cloned());
+        header.push("error".into());
+        writeln!(out, "{}", header.join(","))?;
+        for p in &self.points {
+            let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
+            match &p.outcome {
+                Ok(s) => {
+                    let fields = summary_fields(s);
+                    row.extend(names.iter().map(|n| fields.iter().find(|(k, _)| k == n).map_or(String::new(), |(_, v)| csv_cell(v))));
+                    row.push(String::new());
+                }
+                Err(e) => {
+                    row.extend(names.iter().map(|_| String::new()));
+                    row.push(quote(e));
+                }
+            }
+            writeln!(out, "{}", row.join(","))?;
+        }
+        Ok(())
+    }
+
+    /// The CSV as a string.
+    pub fn csv(&self) -> String {
+        let mut v = Vec::new();
+        let _ = self.write_csv(&mut v);
+        String::from_utf8_lossy(&v).into_owned()
+    }
+
+    /// A metric at every point (NaN where missing or failed), row-major.
+    pub fn metric(&self, name: &str) -> Vec<f64> {
+        self.points.iter().map(|p| p.outcome.as_ref().ok().and_then(|s| metric(s, name)).unwrap_or(f64::NAN)).collect()
+    }
+
+    /// The summary at grid indices `idx` (one per axis), if that point ran.
+    pub fn at(&self, idx: &[usize]) -> Option<&Summary> {
+        let sizes: Vec<usize> = self.values.iter().map(Vec::len).collect();
+        let mut k = 0;
+        for (i, n) in idx.iter().zip(&sizes) {
+            k = k * n + i;
+        }
+        self.points.get(k).and_then(|p| p.outcome.as_ref().ok())
+    }
+
+    /// Points whose solver failed.
+    pub fn failures(&self) -> usize {
+        self.points.iter().filter(|p| p.outcome.is_err()).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_and_log_values_hit_both_ends() {
+        let a = Axis::parse("motion.speed=0.01:0.3:30", false).unwrap();
+        let v = a.values();
+        assert_eq!(v.len(), 30);
+        assert_eq!((v[0], v[29]), (0.01, 0.3));
+        let l = Axis::parse("target.stiffness=log:1e3:1e5:3", false).unwrap();
+        let v = l.values();
+        assert_eq!(v[0], 1e3);
+        assert!((v[1] - 1e4).abs() < 1e-6);
+        assert_eq!(v[2], 1e5);
+        assert_eq!(Axis::parse("target.stiffness=1e3:1e5:3", true).unwrap().spacing, Spacing::Log);
+    }
+
+    #[test]
+    fn edit_distance() {
+        assert_eq!(distance("speed", "sped"), 1);
+        assert_eq!(distance("", "abc"), 3);
+        assert_eq!(close_matches("motion.sped", &["motion.speed".into(), "motion.decel".into(), "tool.mass".into()]), vec!["motion.speed".to_string()]);
+    }
+
+    #[test]
+    fn grid_is_row_major() {
+        assert_eq!(grid_index(&[2, 3], 0), vec![0, 0]);
+        assert_eq!(grid_index(&[2, 3], 2), vec![0, 2]);
+        assert_eq!(grid_index(&[2, 3], 3), vec![1, 0]);
+    }
+}
