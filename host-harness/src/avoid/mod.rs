@@ -7,6 +7,7 @@
 //! `flinch avoid SCENE.toml` is [`run`].
 
 pub mod calib;
+pub mod compare;
 pub mod depth;
 pub mod path;
 pub mod plot;
@@ -37,6 +38,10 @@ pub struct AvoidArgs {
     /// Save the calibration used to this file.
     #[arg(long, value_name = "FILE")]
     pub save_calibration: Option<PathBuf>,
+    /// Compare every number type and Gaussian of the firmware step with the f64 reference, on this
+    /// grid and on the other of 15 x 15 / 30 x 30 (slow: about a minute).
+    #[arg(long)]
+    pub compare: bool,
     /// Write the first synthetic depth frame (16-bit, `.png` or `.pgm`) to this file.
     #[arg(long, value_name = "FILE")]
     pub save_depth: Option<PathBuf>,
@@ -81,6 +86,9 @@ pub fn run(args: &AvoidArgs) -> Result<(), String> {
         );
         img.save(p)?;
     }
+    if args.compare {
+        return run_compare(&scene, &setup, &args.scene);
+    }
     let engine = if args.mcu { Engine::Mcu } else { Engine::Reference };
     let res = path::simulate(&scene, &setup, engine).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     if let Some(p) = &args.plot {
@@ -121,5 +129,49 @@ pub fn run(args: &AvoidArgs) -> Result<(), String> {
             println!("  plot              {}", p.display());
         }
     }
+    Ok(())
+}
+
+fn run_compare(scene: &scene::Avoid, setup: &Setup, file: &std::path::Path) -> Result<(), String> {
+    let ctx = |e: String| format!("{}: {e}", file.display());
+    let other = if scene.fit.grid == 30 { 15 } else { 30 };
+    let mut refs = Vec::new();
+    for (k, n) in [scene.fit.grid, other].into_iter().enumerate() {
+        let mut s = scene.clone();
+        s.fit.grid = n;
+        let own;
+        let setup = if k == 0 {
+            setup
+        } else {
+            own = Setup::new(&s, Some(setup.calibration.clone())).map_err(ctx)?;
+            &own
+        };
+        let (reference, rows) = compare::compare(&s, setup).map_err(ctx)?;
+        println!(
+            "grid {n} x {n}: f64 reference: time to goal {}, min clearance {:.1} mm, path {:.3} m",
+            reference.time_to_goal_s.map_or("not reached".to_string(), |t| format!("{t:.2} s")),
+            reference.min_clearance_m * 1e3,
+            reference.path_length_m
+        );
+        println!("  {:<30} {:>14} {:>14} {:>14} {:>12} {:>10}", "variant", "cmd max mm/s", "cmd rms mm/s", "path dev mm", "min clr mm", "goal s");
+        for r in &rows {
+            println!(
+                "  {:<30} {:>14.3} {:>14.3} {:>14.3} {:>12.1} {:>10}",
+                r.variant,
+                r.cmd_max_err_mps * 1e3,
+                r.cmd_rms_err_mps * 1e3,
+                r.path_max_dev_m * 1e3,
+                r.min_clearance_m * 1e3,
+                r.time_to_goal_s.map_or("-".to_string(), |t| format!("{t:.2}"))
+            );
+        }
+        refs.push(reference);
+    }
+    println!(
+        "grid {} vs {} (both f64 reference): largest path difference {:.1} mm",
+        scene.fit.grid,
+        other,
+        compare::path_deviation(&refs[0], &refs[1]) * 1e3
+    );
     Ok(())
 }

@@ -104,6 +104,11 @@ impl DenseFitter {
         Ok(DenseFitter { g_pinv: pinv(dense_basis(grid))? })
     }
 
+    /// The same `G+` assembled as `Gy+ (x) Gx+` from a separable fitter (no SVD of the big matrix).
+    pub fn from_separable(f: &Fitter) -> Self {
+        DenseFitter { g_pinv: f.gy_pinv.kronecker(&f.gx_pinv_t.transpose()) }
+    }
+
     /// `lambda = G+ f`, row-major weights.
     pub fn weights(&self, map: &HeightMap) -> Vec<f64> {
         let f = nalgebra::DVector::from_column_slice(&map.m);
