@@ -5,6 +5,7 @@
 //! what a run produced; `avoid` is collision avoidance (Ch. 5).
 pub mod avoid;
 pub mod check;
+pub mod design;
 pub mod hil;
 pub mod plant;
 pub mod report;

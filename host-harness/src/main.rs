@@ -24,6 +24,8 @@ enum Command {
     Avoid(flinch_harness::avoid::AvoidArgs),
     /// Run a scene over a grid of one or two of its keys (all cores): CSV and a line chart or heat map.
     Sweep(flinch_harness::sweep::cli::SweepArgs),
+    /// Size a module: the stroke a robot needs, the largest safe speed for a stroke, the working mode.
+    Design(flinch_harness::design::DesignArgs),
 }
 
 #[derive(clap::Args)]
@@ -163,6 +165,7 @@ fn main() -> ExitCode {
         Command::Check(a) => check_cmd(a),
         Command::Avoid(a) => flinch_harness::avoid::run(a).map(|_| true),
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a).map(|_| true),
+        Command::Design(a) => flinch_harness::design::run(a),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

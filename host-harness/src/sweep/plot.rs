@@ -160,9 +160,9 @@ where
                 }
             }
         }
-        for (m, label) in &p.marks {
+        for (k, (m, label)) in p.marks.iter().enumerate() {
             let u = x.fwd(*m);
-            let red = RGBColor(180, 0, 0);
+            let red = [RGBColor(120, 120, 120), RGBColor(180, 0, 0), RGBColor(0, 120, 120)][k % 3];
             chart.draw_series(LineSeries::new(vec![(u, y0), (u, y1)], red.stroke_width(2)))?.label(label.as_str()).legend(move |(a, b)| PathElement::new(vec![(a, b), (a + 20, b)], red.stroke_width(2)));
         }
         chart.configure_series_labels().position(SeriesLabelPosition::UpperLeft).background_style(WHITE.mix(0.85)).border_style(BLACK).draw()?;

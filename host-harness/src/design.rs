@@ -1,0 +1,422 @@
+//! `flinch design`: size a module for a robot, or a robot's speed for a module.
+//!
+//! From the stopping-distance budget of `flinch check` (the firmware's own formula
+//! `v DT + v^2 / (2 d_c)`, [`crate::check::check`]): after the switch fires at travel d_sw the flange
+//! keeps closing for the stopping distance, so the module needs a stroke `C >= d_sw + v DT + v^2/2d`
+//! and, for a given stroke, the robot may go up to the speed that solves `v DT + v^2/2d = C - d_sw`.
+//! Both answers are then confirmed by simulating the scene: the smallest stroke (C1 and C2 scaled
+//! together for a bi-stable module, L for a hydraulic one) and the largest speed at which the
+//! flange does not reach the target, found by a scan and a bisection. The working mode (Fig. 46) and
+//! the margins (formula and simulated) are reported with them.
+//!
+//! Every candidate is the scene file with keys set and re-validated ([`crate::sweep::Template`]).
+//! Two keys are adjusted so a candidate stays a fair test, and the report says so: `duration` is
+//! lengthened to cover contact, detection, the dead time and braking, and `target.gap` is raised
+//! when the flange would otherwise meet the target before reaching V_c.
+
+use crate::check;
+use crate::scene::{Decoupler, Scene, Sensor};
+use crate::sim::Summary;
+use crate::sweep::plot::{self as splot, Panel, Series, Style, XAxis, PALETTE};
+use crate::sweep::{SweepError, Template};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// `flinch design SCENE [--stroke C] [--speed V] [--dead-time DT]`.
+#[derive(clap::Args, Debug)]
+pub struct DesignArgs {
+    /// The scene: robot, tool, module (bi-stable or hydraulic, with a travel switch) and obstacle.
+    pub scene: PathBuf,
+    /// The module's total stroke C, m (default: the scene's; a bi-stable module keeps its C1:C2).
+    #[arg(long, value_name = "M")]
+    pub stroke: Option<f64>,
+    /// The robot's speed V_c, m/s (default: the scene's motion.speed).
+    #[arg(long, value_name = "M/S")]
+    pub speed: Option<f64>,
+    /// The controller's dead time DT, s (default: the scene's motion.dead_time), e.g. 0.07.
+    #[arg(long = "dead-time", value_name = "S")]
+    pub dead_time: Option<f64>,
+    /// Draw peak forces and the stroke margin against speed, the safe limit marked (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One simulated candidate.
+#[derive(Debug, Clone, Serialize)]
+pub struct Trial {
+    /// Speed, m/s.
+    pub speed: f64,
+    /// Stroke, m.
+    pub stroke: f64,
+    /// The run.
+    pub summary: Summary,
+    /// Closest approach of the flange to the obstacle after contact: the tool's distance from the
+    /// obstacle plus the travel left before the back end-stop, minimised over the run, m (<= 0
+    /// once the flange reaches the target). `None` for a free object, which moves away.
+    pub simulated_margin: Option<f64>,
+}
+
+/// The answers.
+#[derive(Debug, Clone, Serialize)]
+pub struct DesignReport {
+    /// Scene name.
+    pub scene: String,
+    /// "bistable" or "hydraulic".
+    pub module: String,
+    /// V_c, m/s.
+    pub speed: f64,
+    /// DT, s.
+    pub dead_time: f64,
+    /// d_c, m/s^2.
+    pub decel: f64,
+    /// m_t, kg.
+    pub tool_mass: f64,
+    /// d_sw, m.
+    pub switch_travel: f64,
+    /// C, m.
+    pub stroke: f64,
+    /// v DT + v^2/2d (firmware formula, micrometre resolution), m.
+    pub stopping_distance: f64,
+    /// d_sw + stopping distance, m.
+    pub stroke_needed_formula: f64,
+    /// Smallest stroke at which the simulated flange does not reach the target, m.
+    pub stroke_needed_simulated: Option<f64>,
+    /// Why the simulated stroke is missing, if it is.
+    pub stroke_search_note: Option<String>,
+    /// C - d_sw - stopping distance, m (the `flinch check` margin).
+    pub margin_formula: f64,
+    /// The design point simulated.
+    pub design: Trial,
+    /// Speed at which the budget is exactly used, m/s.
+    pub speed_limit_formula: f64,
+    /// Largest simulated speed with no stroke exhaustion, m/s.
+    pub speed_limit_simulated: Option<f64>,
+    /// Why the simulated speed limit is missing, if it is.
+    pub speed_search_note: Option<String>,
+    /// The run at the simulated limit.
+    pub at_limit: Option<Trial>,
+    /// Adjustments made to candidates (duration, gap).
+    pub notes: Vec<String>,
+}
+
+/// A module the design can scale.
+#[derive(Debug, Clone, Copy)]
+enum Module {
+    Bistable { c1: f64, c2: f64 },
+    Hydraulic { l: f64 },
+}
+
+impl Module {
+    fn of(s: &Scene) -> Result<Self, String> {
+        match &s.decoupler {
+            Decoupler::Bistable(b) => Ok(Module::Bistable { c1: b.front_stroke, c2: b.back_stroke }),
+            Decoupler::Hydraulic(h) => Ok(Module::Hydraulic { l: h.stroke }),
+            _ => Err("decoupler.kind: flinch design needs a module with a stroke (\"bistable\" or \"hydraulic\")".into()),
+        }
+    }
+    fn stroke(&self) -> f64 {
+        match *self {
+            Module::Bistable { c1, c2 } => c1 + c2,
+            Module::Hydraulic { l } => l,
+        }
+    }
+    fn keys(&self, c: f64) -> Vec<(&'static str, f64)> {
+        match *self {
+            Module::Bistable { c1, c2 } => {
+                let k = c / (c1 + c2);
+                vec![("decoupler.front_stroke", c1 * k), ("decoupler.back_stroke", c2 * k)]
+            }
+            Module::Hydraulic { .. } => vec![("decoupler.stroke", c)],
+        }
+    }
+    fn name(&self) -> &'static str {
+        match self {
+            Module::Bistable { .. } => "bistable",
+            Module::Hydraulic { .. } => "hydraulic",
+        }
+    }
+}
+
+/// The scene a candidate runs: the template with the module's stroke, the speed and the dead time
+/// set, `duration` and `target.gap` adjusted (see the module docs), re-validated.
+struct Candidates<'a> {
+    t: &'a Template,
+    module: Module,
+    dead_time: f64,
+    base: &'a Scene,
+}
+
+impl Candidates<'_> {
+    fn gap_for(&self, v: f64) -> f64 {
+        let m = &self.base.motion;
+        if m.start_at_speed { self.base.target.gap } else { self.base.target.gap.max(1.2 * v * v / (2.0 * m.accel)) }
+    }
+    fn duration_for(&self, v: f64) -> f64 {
+        let m = &self.base.motion;
+        let gap = self.gap_for(v);
+        let t_contact = if m.start_at_speed { gap / v } else { v / (2.0 * m.accel) + gap / v };
+        // Contact, up to 0.5 s to detect, the dead time, braking, and 0.3 s for the back-stop
+        // impacts and the ring-down.
+        self.base.duration_s.max(t_contact + 0.5 + self.dead_time + v / m.decel + 0.3)
+    }
+    fn scene(&self, v: f64, c: f64) -> Result<Scene, SweepError> {
+        let mut sets = self.module.keys(c);
+        sets.extend([("motion.speed", v), ("motion.dead_time", self.dead_time), ("target.gap", self.gap_for(v)), ("duration", self.duration_for(v))]);
+        self.t.with(&sets)
+    }
+    fn trial(&self, v: f64, c: f64) -> Result<Trial, String> {
+        let s = self.scene(v, c).map_err(|e| e.to_string())?;
+        trial_of(&s, v, c)
+    }
+    fn safe(&self, v: f64, c: f64) -> Option<bool> {
+        let s = self.scene(v, c).ok()?;
+        crate::sim::run(&s, false).ok().map(|(r, _)| !r.stroke_exhausted)
+    }
+}
+
+/// Runs a scene, recording, and measures the flange's closest approach to a fixed obstacle.
+fn trial_of(s: &Scene, v: f64, c: f64) -> Result<Trial, String> {
+    let (summary, history) = crate::sim::run(s, true).map_err(|e| format!("V_c = {v}, C = {c}: {e}"))?;
+    let margin = match (s.target.kind, summary.t_contact) {
+        (crate::scene::TargetKind::Obstacle, Some(tc)) => {
+            let plant = crate::plant::Plant::new(s);
+            let stop = plant.decoupler.back_stop();
+            // x_o = x_t(t_contact); the tool's distance from the obstacle is -(integral of v_t since
+            // contact); the travel left is minus the back end-stop's penetration.
+            let (mut gone, mut best) = (0.0_f64, f64::INFINITY);
+            let mut prev: Option<(f64, f64)> = None;
+            for h in history.iter().filter(|h| h.t >= tc) {
+                if let Some((t0, v0)) = prev {
+                    gone += 0.5 * (v0 + h.v_t) * (h.t - t0);
+                }
+                prev = Some((h.t, h.v_t));
+                let room = stop.map_or(f64::INFINITY, |b| -b.penetration(h.s));
+                best = best.min(-gone + room);
+            }
+            best.is_finite().then_some(best)
+        }
+        _ => None,
+    };
+    Ok(Trial { speed: v, stroke: c, simulated_margin: margin, summary })
+}
+
+/// Speed that uses the budget exactly: v DT + v^2 / (2 d) = room.
+pub fn speed_for_budget(room: f64, dead_time: f64, decel: f64) -> f64 {
+    if room <= 0.0 {
+        return 0.0;
+    }
+    decel * (-dead_time + (dead_time * dead_time + 2.0 * room / decel).sqrt())
+}
+
+/// Scans `xs` (ascending) for the first boundary from `want_low` to its opposite and bisects it;
+/// `f` is None where the candidate is invalid. Returns the last x on the `want_low` side and the
+/// first x past it.
+fn boundary(xs: &[f64], f: &(dyn Fn(f64) -> Option<bool> + Sync), want_low: bool, iters: usize) -> Result<(f64, f64), String> {
+    let scan: Vec<Option<bool>> = xs.par_iter().map(|&x| f(x)).collect();
+    let valid: Vec<(f64, bool)> = xs.iter().copied().zip(scan).filter_map(|(x, s)| s.map(|s| (x, s))).collect();
+    if valid.is_empty() {
+        return Err("the validator refuses every candidate".into());
+    }
+    let Some(k) = valid.iter().position(|&(_, s)| s != want_low) else {
+        return Err(format!("no boundary between {} and {}", valid[0].0, valid[valid.len() - 1].0));
+    };
+    if k == 0 {
+        return Err(format!("already past the boundary at the smallest candidate {}", valid[0].0));
+    }
+    let (mut lo, mut hi) = (valid[k - 1].0, valid[k].0);
+    for _ in 0..iters {
+        let mid = 0.5 * (lo + hi);
+        match f(mid) {
+            Some(s) if s == want_low => lo = mid,
+            Some(_) => hi = mid,
+            None => break,
+        }
+    }
+    Ok((lo, hi))
+}
+
+/// Answers the design questions for a scene with optional overrides.
+pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: Option<f64>) -> Result<DesignReport, String> {
+    let base = &t.base;
+    let module = Module::of(base)?;
+    let Some(Sensor::Travel { threshold: d_sw }) = base.sensor else {
+        return Err("sensor.kind: flinch design needs a travel switch (sensor.kind = \"travel\")".into());
+    };
+    for (name, v) in [("--stroke", stroke), ("--speed", speed), ("--dead-time", dead_time)] {
+        if let Some(v) = v {
+            let ok = if name == "--dead-time" { v >= 0.0 && v.is_finite() } else { v > 0.0 && v.is_finite() };
+            if !ok {
+                return Err(format!("{name}: must be {} and finite, got {v}", if name == "--dead-time" { ">= 0" } else { "> 0" }));
+            }
+        }
+    }
+    let c = stroke.unwrap_or(module.stroke());
+    let v = speed.unwrap_or(base.motion.speed);
+    let dt = dead_time.unwrap_or(base.motion.dead_time);
+    let decel = base.motion.decel;
+    let cand = Candidates { t, module, dead_time: dt, base };
+    // The design point, validated, and the budget of `flinch check` on it.
+    let design_scene = cand.scene(v, c).map_err(|e| e.to_string())?;
+    let budget = check::check(&design_scene)?;
+    let design = trial_of(&design_scene, v, c)?;
+    let needed = d_sw + budget.stopping_distance;
+    let mut notes = Vec::new();
+    if cand.gap_for(v) > base.target.gap {
+        notes.push(format!("target.gap raised from {:.1} mm to {:.1} mm so the flange reaches V_c before contact", base.target.gap * 1e3, cand.gap_for(v) * 1e3));
+    }
+    if cand.duration_for(v) > base.duration_s {
+        notes.push(format!("duration lengthened from {} s to {:.2} s to cover detection, the dead time and braking", base.duration_s, cand.duration_for(v)));
+    }
+    // Smallest stroke, simulated: scan 0.4..2.5 x the formula's, then bisect.
+    let strokes: Vec<f64> = (0..16).map(|i| needed * (0.4 + 2.1 * i as f64 / 15.0)).collect();
+    let unsafe_at = |cc: f64| cand.safe(v, cc).map(|s| !s);
+    let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, 14) {
+        Ok((_, first_safe)) => (Some(first_safe), None),
+        Err(e) => (None, Some(format!("stroke search over {:.1}..{:.1} mm ({} C1:C2 scaled together): {e}", strokes[0] * 1e3, strokes[15] * 1e3, module.name()))),
+    };
+    // Largest safe speed for this stroke, simulated: scan 0.1..3 x the formula's, then bisect.
+    let v_formula = speed_for_budget(c - d_sw, dt, decel);
+    let speeds: Vec<f64> = (0..20).map(|i| v_formula * (0.1 + 2.9 * i as f64 / 19.0)).collect();
+    let safe_at = |vv: f64| cand.safe(vv, c);
+    let (speed_sim, speed_note, at_limit) = if v_formula <= 0.0 {
+        (None, Some("the switch travel takes the whole stroke: no speed is safe".to_string()), None)
+    } else {
+        match boundary(&speeds, &safe_at, true, 16) {
+            Ok((vmax, _)) => (Some(vmax), None, cand.trial(vmax, c).ok()),
+            Err(e) => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}", speeds[0], speeds[19])), None),
+        }
+    };
+    Ok(DesignReport {
+        scene: base.name.clone(),
+        module: module.name().into(),
+        speed: v,
+        dead_time: dt,
+        decel,
+        tool_mass: base.tool.mass,
+        switch_travel: d_sw,
+        stroke: c,
+        stopping_distance: budget.stopping_distance,
+        stroke_needed_formula: needed,
+        stroke_needed_simulated: stroke_sim,
+        stroke_search_note: stroke_note,
+        margin_formula: budget.margin,
+        design,
+        speed_limit_formula: v_formula,
+        speed_limit_simulated: speed_sim,
+        speed_search_note: speed_note,
+        at_limit,
+        notes,
+    })
+}
+
+fn mode_text(m: Option<u8>) -> &'static str {
+    match m {
+        Some(1) => "1 (the tool never reaches the back end-stop)",
+        Some(2) => "2 (back end-stop reached after the robot stopped)",
+        Some(3) => "3 (back end-stop reached while the robot still moves)",
+        _ => "- (no back end-stop)",
+    }
+}
+
+/// The human answer.
+pub fn human(r: &DesignReport) -> String {
+    use std::fmt::Write;
+    let mm = |x: f64| format!("{:.2} mm", x * 1e3);
+    let mut o = String::new();
+    let _ = writeln!(o, "{} ({} module, m_t = {} kg)", r.scene, r.module, r.tool_mass);
+    let _ = writeln!(o, "  robot: V_c = {} m/s, DT = {} ms, d_c = {} m/s^2; switch travel d_sw = {}", r.speed, r.dead_time * 1e3, r.decel, mm(r.switch_travel));
+    let _ = writeln!(o, "  stopping distance after detection v DT + v^2/2d = {}", mm(r.stopping_distance));
+    let _ = writeln!(o, "stroke needed");
+    let _ = writeln!(o, "  formula d_sw + v DT + v^2/2d = {}", mm(r.stroke_needed_formula));
+    match (r.stroke_needed_simulated, &r.stroke_search_note) {
+        (Some(s), _) => {
+            let _ = writeln!(o, "  simulated: smallest stroke at which the flange does not reach the target = {} ({:+.2} mm vs the formula)", mm(s), (s - r.stroke_needed_formula) * 1e3);
+        }
+        (None, Some(n)) => {
+            let _ = writeln!(o, "  simulated: not found ({n}); the formula stands, with the simulated margin below");
+        }
+        _ => {}
+    }
+    let _ = writeln!(o, "this module, C = {}", mm(r.stroke));
+    let _ = writeln!(o, "  budget margin C - d_sw - stopping distance = {:+.2} mm: {}", r.margin_formula * 1e3, if r.margin_formula >= 0.0 { "FITS" } else { "DOES NOT FIT" });
+    let d = &r.design.summary;
+    let closest = |t: &Trial| t.simulated_margin.map_or("-".to_string(), |m| format!("{:+.2} mm", m * 1e3));
+    let _ = writeln!(o, "  simulated at V_c = {} m/s: max travel {}, closest approach of the flange to the target {}, flange reached the target: {}", r.speed, mm(d.max_travel), closest(&r.design), if d.stroke_exhausted { "YES" } else { "no" });
+    let _ = writeln!(o, "  working mode {}; peak force on the robot {:.1} N, peak contact force {:.1} N", mode_text(d.mode), d.peak_robot_force, d.peak_contact_force);
+    let _ = writeln!(o, "largest safe speed with this stroke and DT = {} ms", r.dead_time * 1e3);
+    let _ = writeln!(o, "  formula (v DT + v^2/2d = C - d_sw): {:.3} m/s", r.speed_limit_formula);
+    match (r.speed_limit_simulated, &r.at_limit, &r.speed_search_note) {
+        (Some(v), Some(t), _) => {
+            let _ = writeln!(o, "  simulated (no stroke exhaustion): {:.3} m/s ({:+.1} % vs the formula); there the flange stops {} short of the target, mode {}, peak force on the robot {:.1} N", v, (v / r.speed_limit_formula - 1.0) * 100.0, closest(t), mode_text(t.summary.mode), t.summary.peak_robot_force);
+            let _ = writeln!(o, "  => with this module and a {} ms controller the robot may go up to {:.3} m/s (your {} m/s: {})", r.dead_time * 1e3, v.min(r.speed_limit_formula), r.speed, if r.speed <= v.min(r.speed_limit_formula) { "OK" } else { "TOO FAST" });
+        }
+        (_, _, Some(n)) => {
+            let _ = writeln!(o, "  simulated: not found ({n})");
+        }
+        _ => {}
+    }
+    for n in &r.notes {
+        let _ = writeln!(o, "  note: {n}");
+    }
+    o
+}
+
+/// Peak forces and the simulated stroke margin against speed, limits marked.
+pub fn draw(path: &Path, t: &Template, r: &DesignReport) -> Result<(), String> {
+    let module = Module::of(&t.base)?;
+    let cand = Candidates { t, module, dead_time: r.dead_time, base: &t.base };
+    let top = r.speed_limit_simulated.unwrap_or(r.speed_limit_formula).max(r.speed).max(1e-3) * 1.5;
+    let speeds: Vec<f64> = (1..=30).map(|i| top * i as f64 / 30.0).collect();
+    let trials: Vec<Option<Trial>> = speeds.par_iter().map(|&v| cand.trial(v, r.stroke).ok()).collect();
+    let pts = |f: &dyn Fn(&Trial) -> f64| speeds.iter().zip(&trials).map(|(&v, t)| (v, t.as_ref().map_or(f64::NAN, f))).collect::<Vec<_>>();
+    let mut marks = vec![(r.speed_limit_formula, format!("formula limit {:.3} m/s", r.speed_limit_formula))];
+    if let Some(v) = r.speed_limit_simulated {
+        marks.push((v, format!("simulated safe limit {v:.3} m/s")));
+    }
+    let exhausted: Vec<(f64, f64)> = speeds.iter().zip(&trials).filter_map(|(&v, t)| t.as_ref().filter(|t| t.summary.stroke_exhausted).map(|t| (v, t.summary.peak_robot_force))).collect();
+    let mut force = vec![
+        Series { name: "peak force on the robot".into(), points: pts(&|t| t.summary.peak_robot_force), color: PALETTE[0], style: Style::Line },
+        Series { name: "peak contact force".into(), points: pts(&|t| t.summary.peak_contact_force), color: PALETTE[1], style: Style::Line },
+    ];
+    if !exhausted.is_empty() {
+        force.push(Series { name: "flange reached the target".into(), points: exhausted, color: splot::PALETTE[3], style: Style::Points });
+    }
+    let budget: Vec<(f64, f64)> = speeds.iter().map(|&v| (v, (r.stroke - r.switch_travel - crate::plant::motion_law::MotionLaw::stopping_distance(v, r.dead_time, r.decel)) * 1e3)).collect();
+    let panels = vec![
+        Panel { caption: "peak forces".into(), y_label: "force [N]".into(), series: force, marks: marks.clone(), y_log: false },
+        Panel {
+            caption: format!("stroke margin, C = {:.1} mm (> 0: the flange stops short of the target)", r.stroke * 1e3),
+            y_label: "margin [mm]".into(),
+            series: vec![
+                Series { name: "simulated: closest approach of the flange to the target".into(), points: pts(&|t| t.simulated_margin.map_or(f64::NAN, |m| m * 1e3)), color: PALETTE[2], style: Style::Line },
+                Series { name: "formula: C - d_sw - (v DT + v^2/2d)".into(), points: budget, color: PALETTE[5], style: Style::Dashed },
+            ],
+            marks: marks.clone(),
+            y_log: false,
+        },
+        Panel { caption: "working mode (Fig. 46)".into(), y_label: "mode".into(), series: vec![Series { name: "mode".into(), points: pts(&|t| t.summary.mode.map_or(f64::NAN, f64::from)), color: PALETTE[4], style: Style::Line }], marks, y_log: false },
+    ];
+    splot::lines(path, &format!("{}: DT = {} ms, C = {:.1} mm", r.scene, r.dead_time * 1e3, r.stroke * 1e3), &XAxis { label: "V_c [m/s]".into(), log: false }, &panels)
+}
+
+/// Runs `flinch design`.
+pub fn run(a: &DesignArgs) -> Result<bool, String> {
+    let t = Template::load(&a.scene).map_err(|e| e.to_string())?;
+    let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?);
+    } else {
+        print!("{}", human(&r));
+    }
+    if let Some(p) = &a.plot {
+        draw(p, &t, &r)?;
+        if !a.json {
+            println!("  plot: {}", p.display());
+        }
+    }
+    Ok(!r.design.summary.stroke_exhausted && r.margin_formula >= 0.0)
+}
