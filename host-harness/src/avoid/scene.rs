@@ -299,3 +299,25 @@ impl Avoid {
         k[k.len() - 1].hand_m
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SHIPPED: &str = include_str!("../../../scenes/avoid_operator_hand.toml");
+
+    #[test]
+    fn shipped_scene_loads_and_errors_name_the_key() {
+        let s = Avoid::parse(SHIPPED).unwrap();
+        assert_eq!(s.fit.grid, 15);
+        assert_eq!(s.hand_at(0.6), [0.49, 0.26]);
+        assert_eq!(s.hand_at(99.0), [0.53, 0.44]);
+        let bad = |from: &str, to: &str| Avoid::parse(&SHIPPED.replacen(from, to, 1)).unwrap_err();
+        assert!(bad("grid = 15", "grid = 40").contains("avoid.fit.grid = 40"));
+        assert!(bad("repulsion = \"vortex\"", "repulsion = \"swirl\"").contains("avoid.repulsion"));
+        assert!(bad("stop_height_m = 0.30", "stop_height_m = 0.01").contains("avoid.stop_height_m"));
+        assert!(bad("goal_m = [0.93, 0.50]", "goal_m = [3.0, 0.50]").contains("avoid.goal_m"));
+        let unknown = bad("dt_s = 0.01", "dt_s = 0.01\nspeeed = 1");
+        assert!(unknown.contains("speeed") && unknown.contains("line"), "{unknown}");
+    }
+}
