@@ -12,7 +12,19 @@
 //! error of each choice against an `f64` reference while the target runs the fixed-point one.
 //!
 //! Units: metres, seconds, metres per second; heights of `f*` in metres; gradients dimensionless.
-//! No heap, no panics, bounded loops.
+//! No heap, no panics, bounded loops: like the detection modules, the non-test code is held to
+//! clippy's `unwrap_used`, `expect_used`, `panic`, `indexing_slicing` and `arithmetic_side_effects`
+//! (`cargo clippy -p flinch-firmware`).
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects
+    )
+)]
 
 pub mod control;
 pub mod field;

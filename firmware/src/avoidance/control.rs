@@ -69,8 +69,8 @@ impl Watchdog {
         } else if age >= self.stop_after_ms || self.stop_after_ms <= self.slow_after_ms {
             R::ZERO
         } else {
-            let left = (self.stop_after_ms - age) as i32;
-            let span = (self.stop_after_ms - self.slow_after_ms) as i32;
+            let left = self.stop_after_ms.saturating_sub(age) as i32;
+            let span = self.stop_after_ms.saturating_sub(self.slow_after_ms) as i32;
             R::from_int(left.min(1 << 20)).div(R::from_int(span.min(1 << 20)))
         }
     }

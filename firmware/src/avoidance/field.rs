@@ -123,11 +123,11 @@ pub struct FieldSample<R> {
 #[inline]
 fn window<R: Real>(u: R, reach: R, n: usize) -> (usize, usize) {
     let lo = u.sub(reach).floor_int().saturating_add(1).max(0);
-    let hi = u.add(reach).floor_int().min(n as i32 - 1);
+    let hi = u.add(reach).floor_int().min((n as i32).saturating_sub(1));
     if hi < lo {
         return (1, 0);
     }
-    let hi = hi.min(lo.saturating_add(MAX_WINDOW as i32 - 1));
+    let hi = hi.min(lo.saturating_add(MAX_WINDOW as i32).saturating_sub(1));
     (lo as usize, hi as usize)
 }
 
@@ -153,8 +153,8 @@ pub fn sample<R: Real, G: Gauss<R>>(grid: &Grid<R>, gauss: &G, x: R, y: R) -> Fi
     // Per column: g(tx_i) and g(tx_i) * tx_i.
     let mut gx = [zero; MAX_WINDOW];
     let mut hx = [zero; MAX_WINDOW];
-    for (k, (gk, hk)) in gx.iter_mut().zip(hx.iter_mut()).enumerate().take(ihi - ilo + 1) {
-        let t = tx0.sub(grid.step_t.mul(R::from_int((ilo + k) as i32)));
+    for (k, (gk, hk)) in gx.iter_mut().zip(hx.iter_mut()).enumerate().take(ihi.saturating_sub(ilo).saturating_add(1)) {
+        let t = tx0.sub(grid.step_t.mul(R::from_int(ilo.saturating_add(k) as i32)));
         let g = gauss.g(t.abs());
         *gk = g;
         *hk = g.mul(t);
@@ -170,7 +170,7 @@ pub fn sample<R: Real, G: Gauss<R>>(grid: &Grid<R>, gauss: &G, x: R, y: R) -> Fi
             continue;
         }
         let row = j.saturating_mul(grid.nx);
-        let ws = match grid.weights.get(row + ilo..=row + ihi) {
+        let ws = match grid.weights.get(row.saturating_add(ilo)..=row.saturating_add(ihi)) {
             Some(ws) => ws,
             None => continue,
         };

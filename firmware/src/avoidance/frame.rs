@@ -65,12 +65,13 @@ pub const fn frame_len(nx: usize, ny: usize) -> Option<usize> {
     if nx == 0 || ny == 0 || nx > MAX_AXIS || ny > MAX_AXIS {
         None
     } else {
-        Some(HEADER_LEN + 4 * nx * ny + CRC_LEN)
+        // nx, ny <= 30: at most 3,632, no overflow.
+        Some(HEADER_LEN.saturating_add(nx.saturating_mul(ny).saturating_mul(4)).saturating_add(CRC_LEN))
     }
 }
 
 fn put(out: &mut [u8], at: usize, bytes: &[u8]) -> Option<()> {
-    out.get_mut(at..at + bytes.len())?.copy_from_slice(bytes);
+    out.get_mut(at..at.checked_add(bytes.len())?)?.copy_from_slice(bytes);
     Some(())
 }
 
@@ -79,7 +80,7 @@ fn put(out: &mut [u8], at: usize, bytes: &[u8]) -> Option<()> {
 pub fn encode_frame(h: &FrameHeader, weights_q16: &[i32], out: &mut [u8]) -> Option<usize> {
     let (nx, ny) = (h.nx as usize, h.ny as usize);
     let len = frame_len(nx, ny)?;
-    if weights_q16.len() != nx * ny || out.len() < len {
+    if weights_q16.len() != nx.saturating_mul(ny) || out.len() < len {
         return None;
     }
     put(out, 0, &[SYNC0, SYNC1, VERSION, h.nx, h.ny, 0])?;
@@ -90,15 +91,16 @@ pub fn encode_frame(h: &FrameHeader, weights_q16: &[i32], out: &mut [u8]) -> Opt
     put(out, 20, &h.spacing_q16.to_le_bytes())?;
     put(out, 24, &h.sigma_q16.to_le_bytes())?;
     for (k, w) in weights_q16.iter().enumerate() {
-        put(out, HEADER_LEN + 4 * k, &w.to_le_bytes())?;
+        put(out, k.checked_mul(4)?.checked_add(HEADER_LEN)?, &w.to_le_bytes())?;
     }
-    let crc = CRC.checksum(out.get(2..len - CRC_LEN)?);
-    put(out, len - CRC_LEN, &crc.to_le_bytes())?;
+    let body_end = len.checked_sub(CRC_LEN)?;
+    let crc = CRC.checksum(out.get(2..body_end)?);
+    put(out, body_end, &crc.to_le_bytes())?;
     Some(len)
 }
 
 fn le_u32(b: &[u8], at: usize) -> Option<u32> {
-    let s = b.get(at..at + 4)?;
+    let s = b.get(at..at.checked_add(4)?)?;
     let mut a = [0u8; 4];
     a.copy_from_slice(s);
     Some(u32::from_le_bytes(a))
@@ -134,7 +136,8 @@ pub fn crc_ok(b: &[u8]) -> bool {
     if n < HEADER_LEN + CRC_LEN {
         return false;
     }
-    match (b.get(2..n - CRC_LEN), le_u32(b, n - CRC_LEN)) {
+    let end = n.saturating_sub(CRC_LEN);
+    match (b.get(2..end), le_u32(b, end)) {
         (Some(body), Some(c)) => CRC.checksum(body) == c,
         _ => false,
     }
@@ -142,5 +145,5 @@ pub fn crc_ok(b: &[u8]) -> bool {
 
 /// Weight `k` of a validated frame, Q16.16.
 pub fn weight_q16(b: &[u8], k: usize) -> Option<i32> {
-    le_u32(b, HEADER_LEN + 4 * k).map(|v| v as i32)
+    le_u32(b, k.checked_mul(4)?.checked_add(HEADER_LEN)?).map(|v| v as i32)
 }

@@ -58,7 +58,7 @@ impl<R: Real> Gauss<R> for GaussLut<R> {
             return R::ZERO;
         }
         let frac = u.sub(R::from_int(k));
-        let (a, b) = match (self.table.get(k as usize), self.table.get(k as usize + 1)) {
+        let (a, b) = match (self.table.get(k as usize), self.table.get((k as usize).saturating_add(1))) {
             (Some(a), Some(b)) => (*a, *b),
             _ => return R::ZERO,
         };

@@ -57,11 +57,13 @@ const fn isqrt_u64(n: u64) -> u64 {
         return 0;
     }
     // Highest power of four not above n.
-    let mut bit: u64 = 1 << ((63 - n.leading_zeros()) & !1);
+    let mut bit: u64 = 1 << (63u32.saturating_sub(n.leading_zeros()) & !1);
     while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
+        // root + bit <= 2 sqrt(n) + bit < 2^33: cannot wrap.
+        let trial = root.wrapping_add(bit);
+        if rem >= trial {
+            rem = rem.wrapping_sub(trial);
+            root = (root >> 1).wrapping_add(bit);
         } else {
             root >>= 1;
         }
@@ -160,8 +162,8 @@ macro_rules! impl_fixed {
                 let (mut a, mut b) = (0i64, 0i64);
                 for ((w, g), h) in ws.iter().zip(gs).zip(hs) {
                     let w = w.to_bits() as i64;
-                    a = a.wrapping_add(w * (g.to_bits() as i64));
-                    b = b.wrapping_add(w * (h.to_bits() as i64));
+                    a = a.wrapping_add(w.wrapping_mul(g.to_bits() as i64));
+                    b = b.wrapping_add(w.wrapping_mul(h.to_bits() as i64));
                 }
                 let narrow = |v: i64| {
                     let v = v >> <$t>::FRAC_NBITS;

@@ -112,7 +112,7 @@ impl<R: Real> Receiver<R> {
         now_ms: u32,
     ) -> Result<usize, S::Error> {
         let mut chunk = [0u8; 64];
-        let mut total = 0;
+        let mut total: usize = 0;
         self.tick(now_ms);
         for _ in 0..(2 * MAX_FRAME / 64 + 1) {
             if !serial.read_ready()? {
@@ -123,7 +123,7 @@ impl<R: Real> Receiver<R> {
                 break;
             }
             self.feed(chunk.get(..n).unwrap_or(&[]), now_ms);
-            total += n;
+            total = total.saturating_add(n);
         }
         Ok(total)
     }
@@ -136,7 +136,7 @@ impl<R: Real> Receiver<R> {
         }
         if let Some(slot) = self.buf.get_mut(self.len) {
             *slot = b;
-            self.len += 1;
+            self.len = self.len.saturating_add(1);
         } else {
             // Cannot happen: a frame is processed at its full length. Start over rather than panic.
             self.len = 0;
@@ -149,7 +149,7 @@ impl<R: Real> Receiver<R> {
     fn drop_front(&mut self, k: usize) {
         let k = k.min(self.len);
         self.buf.copy_within(k..self.len, 0);
-        self.len -= k;
+        self.len = self.len.saturating_sub(k);
     }
 
     /// Act on the buffer: skip to a sync pair, check the header, then the whole frame.
@@ -215,7 +215,7 @@ impl<R: Real> Receiver<R> {
             self.stats.stale = self.stats.stale.saturating_add(1);
             return;
         }
-        let inactive = 1 - self.active.min(1);
+        let inactive = if self.active == 0 { 1 } else { 0 };
         let frame_bytes = match self.buf.get(..flen) {
             Some(b) => b,
             None => return,
@@ -237,7 +237,7 @@ impl<R: Real> Receiver<R> {
             self.stats.bad_header = self.stats.bad_header.saturating_add(1);
             return;
         }
-        for (k, w) in g.weights.iter_mut().enumerate().take(nx * ny) {
+        for (k, w) in g.weights.iter_mut().enumerate().take(nx.saturating_mul(ny)) {
             *w = R::from_q16(frame::weight_q16(frame_bytes, k).unwrap_or(0));
         }
         g.seq = hdr.seq;
