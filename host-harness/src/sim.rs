@@ -1,25 +1,32 @@
 //! A scene run: the plant integrated with its events, and what the summary reports.
 //!
 //! Events (located, not sampled): 0 tool-target contact onset/separation, 1 front end-stop
-//! entry/exit, 2 back end-stop entry/exit, 3 the sensor's threshold. Breakpoints: end of the
+//! entry/exit, 2 back end-stop entry/exit, 3 the sensor's threshold, and 4-6 the instants where
+//! the contact, the front stop or the back stop stops pushing (or starts again) while still
+//! penetrated: its damping term cancels the spring term and the clamp at zero force (no adhesion)
+//! takes over. That clamp is a kink in the right-hand side; located as an event, the step ends on
+//! it instead of the error control hacking at it with a dozen rejected steps (docs/accuracy.md). Breakpoints: end of the
 //! acceleration, start and end of braking. Contact dampings chi are fixed at each onset from the
 //! approach velocity (eq 7).
 
 use crate::plant::{self, Forces, Kinematics, Plant, State, N};
-use crate::scene::{Method, Scene, TargetKind};
+use crate::scene::{Decoupler, Fidelity, Method, Scene, TargetKind};
 use crate::solver::dopri5::Dopri5;
 use crate::solver::driver::{Crossing, Driver, Hybrid, Settings, SolveError, Stats};
 use crate::solver::fixed::{Fixed, FixedKind};
-use crate::solver::{Stepper, System};
+use crate::solver::{AnyStepper, System};
 use serde::Serialize;
 use std::cell::Cell;
 
 /// Number of event functions.
-pub const E: usize = 4;
+pub const E: usize = 7;
 const EV_CONTACT: usize = 0;
 const EV_FRONT: usize = 1;
 const EV_BACK: usize = 2;
 const EV_SWITCH: usize = 3;
+const EV_CONTACT_PUSH: usize = 4;
+const EV_FRONT_PUSH: usize = 5;
+const EV_BACK_PUSH: usize = 6;
 
 /// One recorded instant of the time history.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -101,6 +108,53 @@ pub struct Summary {
     pub method: String,
     /// Things the user should know about this run (regularisations applied, ...).
     pub warnings: Vec<String>,
+    /// `solver.fidelity` of the run: "fast", "default" or "reference".
+    pub fidelity: String,
+    /// The parts of the model this run left out (`solver.simplify`, or chosen by
+    /// `fidelity = "fast"`): "rigid-robot", "no-friction". Empty for the full model.
+    pub simplified: Vec<String>,
+}
+
+/// The scene as the simulator models it: `scene` without the parts its `[solver]` lets it drop,
+/// and the names of those actually dropped (a simplification that changes nothing, such as
+/// "rigid-robot" on a scene without `[robot]`, is not listed).
+///
+/// `fidelity = "fast"` drops the robot's compliance when a decoupler sits between tool and robot:
+/// the robot then feels only the decoupler's force, a few newtons against k_r, so its deflection is
+/// micrometres (docs/accuracy.md measures what it costs). It never drops friction on its own:
+/// friction decides whether a bi-stable module switches (Ch. 3.3), so only the scene may ask.
+pub fn simplified(scene: &Scene) -> (Scene, Vec<String>) {
+    let mut s = scene.clone();
+    let mut done = Vec::new();
+    let want = scene.solver.simplify;
+    let fast = scene.solver.fidelity == Fidelity::Fast;
+    let decoupled = !matches!(scene.decoupler, Decoupler::Rigid);
+    if (want.rigid_robot || (fast && decoupled)) && s.robot.is_some() {
+        s.robot = None;
+        done.push("rigid-robot".to_string());
+    }
+    if want.no_friction {
+        let mut any = false;
+        match &mut s.decoupler {
+            Decoupler::Bistable(b) if b.friction.is_some() => {
+                b.friction = None;
+                any = true;
+            }
+            Decoupler::Hydraulic(h) if h.dry_friction > 0.0 || h.viscous_friction > 0.0 => {
+                h.dry_friction = 0.0;
+                h.viscous_friction = 0.0;
+                any = true;
+            }
+            _ => {}
+        }
+        if let TargetKind::Object { floor_friction, .. } = &mut s.target.kind {
+            any |= floor_friction.take().is_some();
+        }
+        if any {
+            done.push("no-friction".to_string());
+        }
+    }
+    (s, done)
 }
 
 /// The plant as a hybrid system, with the run's bookkeeping.
@@ -113,6 +167,10 @@ pub struct Simulation {
     in_contact: bool,
     on_front: bool,
     on_back: bool,
+    /// While penetrated: the law's unclamped force pushes (false: clamped at zero).
+    contact_push: bool,
+    front_push: bool,
+    back_push: bool,
     detected: bool,
     rhs_evals: Cell<u64>,
     t_contact: Option<f64>,
@@ -133,6 +191,12 @@ pub struct Simulation {
     /// The recorded time history (empty unless recording).
     pub history: Vec<Sample>,
     warnings: Vec<String>,
+    /// Contact and robot-force magnitude at the end of the last step (t, (N, N)).
+    last_end: (f64, (f64, f64)),
+    /// Relative accuracy the in-step peak search stops at.
+    peak_rtol: f64,
+    fidelity: Fidelity,
+    simplified: Vec<String>,
 }
 
 impl System<N> for Simulation {
@@ -157,6 +221,14 @@ impl Hybrid<N, E> for Simulation {
             let fc = self.plant.contact.force(k.delta, k.delta_dot, self.plant.target_chi);
             g[EV_SWITCH] = d.signal(k.s, fc);
         }
+        // Sign of the unclamped force per unit d^1.5 (or per metre for the linear front stop).
+        g[EV_CONTACT_PUSH] = self.plant.contact.stiffness + self.plant.target_chi * k.delta_dot;
+        if let Some(f) = self.plant.decoupler.front_stop() {
+            g[EV_FRONT_PUSH] = f.stiffness * (k.s - f.at) + f.damping * k.s_dot;
+        }
+        if let Some(b) = self.plant.decoupler.back_stop() {
+            g[EV_BACK_PUSH] = b.contact.stiffness - self.plant.back_chi * k.s_dot;
+        }
         g
     }
 
@@ -167,6 +239,9 @@ impl Hybrid<N, E> for Simulation {
             EV_FRONT if self.plant.decoupler.front_stop().is_some() => dir(self.on_front),
             EV_BACK if self.plant.decoupler.back_stop().is_some() => dir(self.on_back),
             EV_SWITCH if self.plant.detector.is_some() && !self.detected => Some(Crossing::Up),
+            EV_CONTACT_PUSH if self.in_contact => dir(self.contact_push),
+            EV_FRONT_PUSH if self.on_front => dir(self.front_push),
+            EV_BACK_PUSH if self.on_back => dir(self.back_push),
             _ => None,
         }
     }
@@ -176,6 +251,7 @@ impl Hybrid<N, E> for Simulation {
         match i {
             EV_CONTACT if !self.in_contact => {
                 self.in_contact = true;
+                self.plant.in_contact = true;
                 self.contacts += 1;
                 self.plant.target_chi = self.plant.contact.chi(k.delta_dot);
                 if self.t_contact.is_none() {
@@ -185,6 +261,7 @@ impl Hybrid<N, E> for Simulation {
             }
             EV_CONTACT => {
                 self.in_contact = false;
+                self.plant.in_contact = false;
                 if self.contacts == 1 && self.v_out_first.is_none() {
                     self.v_out_first = Some(k.delta_dot);
                 }
@@ -193,6 +270,9 @@ impl Hybrid<N, E> for Simulation {
                 }
             }
             EV_FRONT => self.on_front = !self.on_front,
+            EV_CONTACT_PUSH => self.contact_push = !self.contact_push,
+            EV_FRONT_PUSH => self.front_push = !self.front_push,
+            EV_BACK_PUSH => self.back_push = !self.back_push,
             EV_BACK => {
                 self.on_back = !self.on_back;
                 if self.on_back {
@@ -211,6 +291,10 @@ impl Hybrid<N, E> for Simulation {
             }
             _ => {}
         }
+        // Entering a contact or a stop: does its law push right away? (A grazing entry may not.)
+        if matches!(i, EV_CONTACT | EV_FRONT | EV_BACK) {
+            self.refresh_push(t, y);
+        }
     }
 
     fn next_breakpoint(&self, t: f64) -> Option<f64> {
@@ -228,13 +312,18 @@ impl Hybrid<N, E> for Simulation {
             }
         }
         let (k, f) = self.observe(t1, y1);
-        // Peaks fall between step ends: while a contact is active, search the step's interpolant too
-        // (golden-section on the contact force, a few samples for the robot force).
+        let at1 = (f.contact, f.robot.abs());
+        // Peaks fall between step ends: while a contact is active, search the step's interpolant too.
         if t1 > t0 && (self.in_contact || self.on_back) {
-            let (c, r) = self.peaks_inside(t0, t1, dense);
+            let at0 = if self.last_end.0 == t0 { self.last_end.1 } else {
+                let f0 = self.observe(t0, &dense(t0)).1;
+                (f0.contact, f0.robot.abs())
+            };
+            let (c, r) = self.peaks_inside(t0, t1, at0, at1, dense);
             self.peak_contact = self.peak_contact.max(c);
             self.peak_robot = self.peak_robot.max(r);
         }
+        self.last_end = (t1, at1);
         self.peak_contact = self.peak_contact.max(f.contact);
         self.peak_robot = self.peak_robot.max(f.robot.abs());
         self.peak_object_v = self.peak_object_v.max(k.vp);
@@ -257,11 +346,53 @@ fn sample(t: f64, k: &Kinematics, f: &Forces) -> Sample {
     }
 }
 
+/// The maximum of a smooth `f` given at five increasing instants `ts` with values `fs`: the
+/// largest sample, refined by successive parabolic interpolation inside its bracket when it is
+/// interior, until the gain is below `rtol` of the peak.
+fn refine_max(f: impl Fn(f64) -> f64, ts: [f64; 5], fs: [f64; 5], rtol: f64) -> f64 {
+    let (mut i, mut best) = (0, fs[0]);
+    for k in 1..5 {
+        if fs[k] > best {
+            (i, best) = (k, fs[k]);
+        }
+    }
+    if i == 0 || i == 4 {
+        return best;
+    }
+    let (mut a, mut fa, mut b, mut fb, mut c, mut fcc) = (ts[i - 1], fs[i - 1], ts[i], fs[i], ts[i + 1], fs[i + 1]);
+    for _ in 0..6 {
+        let p = (b - a) * (fb - fcc);
+        let q = (b - c) * (fb - fa);
+        let den = p - q;
+        if den == 0.0 {
+            break;
+        }
+        let x = b - 0.5 * ((b - a) * p - (b - c) * q) / den;
+        if !(x > a && x < c) || x == b {
+            break;
+        }
+        let fx = f(x);
+        let gain = fx - fb;
+        if fx > fb {
+            if x < b { (c, fcc) = (b, fb) } else { (a, fa) = (b, fb) }
+            (b, fb) = (x, fx);
+        } else if x < b {
+            (a, fa) = (x, fx);
+        } else {
+            (c, fcc) = (x, fx);
+        }
+        if gain.abs() <= rtol * fb.abs() {
+            break;
+        }
+    }
+    best.max(fb)
+}
+
 /// A scene's run in progress: the simulation, its stepper and its driver.
 pub struct Run {
     /// The simulation (plant and bookkeeping).
     pub sim: Simulation,
-    stepper: Box<dyn Stepper<N>>,
+    stepper: AnyStepper<N>,
     driver: Driver<N, E>,
     method: Method,
     duration: f64,
@@ -271,8 +402,13 @@ impl Simulation {
     /// A simulation of `scene`; with `external_brake` the sensor only records detection and the
     /// caller decides when braking starts (firmware in the loop).
     pub fn new(scene: &Scene, external_brake: bool, record: bool) -> Self {
+        let (scene, simplified) = simplified(scene);
+        let scene = &scene;
         let plant = Plant::new(scene);
         let mut warnings = Vec::new();
+        for what in &simplified {
+            warnings.push(format!("simplified model: {what} (solver.simplify / fidelity = \"fast\"; docs/accuracy.md gives its cost)"));
+        }
         if plant.decoupler.friction_regularised() {
             warnings.push(format!("decoupler.friction.v0 below {} m/s was raised to it (Coulomb limit regularised, plant::friction)", plant::friction::V0_MIN));
         }
@@ -287,6 +423,9 @@ impl Simulation {
             in_contact: false,
             on_front: false,
             on_back: false,
+            contact_push: false,
+            front_push: false,
+            back_push: false,
             detected: false,
             rhs_evals: Cell::new(0),
             t_contact: None,
@@ -306,6 +445,10 @@ impl Simulation {
             next_record: 0.0,
             history: Vec::new(),
             warnings,
+            last_end: (f64::NAN, (0.0, 0.0)),
+            fidelity: scene.solver.fidelity,
+            simplified,
+            peak_rtol: scene.solver.rtol.max(1e-12),
         };
         if let Some(TargetKind::Object { floor_friction: Some(_), .. }) = Some(scene.target.kind) {
             sim.warnings.push(format!("target.floor_friction regularised with v0 = {} m/s", plant::friction::V0_MIN));
@@ -313,28 +456,29 @@ impl Simulation {
         sim
     }
 
-    /// The largest contact force and robot-force magnitude inside the step [t0, t1], N.
-    fn peaks_inside(&self, t0: f64, t1: f64, dense: &dyn Fn(f64) -> State) -> (f64, f64) {
-        let forces = |t: f64| self.observe(t, &dense(t)).1;
-        let (mut best_c, mut best_t, mut best_r) = (0.0_f64, t0, 0.0_f64);
-        for i in 1..8 {
-            let t = t0 + (t1 - t0) * i as f64 / 8.0;
-            let f = forces(t);
-            best_r = best_r.max(f.robot.abs());
-            if f.contact > best_c {
-                (best_c, best_t) = (f.contact, t);
-            }
+    /// The largest contact force and robot-force magnitude inside the step [t0, t1], N, given
+    /// both at the step's ends (`at0`, `at1`).
+    ///
+    /// Three interior samples of the step's interpolant; where the largest sample is interior, a
+    /// few successive parabolic interpolations (Brent's idea without the golden fallback, the
+    /// bracket kept) refine it. A peak in the middle of a step is smooth, so the parabola converges
+    /// in two or three evaluations; the old golden-section search spent 48 evaluations a step and
+    /// was most of the run's cost (docs/accuracy.md).
+    fn peaks_inside(&self, t0: f64, t1: f64, at0: (f64, f64), at1: (f64, f64), dense: &dyn Fn(f64) -> State) -> (f64, f64) {
+        let forces = |t: f64| {
+            let f = self.observe(t, &dense(t)).1;
+            (f.contact, f.robot.abs())
+        };
+        let h = t1 - t0;
+        let ts = [t0, t0 + 0.25 * h, t0 + 0.5 * h, t0 + 0.75 * h, t1];
+        let mut fc = [at0.0, 0.0, 0.0, 0.0, at1.0];
+        let mut fr = [at0.1, 0.0, 0.0, 0.0, at1.1];
+        for i in 1..4 {
+            (fc[i], fr[i]) = forces(ts[i]);
         }
-        // Refine the contact-force maximum around the best sample (golden section).
-        let h = (t1 - t0) / 8.0;
-        let (mut a, mut b) = ((best_t - h).max(t0), (best_t + h).min(t1));
-        let g = 0.618_033_988_75;
-        for _ in 0..20 {
-            let (c, d) = (b - g * (b - a), a + g * (b - a));
-            if forces(c).contact > forces(d).contact { b = d } else { a = c }
-        }
-        let f = forces(0.5 * (a + b));
-        (best_c.max(f.contact), best_r.max(f.robot.abs()))
+        let c = refine_max(|t| forces(t).0, ts, fc, self.peak_rtol);
+        let r = refine_max(|t| forces(t).1, ts, fr, self.peak_rtol);
+        (c, r)
     }
 
     /// Kinematics and forces at (t, y).
@@ -344,11 +488,20 @@ impl Simulation {
         (k, f)
     }
 
+    fn refresh_push(&mut self, t: f64, y: &State) {
+        let g = self.events(t, y);
+        self.contact_push = g[EV_CONTACT_PUSH] > 0.0;
+        self.front_push = g[EV_FRONT_PUSH] > 0.0;
+        self.back_push = g[EV_BACK_PUSH] > 0.0;
+    }
+
     fn init_flags(&mut self, t: f64, y: &State) {
         let g = self.events(t, y);
         self.in_contact = g[EV_CONTACT] > 0.0;
+        self.plant.in_contact = self.in_contact;
         self.on_front = g[EV_FRONT] > 0.0;
         self.on_back = g[EV_BACK] > 0.0;
+        self.refresh_push(t, y);
     }
 }
 
@@ -359,10 +512,10 @@ impl Run {
         let y0 = sim.plant.initial_state(scene.motion.start_at_speed, scene.motion.speed);
         sim.init_flags(0.0, &y0);
         let s = &scene.solver;
-        let stepper: Box<dyn Stepper<N>> = match s.method {
-            Method::Dopri5 => Box::new(Dopri5::<N>::new(s.rtol, s.atol)),
-            Method::Rk4 => Box::new(Fixed::<N>::new(FixedKind::Rk4)),
-            Method::SemiImplicitEuler => Box::new(Fixed::<N>::new(FixedKind::SemiImplicitEuler { pairs: 3 })),
+        let stepper = match s.method {
+            Method::Dopri5 => AnyStepper::Dopri5(Dopri5::<N>::new(s.rtol, s.atol)),
+            Method::Rk4 => AnyStepper::Fixed(Fixed::<N>::new(FixedKind::Rk4)),
+            Method::SemiImplicitEuler => AnyStepper::Fixed(Fixed::<N>::new(FixedKind::SemiImplicitEuler { pairs: 3 })),
         };
         let driver = Driver::new(&sim, 0.0, y0, Settings { max_step: s.max_step, ..Default::default() });
         sim.on_step(0.0, 0.0, &y0, &|_| y0);
@@ -371,7 +524,7 @@ impl Run {
 
     /// Integrates to `t` (clamped to the scene's duration).
     pub fn advance_to(&mut self, t: f64) -> Result<(), SolveError> {
-        self.driver.advance_to(&mut self.sim, self.stepper.as_mut(), t.min(self.duration))
+        self.driver.advance_to(&mut self.sim, &mut self.stepper, t.min(self.duration))
     }
 
     /// Integrates to the end of the scene.
@@ -459,6 +612,8 @@ impl Run {
             events: stats.events,
             method: format!("{:?}", self.method),
             warnings: s.warnings.clone(),
+            fidelity: format!("{:?}", s.fidelity).to_lowercase(),
+            simplified: s.simplified.clone(),
         }
     }
 }

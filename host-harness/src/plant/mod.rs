@@ -50,6 +50,8 @@ pub struct Kinematics {
     pub xc: f64,
     /// x_c'.
     pub vc: f64,
+    /// x_c'' (kept so the right-hand side evaluates the motion law once).
+    pub ac: f64,
     /// x_r.
     pub xr: f64,
     /// x_r'.
@@ -108,6 +110,11 @@ pub struct Plant {
     pub back_chi: f64,
     /// Stroke coordinate at rest (static equilibrium), m.
     pub s_rest: f64,
+    /// True between a located contact onset and its separation: the decoupler impulse (eq 21)
+    /// accumulates. A discrete state set at the events, not `delta > 0` tested inside the
+    /// right-hand side, which would make the impulse's rate jump inside a step: that jump alone
+    /// cost a dozen rejected steps at every contact onset (docs/accuracy.md).
+    pub in_contact: bool,
 }
 
 impl Plant {
@@ -127,6 +134,7 @@ impl Plant {
             target_chi: 0.0,
             back_chi: 0.0,
             s_rest: 0.0,
+            in_contact: false,
         };
         plant.s_rest = plant.rest_stroke();
         let x_r0 = plant.robot.map_or(0.0, |r| r.static_offset(plant.tool_mass * plant.gravity));
@@ -196,7 +204,7 @@ impl Plant {
             Target::Obstacle { surface } => (surface, 0.0),
             Target::Object { .. } => (y[XP], y[VP]),
         };
-        Kinematics { xc: c.x, vc: c.v, xr, vr, xt, vt, xp, vp, s: xt - xr, s_dot: vt - vr, delta: xt - xp, delta_dot: vt - vp }
+        Kinematics { xc: c.x, vc: c.v, ac: c.a, xr, vr, xt, vt, xp, vp, s: xt - xr, s_dot: vt - vr, delta: xt - xp, delta_dot: vt - vp }
     }
 
     /// Forces at one instant.
@@ -214,7 +222,7 @@ impl Plant {
         *dy = [0.0; N];
         let weight = self.tool_mass * self.gravity;
         if let Some(r) = &self.robot {
-            let c = self.motion.at(t);
+            let c = motion_law::Commanded { x: k.xc, v: k.vc, a: k.ac };
             // Rigid tool: contact and the tool's weight act on the joint mass m_r + m_t.
             let f_ext = if self.decoupler.is_rigid() { weight - f.contact } else { f.robot };
             dy[XR] = k.vr;
@@ -228,7 +236,7 @@ impl Plant {
             dy[XP] = k.vp;
             dy[VP] = self.target.accel(f.contact, k.vp);
         }
-        dy[IMPULSE] = if k.delta > 0.0 { f.decoupler.total } else { 0.0 };
+        dy[IMPULSE] = if self.in_contact { f.decoupler.total } else { 0.0 };
         (k, f)
     }
 

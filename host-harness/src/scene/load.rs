@@ -24,7 +24,11 @@
 //! - hydraulic `adiabatic_exponent` (default [`DEFAULT_ADIABATIC_EXPONENT`], air, fixed by eq 47) and
 //!   `friction_v0` (default [`DEFAULT_HYDRAULIC_FRICTION_V0`] m/s, regularises sgn in eq 48).
 //! - `[solver]`: `method` ("dopri5" | "rk4" | "semi-implicit-euler"), `rtol`, `atol`, `max_step`,
-//!   `output_interval`, defaults in the `DEFAULT_*` constants below.
+//!   `output_interval`, defaults in the `DEFAULT_*` constants below (measured: docs/accuracy.md).
+//!   `fidelity` ("fast" | "default" | "reference", default "default") picks the tolerance defaults:
+//!   `REFERENCE_*` (dopri5 only, no other solver key, no simplification), `DEFAULT_*`, or `FAST_*`
+//!   plus the simplifications that are safe for the scene (`sim`). `simplify` (a list of
+//!   "rigid-robot" | "no-friction", default none) drops those parts of the model explicitly.
 //! - `[controller]` (firmware in the loop): `scan_cycle` (s > 0), `phase` in [0, 1),
 //!   `firmware_tick` (s > 0), all required when the table is present.
 use super::model::*;
@@ -39,6 +43,15 @@ pub const DEFAULT_RTOL: f64 = 1e-7;
 pub const DEFAULT_ATOL: f64 = 1e-10;
 /// Default largest step (adaptive) or fixed step (fixed-step methods), s.
 pub const DEFAULT_MAX_STEP: f64 = 1e-3;
+/// Tolerances of `fidelity = "reference"` (docs/accuracy.md: the reference the others are
+/// measured against; tightening further changes no reported figure by more than 1e-6).
+pub const REFERENCE_RTOL: f64 = 1e-10;
+/// Absolute tolerance of `fidelity = "reference"` (m and m/s).
+pub const REFERENCE_ATOL: f64 = 1e-13;
+/// Relative tolerance of `fidelity = "fast"`.
+pub const FAST_RTOL: f64 = 1e-5;
+/// Absolute tolerance of `fidelity = "fast"`.
+pub const FAST_ATOL: f64 = 1e-8;
 /// Default interval between recorded samples, s.
 pub const DEFAULT_OUTPUT_INTERVAL: f64 = 1e-4;
 /// Default integration method.
@@ -1132,16 +1145,52 @@ fn default_solver() -> SolverSettings {
         atol: DEFAULT_ATOL,
         max_step: DEFAULT_MAX_STEP,
         output_interval: DEFAULT_OUTPUT_INTERVAL,
+        fidelity: Fidelity::Default,
+        simplify: Simplify::default(),
     }
 }
 
 fn solver(cx: &mut Ctx, t: &Tab, duration: Option<f64>) -> Option<SolverSettings> {
     cx.check_keys(
         t,
-        &["method", "rtol", "atol", "max_step", "output_interval"],
+        &[
+            "method",
+            "rtol",
+            "atol",
+            "max_step",
+            "output_interval",
+            "fidelity",
+            "simplify",
+        ],
         "",
     );
     let d = default_solver();
+    let fidelities = [
+        ("fast", Fidelity::Fast),
+        ("default", Fidelity::Default),
+        ("reference", Fidelity::Reference),
+    ];
+    let fidelity = match t.t.contains_key("fidelity") {
+        true => cx.choice(t, "fidelity", &fidelities, false),
+        false => Some(d.fidelity),
+    };
+    let (rtol_default, atol_default) = match fidelity {
+        Some(Fidelity::Fast) => (FAST_RTOL, FAST_ATOL),
+        Some(Fidelity::Reference) => (REFERENCE_RTOL, REFERENCE_ATOL),
+        _ => (d.rtol, d.atol),
+    };
+    if fidelity == Some(Fidelity::Reference) {
+        // The reference is one fixed thing: nothing may loosen it.
+        for key in ["method", "rtol", "atol", "simplify"] {
+            if t.t.contains_key(key) {
+                cx.bad(
+                    t,
+                    key,
+                    format!("must not be set with fidelity = \"reference\" (dopri5 at rtol = {}, atol = {}, the full model)", num(REFERENCE_RTOL), num(REFERENCE_ATOL)),
+                );
+            }
+        }
+    }
     let methods = [
         ("dopri5", Method::Dopri5),
         ("rk4", Method::Rk4),
@@ -1158,15 +1207,16 @@ fn solver(cx: &mut Ctx, t: &Tab, duration: Option<f64>) -> Option<SolverSettings
     let rtol = opt(
         "rtol",
         Rule::within(RTOL_RANGE.0, RTOL_RANGE.1, true, ""),
-        d.rtol,
+        rtol_default,
     );
     let atol = opt(
         "atol",
         Rule::within(ATOL_RANGE.0, ATOL_RANGE.1, true, ""),
-        d.atol,
+        atol_default,
     );
     let max_step = opt("max_step", Rule::gt(0.0, "s"), d.max_step);
     let output_interval = opt("output_interval", Rule::ge(0.0, "s"), d.output_interval);
+    let simplify = simplify(cx, t);
     if let Some(dur) = duration {
         for (key, v) in [("max_step", max_step), ("output_interval", output_interval)] {
             if let Some(v) = v.filter(|&v| v > dur) {
@@ -1185,7 +1235,40 @@ fn solver(cx: &mut Ctx, t: &Tab, duration: Option<f64>) -> Option<SolverSettings
         atol: atol?,
         max_step: max_step?,
         output_interval: output_interval?,
+        fidelity: fidelity?,
+        simplify: simplify?,
     })
+}
+
+/// `solver.simplify`: a list of distinct names of simplifications.
+fn simplify(cx: &mut Ctx, t: &Tab) -> Option<Simplify> {
+    let mut out = Simplify::default();
+    let Some(item) = t.t.get("simplify") else {
+        return Some(out);
+    };
+    let what = "a list of \"rigid-robot\" | \"no-friction\"";
+    let Some(list) = item.as_value().and_then(Value::as_array) else {
+        cx.wrong_type(t, "simplify", what, item);
+        return None;
+    };
+    let mut ok = true;
+    for v in list.iter() {
+        let flag = match v.as_str() {
+            Some("rigid-robot") => &mut out.rigid_robot,
+            Some("no-friction") => &mut out.no_friction,
+            _ => {
+                cx.bad(t, "simplify", format!("must be {what}, got {}", v.to_string().trim()));
+                ok = false;
+                continue;
+            }
+        };
+        if *flag {
+            cx.bad(t, "simplify", format!("lists {} twice", v.to_string().trim()));
+            ok = false;
+        }
+        *flag = true;
+    }
+    ok.then_some(out)
 }
 
 fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
@@ -2550,8 +2633,68 @@ threshold = 0.0015
         "method = \"rk4\"\norder = 4\n",
         "solver.order",
         "order",
-        "allowed keys: method, rtol, atol, max_step, output_interval"
+        "allowed keys: method, rtol, atol, max_step, output_interval, fidelity, simplify"
     );
+    case!(
+        solver_fidelity_bad,
+        BASE,
+        "method = \"rk4\"\n",
+        "method = \"rk4\"\nfidelity = \"exact\"\n",
+        "solver.fidelity",
+        "fidelity",
+        "must be one of \"fast\" | \"default\" | \"reference\", got \"exact\""
+    );
+    case!(
+        solver_reference_refuses_a_method,
+        BASE,
+        "method = \"rk4\"\n",
+        "method = \"rk4\"\nfidelity = \"reference\"\n",
+        "solver.method",
+        "method = \"rk4\"",
+        "must not be set with fidelity = \"reference\""
+    );
+    case!(
+        solver_simplify_unknown,
+        BASE,
+        "method = \"rk4\"\n",
+        "method = \"rk4\"\nsimplify = [\"rigid-tool\"]\n",
+        "solver.simplify",
+        "simplify",
+        "must be a list of \"rigid-robot\" | \"no-friction\", got \"rigid-tool\""
+    );
+    case!(
+        solver_simplify_twice,
+        BASE,
+        "method = \"rk4\"\n",
+        "method = \"rk4\"\nsimplify = [\"no-friction\", \"no-friction\"]\n",
+        "solver.simplify",
+        "simplify",
+        "lists \"no-friction\" twice"
+    );
+    case!(
+        solver_simplify_not_a_list,
+        BASE,
+        "method = \"rk4\"\n",
+        "method = \"rk4\"\nsimplify = \"no-friction\"\n",
+        "solver.simplify",
+        "simplify",
+        "must be a list of"
+    );
+
+    #[test]
+    fn fidelity_sets_the_tolerance_defaults_and_explicit_keys_win() {
+        let no_tol = BASE.replace("rtol = 1e-6\n", "").replace("atol = 1e-9\n", "").replace("method = \"rk4\"\n", "");
+        let with = |extra: &str| parse(&no_tol.replace("[solver]\n", &format!("[solver]\n{extra}")), "f.toml").unwrap().solver;
+        let r = with("fidelity = \"reference\"\n");
+        assert_eq!((r.method, r.rtol, r.atol, r.fidelity), (Method::Dopri5, REFERENCE_RTOL, REFERENCE_ATOL, Fidelity::Reference));
+        let f = with("fidelity = \"fast\"\n");
+        assert_eq!((f.rtol, f.atol), (FAST_RTOL, FAST_ATOL));
+        let f = with("fidelity = \"fast\"\nrtol = 1e-4\nsimplify = [\"rigid-robot\"]\n");
+        assert_eq!((f.rtol, f.atol), (1e-4, FAST_ATOL));
+        assert_eq!(f.simplify, Simplify { rigid_robot: true, no_friction: false });
+        let d = with("");
+        assert_eq!((d.rtol, d.atol, d.fidelity), (DEFAULT_RTOL, DEFAULT_ATOL, Fidelity::Default));
+    }
 
     // Controller.
     case!(

@@ -253,6 +253,32 @@ pub struct SolverSettings {
     pub max_step: f64,
     /// Interval between recorded samples of the time history, s (0 = every step).
     pub output_interval: f64,
+    /// What accuracy the scene asks for (`solver.fidelity`); it sets the tolerance defaults.
+    pub fidelity: Fidelity,
+    /// Parts of the model the scene allows the simulator to drop (`solver.simplify`, and what
+    /// `fidelity = "fast"` adds where it is safe); every one applied is reported in the summary.
+    pub simplify: Simplify,
+}
+
+/// The accuracy a scene asks for (docs/accuracy.md gives what each costs and buys).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Fidelity {
+    /// Looser tolerance, and the simplifications that are safe for the scene.
+    Fast,
+    /// The measured default: within 1 % of the reference on peak forces and detection time.
+    Default,
+    /// The reference: the full model at the tightest tolerance, to check the others against.
+    Reference,
+}
+
+/// Simplifications of the model, each an explicit option (all `false`: the full model).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Simplify {
+    /// Drop the robot's compliance: x_r = x_c (removes the robot mode and two states).
+    pub rigid_robot: bool,
+    /// Drop friction: the decoupler's slide friction, the hydraulic dry and viscous friction, the
+    /// floor under a free object.
+    pub no_friction: bool,
 }
 
 /// Integration methods.

@@ -71,7 +71,8 @@ fn comb<const N: usize>(y: &[f64; N], h: f64, terms: &[(f64, &[f64; N])]) -> [f6
 }
 
 impl<const N: usize> Stepper<N> for Dopri5<N> {
-    fn step(&mut self, sys: &dyn System<N>, t: f64, y: &[f64; N], k1: &[f64; N], h: f64) -> ([f64; N], f64) {
+    #[inline]
+    fn step<S: System<N> + ?Sized>(&mut self, sys: &S, t: f64, y: &[f64; N], k1: &[f64; N], h: f64) -> ([f64; N], f64) {
         let mut k2 = [0.0; N];
         let mut k3 = [0.0; N];
         let mut k4 = [0.0; N];
@@ -119,5 +120,9 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
 
     fn adaptive(&self) -> bool {
         true
+    }
+
+    fn tolerances(&self) -> (f64, f64) {
+        (self.rtol, self.atol)
     }
 }

@@ -3,8 +3,13 @@
 //! regula falsi) to `event_tol` seconds. After an event the integration restarts from the located
 //! instant, so two events in one step are found one after the other, and an event exactly on a
 //! step boundary is found once.
+//!
+//! Step-size control of the adaptive method (Hairer, Norsett, Wanner, "Solving ODEs I", II.4 and
+//! their DOPRI5 code): a PI controller (beta = 0.04), steps grow at most 10x and shrink at most 5x,
+//! never grow right after a rejection, and restart from the HINIT estimate ([`super::initial_step`])
+//! at the start and after each event, where the right-hand side has just changed.
 
-use super::{Stepper, System};
+use super::{initial_step, Stepper, System};
 use std::fmt;
 
 /// Which zero crossing of an event function counts. "Inside" means g > 0.
@@ -111,7 +116,12 @@ pub struct Driver<const N: usize, const E: usize> {
     /// Current state.
     pub y: [f64; N],
     f: [f64; N],
+    /// Next adaptive step, s; 0 until estimated (start, after an event).
     h: f64,
+    /// Error of the last accepted step (the PI controller's memory).
+    err_old: f64,
+    /// True when the last attempt was rejected.
+    rejected_last: bool,
     g: [f64; E],
     /// Cost so far.
     pub stats: Stats,
@@ -124,7 +134,7 @@ impl<const N: usize, const E: usize> Driver<N, E> {
         let mut f = [0.0; N];
         sys.rhs(t0, &y0, &mut f);
         let g = sys.events(t0, &y0);
-        Self { t: t0, y: y0, f, h: settings.max_step.min(1e-5), g, stats: Stats::default(), settings }
+        Self { t: t0, y: y0, f, h: 0.0, err_old: 1e-4, rejected_last: false, g, stats: Stats::default(), settings }
     }
 
     /// Call after the system's own state changed outside an event (e.g. braking commanded from
@@ -135,12 +145,20 @@ impl<const N: usize, const E: usize> Driver<N, E> {
     }
 
     /// Integrates up to `t_end` (inclusive).
-    pub fn advance_to<S: Hybrid<N, E>>(&mut self, sys: &mut S, stepper: &mut dyn Stepper<N>, t_end: f64) -> Result<(), SolveError> {
+    pub fn advance_to<S: Hybrid<N, E>, M: Stepper<N>>(&mut self, sys: &mut S, stepper: &mut M, t_end: f64) -> Result<(), SolveError> {
+        const SAFE: f64 = 0.9;
+        const BETA: f64 = 0.04;
+        const GROW_MAX: f64 = 10.0;
+        const SHRINK_MAX: f64 = 5.0;
         let adaptive = stepper.adaptive();
-        let exponent = -1.0 / (stepper.order() + 1.0);
+        let expo = 1.0 / (stepper.order() + 1.0) - 0.75 * BETA;
+        let (rtol, atol) = stepper.tolerances();
         while self.t < t_end {
             if self.stats.steps + self.stats.rejected >= self.settings.max_steps {
                 return Err(SolveError::TooManySteps { t: self.t });
+            }
+            if adaptive && self.h <= 0.0 {
+                self.h = initial_step(&*sys, self.t, &self.y, &self.f, stepper.order(), rtol, atol, self.settings.max_step);
             }
             let limit = sys.next_breakpoint(self.t).map_or(t_end, |b| b.min(t_end));
             let mut h = if adaptive { self.h.min(self.settings.max_step) } else { self.settings.max_step };
@@ -154,18 +172,62 @@ impl<const N: usize, const E: usize> Driver<N, E> {
                 self.t = limit;
                 continue;
             }
-            let (y1, err) = stepper.step(sys, self.t, &self.y, &self.f, h);
+            let (y1, err) = stepper.step(&*sys, self.t, &self.y, &self.f, h);
             let finite = y1.iter().all(|v| v.is_finite()) && err.is_finite();
+            let mut h_next = h;
             if adaptive {
                 if !finite || err > 1.0 {
                     self.stats.rejected += 1;
-                    let factor = if finite { (0.9 * err.powf(exponent)).max(0.2) } else { 0.2 };
-                    self.h = h * factor;
+                    let mut shrink = if finite { (err.powf(expo) / SAFE).min(SHRINK_MAX) } else { SHRINK_MAX };
+                    // A second rejection in a row: the error is not behaving like h^5 (a kink), so
+                    // at least halve.
+                    if self.rejected_last {
+                        shrink = shrink.max(2.0);
+                    }
+                    self.h = h / shrink;
+                    // The step ran into an event (a contact onset, a stop): the right-hand side is
+                    // not smooth across it, so aim the retry just past the crossing instead of
+                    // creeping up on it by error control. Where it is depends on the state before
+                    // the event only: estimated on the tangent y0 + tau f0 (exact to first order;
+                    // the failed step's own end is polluted by the force it should not have felt).
+                    // Only on a first rejection: if the estimate was off, shrinking takes over.
+                    if finite && !self.rejected_last {
+                        let g1 = sys.events(self.t + h, &y1);
+                        let mut aim = f64::INFINITY;
+                        for i in 0..E {
+                            let Some(dir) = sys.watching(i) else { continue };
+                            if dir.new_side(self.g[i]) || !dir.new_side(g1[i]) {
+                                continue;
+                            }
+                            let tangent = |tau: f64| {
+                                let mut y = self.y;
+                                for k in 0..N {
+                                    y[k] += tau * self.f[k];
+                                }
+                                sys.events(self.t + tau, &y)[i]
+                            };
+                            if dir.new_side(tangent(h)) {
+                                let theta = locate(|th| tangent(th * h), self.g[i], tangent(h), dir, 1e-3);
+                                aim = aim.min((theta * 1.001).clamp(1e-3, 0.95) * h);
+                            }
+                        }
+                        if aim.is_finite() {
+                            self.h = aim;
+                        }
+                    }
+                    self.rejected_last = true;
                     if self.h < 1e-14 * self.t.abs().max(1e-3) {
                         return Err(SolveError::StepCollapse { t: self.t, h: self.h });
                     }
                     continue;
                 }
+                let fac = (err.powf(expo) / self.err_old.powf(BETA) / SAFE).clamp(1.0 / GROW_MAX, SHRINK_MAX);
+                h_next = h / fac;
+                if self.rejected_last {
+                    h_next = h_next.min(h);
+                }
+                self.err_old = err.max(1e-4);
+                self.rejected_last = false;
             } else if !finite {
                 return Err(SolveError::NonFinite { t: self.t });
             }
@@ -196,6 +258,12 @@ impl<const N: usize, const E: usize> Driver<N, E> {
                 self.y = ye;
                 sys.rhs(self.t, &self.y, &mut self.f);
                 self.g = sys.events(self.t, &self.y);
+                // The right-hand side just changed (a contact began, a damping was fixed): go on
+                // from what the step that reached the event allowed, and forget the PI history.
+                if adaptive {
+                    self.h = h_next;
+                }
+                self.err_old = 1e-4;
             } else {
                 sys.on_step(t0, t1, &y1, &dense);
                 self.t = t1;
@@ -205,11 +273,10 @@ impl<const N: usize, const E: usize> Driver<N, E> {
                     None => sys.rhs(self.t, &self.y, &mut self.f),
                 }
                 self.g = g1;
-            }
-            if adaptive {
-                let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(exponent)).clamp(0.2, 5.0) };
-                // A step cut short by a breakpoint says nothing about the next one's size.
-                self.h = if lands && first.is_none() { self.h.max(h * factor) } else { h * factor };
+                if adaptive {
+                    // A step cut short by a breakpoint says nothing about the next one's size.
+                    self.h = if lands { self.h.max(h_next) } else { h_next };
+                }
             }
         }
         Ok(())
@@ -286,10 +353,11 @@ mod tests {
 
     #[test]
     fn events_are_located_not_sampled() {
-        for stepper in [&mut Dopri5::<2>::new(1e-9, 1e-12) as &mut dyn Stepper<2>, &mut Fixed::<2>::new(FixedKind::Rk4)] {
+        use crate::solver::AnyStepper;
+        for mut stepper in [AnyStepper::Dopri5(Dopri5::<2>::new(1e-9, 1e-12)), AnyStepper::Fixed(Fixed::<2>::new(FixedKind::Rk4))] {
             let mut ball = Ball { bounces: vec![], breakpoint: None };
             let mut d = Driver::<2, 1>::new(&ball, 0.0, [1.0, 0.0], Settings { max_step: 0.1, ..Default::default() });
-            d.advance_to(&mut ball, stepper, 0.5).unwrap();
+            d.advance_to(&mut ball, &mut stepper, 0.5).unwrap();
             // With a 0.1 s step, sampling would be off by up to 0.1 s; located, it is exact
             // (the motion is a parabola, which both interpolants represent exactly).
             assert!((ball.bounces[0] - first_bounce_exact()).abs() < 1e-9, "{:?}", ball.bounces);

@@ -36,7 +36,8 @@ impl<const N: usize> Fixed<N> {
 }
 
 impl<const N: usize> Stepper<N> for Fixed<N> {
-    fn step(&mut self, sys: &dyn System<N>, t: f64, y: &[f64; N], f0: &[f64; N], h: f64) -> ([f64; N], f64) {
+    #[inline]
+    fn step<S: System<N> + ?Sized>(&mut self, sys: &S, t: f64, y: &[f64; N], f0: &[f64; N], h: f64) -> ([f64; N], f64) {
         let mut y1 = *y;
         match self.kind {
             FixedKind::Rk4 => {
