@@ -13,3 +13,4 @@ pub mod scene;
 pub mod sim;
 pub mod solver;
 pub mod sweep;
+pub mod validate;

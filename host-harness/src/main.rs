@@ -26,6 +26,8 @@ enum Command {
     Sweep(flinch_harness::sweep::cli::SweepArgs),
     /// Size a module: the stroke a robot needs, the largest safe speed for a stroke, the working mode.
     Design(flinch_harness::design::DesignArgs),
+    /// Regenerate docs/validation.md and its pictures: the thesis's figures against ours.
+    Validate(flinch_harness::validate::ValidateArgs),
 }
 
 #[derive(clap::Args)]
@@ -166,6 +168,7 @@ fn main() -> ExitCode {
         Command::Avoid(a) => flinch_harness::avoid::run(a).map(|_| true),
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a).map(|_| true),
         Command::Design(a) => flinch_harness::design::run(a),
+        Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

@@ -126,10 +126,12 @@ impl Axis {
                 i if i == self.n - 1 => self.stop,
                 i => {
                     let f = i as f64 / last;
-                    match self.spacing {
+                    let x = match self.spacing {
                         Spacing::Linear => self.start + (self.stop - self.start) * f,
                         Spacing::Log => (self.start.ln() + (self.stop.ln() - self.start.ln()) * f).exp(),
-                    }
+                    };
+                    // 12 significant digits: 0.15, not 0.15000000000000002, in files and CSVs.
+                    format!("{x:.11e}").parse().unwrap_or(x)
                 }
             })
             .collect()
@@ -314,6 +316,16 @@ impl Template {
                 }
             }
         }
+    }
+
+    /// A new template: this one with `sets` applied and re-validated (a sweep around a variant).
+    pub fn with_base(&self, sets: &[(&str, f64)]) -> Result<Self, SweepError> {
+        let base = self.with(sets)?;
+        let mut doc = self.doc.clone();
+        for &(k, x) in sets {
+            set(&mut doc, k, x);
+        }
+        Ok(Self { doc, file: self.file.clone(), base })
     }
 
     /// The scene with `sets` applied, validated; the error names the values and the validator's

@@ -1,0 +1,576 @@
+//! `flinch validate --out docs/`: the thesis's figures side by side with ours, `docs/validation.md`.
+//!
+//! Every number in the document's tables comes from running the simulator here, from the shipped
+//! scenes (`scenes/*.toml`, `scenes/figures/*.toml`) with keys set through the sweep module, so the
+//! document is regenerated, never edited. [`tables`] computes the numbers (coarse sweep grids, a few
+//! seconds) and [`markdown`] renders them; `tests/validation.rs` does both and fails when
+//! `docs/validation.md` differs. [`write`] also draws the pictures into `docs/validation/` (finer
+//! grids; the test does not redraw them, it checks they exist).
+
+use crate::report;
+use crate::scene::{Decoupler, Scene};
+use crate::sim::{self, Sample, Summary};
+use crate::sweep::plot::{self as splot, Panel, Series, Style, XAxis, PALETTE};
+use crate::sweep::{Axis, Progress, Spacing, Sweep, SweepResult, Template};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// `flinch validate [--out DIR] [--scenes DIR]`.
+#[derive(clap::Args, Debug)]
+pub struct ValidateArgs {
+    /// Where validation.md and validation/*.svg go.
+    #[arg(long, value_name = "DIR", default_value = "docs")]
+    pub out: PathBuf,
+    /// The scenes folder (with figures/ inside).
+    #[arg(long, value_name = "DIR", default_value = "scenes")]
+    pub scenes: PathBuf,
+    /// Only print the markdown (no pictures, nothing written).
+    #[arg(long)]
+    pub check: bool,
+}
+
+/// How a row compares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// Within the stated tolerance, or the stated trend holds.
+    Match,
+    /// Outside it: the section's notes say why.
+    Differs,
+}
+
+/// One compared quantity.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// What is compared.
+    pub quantity: String,
+    /// The thesis's value or statement.
+    pub thesis: String,
+    /// Ours, from the simulator.
+    pub ours: String,
+    /// The difference (or the check applied).
+    pub diff: String,
+    /// Verdict.
+    pub verdict: Verdict,
+}
+
+/// One figure group.
+#[derive(Debug, Clone)]
+pub struct Section {
+    /// Heading.
+    pub title: String,
+    /// Commands that reproduce it.
+    pub commands: Vec<String>,
+    /// Pictures (relative to the document).
+    pub plots: Vec<String>,
+    /// The table.
+    pub rows: Vec<Row>,
+    /// Where we differ and why.
+    pub notes: Vec<String>,
+}
+
+/// Three significant digits.
+pub fn sig(x: f64) -> String {
+    if !x.is_finite() {
+        return "-".into();
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    let d = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.d$}")
+}
+
+fn num_row(quantity: &str, thesis: f64, ours: f64, unit: &str, tol_rel: f64) -> Row {
+    let d = ours - thesis;
+    let rel = if thesis != 0.0 { d / thesis.abs() } else { f64::NAN };
+    let verdict = if rel.abs() <= tol_rel { Verdict::Match } else { Verdict::Differs };
+    Row {
+        quantity: quantity.into(),
+        thesis: format!("{} {unit}", sig(thesis)).trim().into(),
+        ours: format!("{} {unit}", sig(ours)).trim().into(),
+        diff: format!("{}{} ({:+.1} %, tolerance {:.0} %)", if d >= 0.0 { "+" } else { "" }, sig(d), rel * 100.0, tol_rel * 100.0),
+        verdict,
+    }
+}
+
+fn claim_row(quantity: &str, thesis: &str, ours: String, check: &str, holds: bool) -> Row {
+    Row { quantity: quantity.into(), thesis: thesis.into(), ours, diff: format!("{check}: {}", if holds { "holds" } else { "does not hold" }), verdict: if holds { Verdict::Match } else { Verdict::Differs } }
+}
+
+struct Ctx {
+    scenes: PathBuf,
+}
+
+impl Ctx {
+    fn template(&self, name: &str) -> Result<Template, String> {
+        Template::load(&self.scenes.join(name)).map_err(|e| e.to_string())
+    }
+    /// A shipped scene with one line of text replaced (for string keys the sweep cannot set).
+    fn variant(&self, name: &str, from: &str, to: &str) -> Result<Template, String> {
+        let text = std::fs::read_to_string(self.scenes.join(name)).map_err(|e| format!("{name}: {e}"))?;
+        if !text.contains(from) {
+            return Err(format!("{name}: expected {from:?} in the scene"));
+        }
+        Template::from_text(&text.replace(from, to), name).map_err(|e| e.to_string())
+    }
+    fn scene(&self, name: &str, sets: &[(&str, f64)]) -> Result<Scene, String> {
+        self.template(name)?.with(sets).map_err(|e| e.to_string())
+    }
+    fn run(&self, name: &str, sets: &[(&str, f64)]) -> Result<Summary, String> {
+        let s = self.scene(name, sets)?;
+        sim::run(&s, false).map(|r| r.0).map_err(|e| format!("{name}: {e}"))
+    }
+    fn history(&self, name: &str, sets: &[(&str, f64)]) -> Result<(Summary, Vec<Sample>), String> {
+        let s = self.scene(name, sets)?;
+        sim::run(&s, true).map_err(|e| format!("{name}: {e}"))
+    }
+    fn sweep(&self, name: &str, axes: &[(&str, f64, f64, usize, bool)]) -> Result<SweepResult, String> {
+        let t = self.template(name)?;
+        let axes = axes.iter().map(|&(k, a, b, n, log)| Axis::new(k, a, b, n, if log { Spacing::Log } else { Spacing::Linear })).collect::<Result<Vec<_>, _>>().map_err(|e| e.to_string())?;
+        let s = Sweep::new(&t, axes).map_err(|e| e.to_string())?;
+        let r = s.run(Progress::Hidden);
+        if r.failures() > 0 {
+            return Err(format!("{name}: the solver failed at {} points", r.failures()));
+        }
+        Ok(r)
+    }
+}
+
+fn obj(s: &Summary) -> f64 {
+    s.object_final_velocity.unwrap_or(f64::NAN)
+}
+
+/// Index of the value nearest `x` on an axis.
+fn near(values: &[f64], x: f64) -> usize {
+    values.iter().enumerate().min_by(|a, b| (a.1 - x).abs().total_cmp(&(b.1 - x).abs())).map_or(0, |(i, _)| i)
+}
+
+/// The command line of a sweep, as the doc prints it.
+fn sweep_cmd(scene: &str, axes: &[(&str, f64, f64, usize, bool)], metric: &str, plot: &str) -> String {
+    let mut c = format!("flinch sweep scenes/{scene}");
+    for &(k, a, b, n, log) in axes {
+        let _ = write!(c, " --vary {k}={}{a}:{b}:{n}", if log { "log:" } else { "" });
+    }
+    let _ = write!(c, " --metric {metric} --plot {plot}");
+    c
+}
+
+/// Grid sizes: coarse for the tables (and the test), fine for the pictures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Grid {
+    Table,
+    Plot,
+}
+
+fn ch3_axes(g: Grid, second: &str) -> Vec<(&'static str, f64, f64, usize, bool)> {
+    let fine = g == Grid::Plot;
+    let v = ("motion.speed", 0.05, 0.3, if fine { 26 } else { 6 }, false);
+    let other = match second {
+        "tool.mass" => ("tool.mass", 0.25, 1.25, if fine { 21 } else { 5 }, false),
+        "target.stiffness" => ("target.stiffness", 1e6, 1e8, if fine { 9 } else { 3 }, true),
+        "decoupler.spring_rate" => ("decoupler.spring_rate", 100.0, 300.0, if fine { 9 } else { 3 }, false),
+        _ => ("motion.dead_time", 0.0, 0.1, if fine { 21 } else { 5 }, false),
+    };
+    vec![v, other]
+}
+
+const CH3: &str = "figures/ch3_bistable_sweep.toml";
+
+/// Computes every section's numbers.
+pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
+    let cx = Ctx { scenes: scenes.to_path_buf() };
+    let mut out = Vec::new();
+
+    // ---- Fig. 2-3, eq 1-4
+    {
+        let free = |e: f64, mt: f64| cx.run("figures/fig2_free_tool.toml", &[("target.restitution", e), ("tool.mass", mt)]).map(|s| obj(&s));
+        let rigid = |e: f64| cx.run("figures/fig2_rigid_tool.toml", &[("target.restitution", e)]).map(|s| obj(&s));
+        let eq4 = |e: f64, mt: f64| mt * (1.0 + e) / (mt + 0.25);
+        let mut rows = vec![num_row("Fig. 2, rigid tool, e = 1: V_p (eq 1)", 2.0, rigid(1.0)?, "m/s", 0.01), num_row("Fig. 2, rigid tool, e = 0: V_p (eq 1)", 1.0, rigid(0.0)?, "m/s", 0.01)];
+        for e in [1.0, 0.5, 0.0] {
+            rows.push(num_row(&format!("Fig. 2, free tool, e = {e}: V_p (eq 4)"), eq4(e, 0.125), free(e, 0.125)?, "m/s", 0.01));
+        }
+        for mt in [0.0625, 0.25, 1.0] {
+            rows.push(num_row(&format!("Fig. 3, free tool m_t = {mt} kg, e = 1: V_p (eq 4)"), eq4(1.0, mt), free(1.0, mt)?, "m/s", 0.01));
+        }
+        out.push(Section {
+            title: "Fig. 2-3: instantaneous impact, eq 1-4".into(),
+            commands: vec![
+                sweep_cmd("figures/fig2_free_tool.toml", &[("target.restitution", 0.0, 1.0, 21, false)], "object_final_velocity", "fig2_free.svg"),
+                sweep_cmd("figures/fig2_free_tool.toml", &[("tool.mass", 0.02, 2.0, 21, true), ("target.restitution", 0.0, 1.0, 3, false)], "object_final_velocity", "fig3.svg"),
+            ],
+            plots: vec!["validation/fig2.svg".into(), "validation/fig3.svg".into()],
+            rows,
+            notes: vec!["The scenes use the `exact` damping law (chi solved for the asked e), so these rows test the momentum balance of eq 2-4, not eq 7; with eq 7 (Hunt-Crossley) e below about 0.5 cannot be reached (MODEL.md, and Fig. 24-26 below).".into()],
+        });
+    }
+
+    // ---- Fig. 13-14: compliant robot
+    {
+        let sc = "figures/fig13_compliant_robot.toml";
+        let a = cx.run("figures/fig2_rigid_tool.toml", &[("target.restitution", 1.0)])?;
+        let b = cx.run(sc, &[])?;
+        let c = cx.run(sc, &[("target.mass", 2.5)])?;
+        let d = cx.run(sc, &[("target.mass", 2.5), ("target.stiffness", 1e6)])?;
+        let rows = vec![
+            num_row("Fig. 13a, rigid robot: V_p", 2.0, obj(&a), "m/s", 0.01),
+            num_row("Fig. 13b, compliant robot (m_r + m_t = 5.35 kg): V_p", 1.94, obj(&b), "m/s", 0.02),
+            num_row("Fig. 13b: impact velocity", 0.98, b.approach_velocity.unwrap_or(f64::NAN), "m/s", 0.02),
+            num_row("Fig. 14a, m_p = 2.5 kg, k_c = 1e5: V_p", 1.88, obj(&c), "m/s", 0.03),
+            num_row("Fig. 14a: impact velocity", 0.95, c.approach_velocity.unwrap_or(f64::NAN), "m/s", 0.03),
+            claim_row("Fig. 14b, k_c = 1e6: V_p", "lower than Fig. 14a (the robot deflects)", format!("{} m/s (14a: {} m/s)", sig(obj(&d)), sig(obj(&c))), "14b < 14a", obj(&d) < obj(&c)),
+        ];
+        out.push(Section {
+            title: "Fig. 13-14: the robot's compliance".into(),
+            commands: vec![format!("flinch run scenes/{sc} --plot fig13b.svg"), "flinch validate --out docs/   (Fig. 14a/b: target.mass = 2.5, target.stiffness = 1e5 / 1e6)".into()],
+            plots: vec!["validation/fig13b.svg".into(), "validation/fig14a.svg".into(), "validation/fig14b.svg".into()],
+            rows,
+            notes: vec!["k_r and c_r of Fig. 12 are not printed; the scene uses Table 7's (2.3e5 N/m, 71 N s/m). The thesis's impact velocities below 1 m/s come from the tool vibrating after the acceleration (Fig. 11-12, configuration-dependent m_r, k_r, c_r); our one-DOF robot with Table 7's constant parameters meets the object at 0.98 m/s whatever the object (the approach does not depend on it), where the thesis's Fig. 14a run met it at 0.95 m/s. As the thesis argues, the robot then acts as a slider at constant speed, so the object leaves at about twice the impact velocity: 2 x 0.98 against the thesis's 2 x 0.95 = 1.90, which accounts for most of the Fig. 14a difference.".into()],
+        });
+    }
+
+    // ---- Fig. 16, 18: linear decoupler, k_t and k_c
+    {
+        let sc = "table2_linear.toml";
+        let at = |kt: f64, kc: f64, e: f64| cx.run(sc, &[("decoupler.stiffness", kt), ("target.stiffness", kc), ("target.restitution", e)]).map(|s| obj(&s));
+        let (a, b) = (at(10.0, 1e5, 1.0)?, at(1000.0, 1e5, 1.0)?);
+        let (c, d) = (at(150.0, 1e3, 1.0)?, at(150.0, 1e5, 1.0)?);
+        let (f, g) = (at(150.0, 1e3, 0.1)?, at(150.0, 1e5, 0.1)?);
+        let gon = cx.variant(sc, "damping_law = \"hunt-crossley\"", "damping_law = \"gonthier\"")?;
+        let gat = |kc: f64| -> Result<Summary, String> { let sc = gon.with(&[("decoupler.stiffness", 150.0), ("target.stiffness", kc), ("target.restitution", 0.1)]).map_err(|e| e.to_string())?; sim::run(&sc, false).map(|r| r.0).map_err(|e| e.to_string()) };
+        let (g3, g5) = (gat(1e3)?, gat(1e5)?);
+        let rows = vec![
+            claim_row("Fig. 16 (e = 1): V_p as k_t grows 10 -> 1000 N/m (k_c = 1e5)", "increases", format!("{} -> {} m/s", sig(a), sig(b)), "increases", b > a),
+            claim_row("Fig. 16 (e = 1): V_p as k_c grows 1e3 -> 1e5 (k_t = 150)", "decreases", format!("{} -> {} m/s", sig(c), sig(d)), "decreases", d < c),
+            claim_row("Fig. 18 (e = 0.1): V_p as k_c grows 1e3 -> 1e5 (k_t = 150)", "increases (the k_c effect inverts)", format!("{} -> {} m/s", sig(f), sig(g)), "increases", g > f),
+            claim_row("Fig. 18 with the Gonthier law (e = 0.1 really achieved)", "increases", format!("{} -> {} m/s (achieved e {} and {})", sig(obj(&g3)), sig(obj(&g5)), sig(g3.achieved_restitution.unwrap_or(f64::NAN)), sig(g5.achieved_restitution.unwrap_or(f64::NAN))), "increases", obj(&g5) > obj(&g3)),
+            claim_row("Fig. 16 vs 13a: the decoupler cuts V_p", "well below 2 m/s", format!("{} m/s at most over these points", sig([a, b, c, d].into_iter().fold(0.0, f64::max))), "< 1.5 m/s", [a, b, c, d].into_iter().all(|x| x < 1.5)),
+        ];
+        out.push(Section {
+            title: "Fig. 16 and 18: stiffness of a linear decoupler and of the contact".into(),
+            commands: vec![
+                sweep_cmd(sc, &[("decoupler.stiffness", 10.0, 1000.0, 13, true), ("target.stiffness", 1e3, 1e6, 4, true)], "object_final_velocity", "fig16.svg") + "   (e = 1: set target.restitution = 1 in a copy)",
+                "flinch validate --out docs/   (draws Fig. 16 at e = 1 and Fig. 18 at e = 0.1 as one line per k_c)".into(),
+            ],
+            plots: vec!["validation/fig16.svg".into(), "validation/fig18.svg".into()],
+            rows,
+            notes: vec![
+                "Fig. 18's e = 0.1 is asked through eq 7 as in the thesis; eq 7 achieves about 0.5 there (MODEL.md), so our Fig. 18 is really an e of about 0.5 curve, and at e = 0.5 the k_c effect keeps the Fig. 16 sign.".into(),
+                if obj(&g5) > obj(&g3) {
+                    format!("With the Gonthier law, which does reach e near 0.1 on the stiff contact, the inversion appears ({} -> {} m/s), though weaker than in the thesis's figure: the thesis's Fig. 18 is an e of about 0.1 effect that eq 7 cannot produce. (On the soft contact the decoupler keeps pushing during the long contact, so the achieved e is {} whatever the law.)", sig(obj(&g3)), sig(obj(&g5)), sig(g3.achieved_restitution.unwrap_or(f64::NAN)))
+                } else {
+                    "With the Gonthier law, which does reach e near 0.1, the inversion does not appear either: it is not reproduced. Table 2's scene brakes 16 ms after a 1 N detection; the thesis says only that the robot brakes after the collision.".into()
+                },
+            ],
+        });
+    }
+
+    // ---- Fig. 24-26: Table 2
+    {
+        let (b, bh) = cx.history("table2_bistable.toml", &[])?;
+        let l = cx.run("table2_linear.toml", &[])?;
+        let r = cx.run("table2_rigid.toml", &[])?;
+        // The tool's velocity when the first contact ends (the collision complete, Fig. 24a).
+        let tc = b.t_contact.unwrap_or(0.0);
+        let after = bh.iter().skip_while(|s| s.t < tc || s.f_contact <= 0.0).find(|s| s.f_contact <= 0.0).map_or(f64::NAN, |s| s.v_t);
+        let cut = 1.0 - obj(&b) / obj(&r);
+        let rows = vec![
+            num_row("Fig. 24a: tool velocity when the collision is over", 0.4, after, "m/s", 0.15),
+            num_row("Fig. 24a vs 26: object-velocity cut, bi-stable vs rigid tool", 51.0, cut * 100.0, "%", 0.10),
+            claim_row("Fig. 25: decoupler impulse, bi-stable vs linear", "bi-stable smaller", format!("{} vs {} N s", sig(b.decoupler_impulse), sig(l.decoupler_impulse)), "bi-stable < linear", b.decoupler_impulse < l.decoupler_impulse),
+            claim_row("Fig. 24: object velocity, bi-stable vs linear", "bi-stable smaller", format!("{} vs {} m/s", sig(obj(&b)), sig(obj(&l))), "bi-stable < linear", obj(&b) < obj(&l)),
+        ];
+        out.push(Section {
+            title: "Fig. 24-26: bi-stable, linear and rigid end-effectors against a free object (Table 2)".into(),
+            commands: vec!["flinch run scenes/table2_bistable.toml --plot fig24a.svg".into(), "flinch run scenes/table2_linear.toml --plot fig24b.svg".into(), "flinch run scenes/table2_rigid.toml --plot fig26.svg".into()],
+            plots: vec!["validation/fig24a.svg".into(), "validation/fig24b.svg".into(), "validation/fig26.svg".into()],
+            rows,
+            notes: vec!["Table 2 asks e = 0.1 through eq 7, which achieves about 0.5 (MODEL.md): the object leaves faster than the thesis's e = 0.1 would give with either end-effector, which is why the cut is about 49 % rather than 51 %. The same floor explains the tool's velocity after the collision: eq 3 gives V_t = 1 - (2/3)(1 + e) m/s, 0.27 m/s at e = 0.1 but 0 at e = 0.5; the thesis's 0.4 m/s (read off Fig. 24a) is above even the e = 0.1 value, so its decoupler must push harder during the contact than Table 2's k_b = 50 N/m does in ours.".into()],
+        });
+    }
+
+    // ---- Fig. 39-41: Tables 5-7
+    {
+        let r = cx.run("tables5-7_rigid.toml", &[])?;
+        let b = cx.run("tables5-7_bistable.toml", &[])?;
+        let f = cx.run("tables5-7_bistable_v025.toml", &[])?;
+        let ms = |x: Option<f64>| x.unwrap_or(f64::NAN) * 1e3;
+        let rows = vec![
+            num_row("Fig. 39, rigid tool: detection (25 N threshold)", 4.0, ms(r.detection_delay), "ms", 0.25),
+            num_row("Fig. 39, rigid tool: reaction time", 20.0, ms(r.reaction_time), "ms", 0.25),
+            num_row("Fig. 40, bi-stable, 0.05 m/s: reaction time", 120.0, ms(b.reaction_time), "ms", 0.10),
+            num_row("Fig. 40 vs 39: contact-force cut", 85.0, (1.0 - b.peak_contact_force / r.peak_contact_force) * 100.0, "%", 0.06),
+            claim_row("Fig. 40: working mode", "1 (no back end-stop impact)", fmt_mode(b.mode), "mode 1", b.mode == Some(1)),
+            claim_row("Fig. 41, 0.25 m/s: working mode", "3 (back end-stop before the robot stops)", fmt_mode(f.mode), "mode 3", f.mode == Some(3)),
+            claim_row("Fig. 41: reaction time", "shorter than at 0.05 m/s (120 ms)", format!("{} ms", sig(ms(f.reaction_time))), "< Fig. 40's", f.reaction_time < b.reaction_time),
+            claim_row("Fig. 41: force on the robot", "much smaller than the contact force", format!("{} N vs {} N", sig(f.peak_robot_force), sig(f.peak_contact_force)), "robot < contact / 2", f.peak_robot_force < 0.5 * f.peak_contact_force),
+        ];
+        out.push(Section {
+            title: "Fig. 39-41: rigid tool and bi-stable module against a hard surface (Tables 5-7)".into(),
+            commands: vec!["flinch run scenes/tables5-7_rigid.toml --plot fig39.svg".into(), "flinch run scenes/tables5-7_bistable.toml --plot fig40.svg".into(), "flinch run scenes/tables5-7_bistable_v025.toml --plot fig41.svg".into()],
+            plots: vec!["validation/fig39.svg".into(), "validation/fig40.svg".into(), "validation/fig41.svg".into()],
+            rows,
+            notes: vec!["Rigid-tool detection: with Table 6's k_c = 1e8 N/m^1.5 the 25 N threshold is crossed after (25 / 1e8)^(2/3) = 40 um of penetration, well under a millisecond at 0.05 m/s; 4 ms does not follow from the printed values (the thesis's sensor or contact model must have been softer or filtered). The reaction time is then detection + 16 ms, not 20 ms.".into()],
+        });
+    }
+
+    // ---- Fig. 42-46, 49: sweeps
+    {
+        let vm = cx.sweep(CH3, &ch3_axes(Grid::Table, "tool.mass"))?;
+        let vk = cx.sweep(CH3, &ch3_axes(Grid::Table, "target.stiffness"))?;
+        let vb = cx.sweep(CH3, &ch3_axes(Grid::Table, "decoupler.spring_rate"))?;
+        let vd = cx.sweep(CH3, &ch3_axes(Grid::Table, "motion.dead_time"))?;
+        let get = |r: &SweepResult, v: f64, y: f64| -> Result<Summary, String> {
+            let (i, j) = (near(&r.values[0], v), near(&r.values[1], y));
+            r.at(&[i, j]).cloned().ok_or_else(|| format!("no point at {v}, {y}"))
+        };
+        // Fig. 42: linearity of the peak contact force in V_c at m_t = 0.75.
+        let j = near(&vm.values[1], 0.75);
+        let xs = &vm.values[0];
+        let (lx, ly): (Vec<f64>, Vec<f64>) = (0..xs.len()).filter_map(|i| vm.at(&[i, j]).filter(|s| !s.stroke_exhausted).map(|s| (xs[i], s.peak_contact_force))).unzip();
+        let r2 = r_squared(&lx, &ly);
+        let m_lo = get(&vm, 0.2, 0.25)?.peak_contact_force;
+        let m_hi = get(&vm, 0.2, 1.25)?.peak_contact_force;
+        let k_lo = get(&vk, 0.2, 1e6)?.peak_contact_force;
+        let k_hi = get(&vk, 0.2, 1e8)?.peak_contact_force;
+        let b_lo = get(&vb, 0.2, 100.0)?.peak_contact_force;
+        let b_hi = get(&vb, 0.2, 300.0)?.peak_contact_force;
+        // Fig. 45: spread of the peak contact force over DT at 0.2 m/s, among points where the stroke holds.
+        let i2 = near(&vd.values[0], 0.2);
+        let held: Vec<f64> = (0..vd.values[1].len()).filter_map(|j| vd.at(&[i2, j])).filter(|s| !s.stroke_exhausted).map(|s| s.peak_contact_force).collect();
+        let spread = held.iter().copied().fold(f64::NEG_INFINITY, f64::max) / held.iter().copied().fold(f64::INFINITY, f64::min) - 1.0;
+        let corner = get(&vd, 0.25, 0.05)?;
+        let corner_ok = get(&vd, 0.25, 0.0)?;
+        let modes: Vec<Option<u8>> = [0.05, 0.2, 0.25].iter().map(|&v| get(&vm, v, 0.75).map(|s| s.mode)).collect::<Result<_, _>>()?;
+        let low = get(&vd, 0.05, 0.0)?;
+        let high = get(&vd, 0.3, 0.1)?;
+        let rows = vec![
+            claim_row("Fig. 42: peak contact force vs V_c (m_t = 0.75 kg, stroke not exhausted)", "almost linear", format!("R^2 of a straight line = {:.4} ({} speeds up to {} m/s; beyond, the stroke runs out)", r2, lx.len(), sig(lx.last().copied().unwrap_or(f64::NAN))), "R^2 > 0.98", r2 > 0.98),
+            claim_row("Fig. 42: peak contact force, m_t 0.25 -> 1.25 kg (0.2 m/s)", "grows with m_t", format!("{} -> {} N", sig(m_lo), sig(m_hi)), "grows", m_hi > m_lo),
+            claim_row("Fig. 43: peak contact force, k_c 1e6 -> 1e8 (0.2 m/s)", "grows with k_c", format!("{} -> {} N", sig(k_lo), sig(k_hi)), "grows", k_hi > k_lo),
+            claim_row("Fig. 44: peak contact force, k_b 100 -> 300 N/m (0.2 m/s)", "grows slightly", format!("{} -> {} N ({:+.1} %)", sig(b_lo), sig(b_hi), (b_hi / b_lo - 1.0) * 100.0), "grows by < 10 %", b_hi >= b_lo && b_hi / b_lo < 1.10),
+            claim_row("Fig. 45: peak contact force over DT = 0..0.1 s (0.2 m/s, stroke not exhausted)", "independent of DT", format!("spread {:.1} % over {} points", spread * 100.0, held.len()), "spread < 5 %", spread < 0.05),
+            claim_row("Fig. 45: V_c = 0.25 m/s, DT = 0.05 s", "the flange just reaches the obstacle: a small second peak", format!("stroke exhausted: {}; peak {} N vs {} N at DT = 0", corner.stroke_exhausted, sig(corner.peak_contact_force), sig(corner_ok.peak_contact_force)), "exhausted", corner.stroke_exhausted),
+            claim_row("Fig. 46: working modes at 0.05 / 0.20 / 0.25 m/s (m_t = 0.75 kg, DT = 16 ms)", "1 / 2 / 3", format!("{} / {} / {}", fmt_mode(modes[0]), fmt_mode(modes[1]), fmt_mode(modes[2])), "equal", modes == [Some(1), Some(2), Some(3)]),
+            claim_row("Fig. 49: slow and prompt (0.05 m/s, DT = 0)", "mode 1", fmt_mode(low.mode), "mode 1", low.mode == Some(1)),
+            claim_row("Fig. 49: fast and late (0.3 m/s, DT = 0.1 s)", "mode 3, the largest force on the robot", format!("mode {}, {} N", fmt_mode(high.mode), sig(high.peak_robot_force)), "mode 3", high.mode == Some(3)),
+        ];
+        let cmds = [("tool.mass", "peak_contact_force", "fig42.svg"), ("target.stiffness", "peak_contact_force", "fig43.svg"), ("decoupler.spring_rate", "peak_contact_force", "fig44.svg"), ("motion.dead_time", "peak_contact_force", "fig45.svg"), ("tool.mass", "peak_robot_force", "fig46.svg"), ("motion.dead_time", "peak_robot_force", "fig49.svg")]
+            .iter()
+            .map(|(k, m, p)| sweep_cmd(CH3, &ch3_axes(Grid::Plot, k), m, p))
+            .collect();
+        out.push(Section {
+            title: "Fig. 42-46 and 49: parametric sweeps of the bi-stable module (Ch. 3.2)".into(),
+            commands: cmds,
+            plots: ["fig42", "fig43", "fig44", "fig45", "fig46", "fig49"].iter().map(|f| format!("validation/{f}.svg")).collect(),
+            rows,
+            notes: vec![
+                format!("The table's numbers come from coarse grids ({} x {} speeds x the other key) so the freshness test stays fast; the pictures use the finer grids of the commands. scenes/figures/ch3_bistable_sweep.toml is tables5-7_bistable.toml with the flange already at V_c, so the impact speed is V_c at every swept speed (the Table 6 scene's 10 mm gap is closed while still accelerating above 0.14 m/s).", vm.values[0].len(), vm.values[1].len()),
+                "Heat maps: colour is the metric, black-and-white lines separate working modes, a red cross marks points where the flange reached the obstacle (stroke exhausted).".into(),
+            ],
+        });
+    }
+
+    // ---- Ch. 4: hydraulic vs bi-stable
+    {
+        let h70 = cx.run("table12_hydraulic_object.toml", &[])?;
+        let b70 = cx.run("table13_bistable_object.toml", &[])?;
+        let h10 = cx.run("table12_hydraulic_object_dt10.toml", &[])?;
+        let b10 = cx.run("table13_bistable_object_dt10.toml", &[])?;
+        let hs70 = cx.run("table14_hydraulic_surface.toml", &[])?;
+        let bs70 = cx.run("table15_bistable_surface.toml", &[])?;
+        let hs10 = cx.run("table14_hydraulic_surface_dt10.toml", &[])?;
+        let bs10 = cx.run("table15_bistable_surface_dt10.toml", &[])?;
+        let k_hyd = match &cx.scene("table14_hydraulic_surface.toml", &[])?.decoupler {
+            Decoupler::Hydraulic(h) => crate::plant::decoupler::hydraulic::HydraulicCylinder::new(h).k_hyd(),
+            _ => f64::NAN,
+        };
+        let k_bm = match &cx.scene("table15_bistable_surface.toml", &[])?.decoupler {
+            Decoupler::Bistable(b) => {
+                let l = (b.height * b.height + b.front_stroke * b.front_stroke).sqrt();
+                b.springs as f64 * b.spring_rate * (b.free_length - l) / l
+            }
+            _ => f64::NAN,
+        };
+        let vs = |h: &Summary, b: &Summary| format!("hydraulic {} vs bi-stable {}", sig(obj(h)), sig(obj(b)));
+        let fs = |h: &Summary, b: &Summary| format!("hydraulic {} N vs bi-stable {} N", sig(h.peak_robot_force), sig(b.peak_robot_force));
+        let rows = vec![
+            claim_row("Fig. 72-74, objects, DT = 70 ms: object velocity", "lower with the hydraulic", vs(&h70, &b70) + " m/s", "hydraulic < bi-stable", obj(&h70) < obj(&b70)),
+            claim_row("Fig. 73-74, objects, DT = 70 ms: force on the robot", "lower with the hydraulic", fs(&h70, &b70), "hydraulic < bi-stable", h70.peak_robot_force < b70.peak_robot_force),
+            claim_row("Fig. 75, objects, DT = 10 ms: object velocity", "lower with the bi-stable", vs(&h10, &b10) + " m/s", "bi-stable < hydraulic", obj(&b10) < obj(&h10)),
+            claim_row("Fig. 76, objects, DT = 10 ms: force on the robot", "still lower with the hydraulic", fs(&h10, &b10), "hydraulic < bi-stable", h10.peak_robot_force < b10.peak_robot_force),
+            claim_row("Fig. 78-79, hard surface, DT = 70 ms: force on the robot", "lower with the hydraulic", fs(&hs70, &bs70) + &format!("; hydraulic stroke exhausted: {}", hs70.stroke_exhausted), "hydraulic < bi-stable", hs70.peak_robot_force < bs70.peak_robot_force),
+            claim_row("Fig. 80, hard surface, DT = 10 ms: bi-stable switches?", "no (mode 1)", fmt_mode(bs10.mode), "mode 1", bs10.mode == Some(1)),
+            claim_row("Fig. 80, hard surface, DT = 10 ms: force on the robot", "lower with the bi-stable", fs(&hs10, &bs10), "bi-stable < hydraulic", bs10.peak_robot_force < hs10.peak_robot_force),
+            num_row("Eq 63, Table 12/14: k_hyd", 27.28, k_hyd, "N/m", 0.02),
+            num_row("Eq 64, Table 15: k_bm at the front stop", 34.0, k_bm, "N/m", 0.02),
+        ];
+        out.push(Section {
+            title: "Ch. 4: hydraulic against bi-stable (Tables 12-15), DT = 70 ms and 10 ms".into(),
+            commands: ["table12_hydraulic_object", "table13_bistable_object", "table12_hydraulic_object_dt10", "table13_bistable_object_dt10", "table14_hydraulic_surface", "table15_bistable_surface", "table14_hydraulic_surface_dt10", "table15_bistable_surface_dt10"].iter().map(|s| format!("flinch run scenes/{s}.toml --plot {s}.svg")).collect(),
+            plots: ["table12_hydraulic_object", "table13_bistable_object", "table14_hydraulic_surface", "table15_bistable_surface", "table14_hydraulic_surface_dt10", "table15_bistable_surface_dt10"].iter().map(|s| format!("validation/{s}.svg")).collect(),
+            rows,
+            notes: vec![
+                format!("Hard surface at DT = 70 ms: after detection the flange still closes 0.25 x 0.07 + 0.25^2 / 4 = 33 mm (`flinch check scenes/table14_hydraulic_surface.toml`), more than the hydraulic's 23 mm stroke, so in our run the flange reaches the surface and the robot sees {} N; the thesis's Fig. 78 shows no such impact. Either its stroke or its braking differ from Tables 12/14, or the flange-obstacle contact was not modelled. The bi-stable (47 mm) does not run out.", sig(hs70.peak_robot_force)),
+                format!("Objects, DT = 10 ms: with Table 12's piston and orifice the hydraulic's orifice term 0.5 c0 rho A_p^3 / A_o^2 v^2 is about 66 N per (m/s)^2, so its first impact at about 0.7 m/s relative speed puts {} N on the robot at either dead time, while the bi-stable's back-stop impacts at DT = 10 ms come after the robot has braked ({} N). The thesis's Fig. 76 shows the opposite order; its force scale cannot be read from the text, so we cannot say which input differs.", sig(h10.peak_robot_force), sig(b10.peak_robot_force)),
+                "Eq 63 with Table 12's values (R_p = 20 mm, p10 = 1000 Pa, V_g0 = 7.63e-5 m^3, kappa = 1.4) gives 28.97 N/m; the thesis prints 27.28 N/m (6 % lower, as if kappa were about 1.32 or V_g0 about 8.1e-5 m^3).".into(),
+            ],
+        });
+    }
+
+    // ---- Table 4 experiments
+    {
+        let b136 = cx.run("table4_bistable_136g.toml", &[])?;
+        let b246 = cx.run("table4_bistable_246g.toml", &[])?;
+        let r136 = cx.run("table4_rigid_136g.toml", &[])?;
+        let pk = |s: &Summary| s.object_peak_velocity.unwrap_or(f64::NAN);
+        let rows = vec![
+            num_row("Table 4, bi-stable, 136 g object: peak object velocity (measured 1.231 +- 0.054)", 1.231, pk(&b136), "m/s", 0.09),
+            num_row("Table 4, bi-stable, 246 g object: peak object velocity (measured 1.430 +- 0.040)", 1.430, pk(&b246), "m/s", 0.06),
+            num_row("Table 4, rigid tool, 136 g object: peak object velocity (measured 1.798 +- 0.037)", 1.798, pk(&r136), "m/s", 0.04),
+        ];
+        out.push(Section {
+            title: "Table 4: the Ch. 2 prototype against the experiments".into(),
+            commands: vec!["flinch run scenes/table4_bistable_136g.toml --plot table4_bistable_136g.svg".into(), "flinch run scenes/table4_bistable_246g.toml".into(), "flinch run scenes/table4_rigid_136g.toml".into()],
+            plots: vec!["validation/table4_bistable_136g.svg".into()],
+            rows,
+            notes: vec!["Tolerance: two measured standard deviations. With the 136 g object our tool hits the object a second time after braking has started, which our object keeps; the thesis notes that in the experiment the object had already left before braking, so the measured peak is the first impact's. With the 246 g object our first impact gives the object 1.10 m/s, below the measured 1.430 +- 0.040; we have not found why (candidates: the paddle contact's k_c and e, which Table 4 does not give for this object, and eq 7's restitution floor).".into()],
+        });
+    }
+    Ok(out)
+}
+
+fn fmt_mode(m: Option<u8>) -> String {
+    m.map_or("-".into(), |m| m.to_string())
+}
+
+/// R^2 of the least-squares line through (x, y).
+fn r_squared(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    let syy: f64 = y.iter().map(|b| (b - my) * (b - my)).sum();
+    sxy * sxy / (sxx * syy)
+}
+
+/// The document.
+pub fn markdown(sections: &[Section]) -> String {
+    let mut o = String::new();
+    let _ = writeln!(o, "# Validation: the thesis's figures side by side with Flinch\n");
+    let _ = writeln!(o, "GENERATED by `flinch validate --out docs/` (host-harness/src/validate.rs); do not edit. `cargo test -p flinch-tests --test validation` recomputes every number below and fails if this file is out of date.\n");
+    let (m, d) = sections.iter().flat_map(|s| &s.rows).fold((0, 0), |(m, d), r| if r.verdict == Verdict::Match { (m + 1, d) } else { (m, d + 1) });
+    let _ = writeln!(o, "{} comparisons: {m} match, {d} differ (each difference is explained under its table). \"Thesis\" is what the thesis states in its text or tables (values read off plots are marked as such there); \"ours\" is the simulator's, from the shipped scenes.\n", m + d);
+    for s in sections {
+        let _ = writeln!(o, "## {}\n", s.title);
+        let _ = writeln!(o, "Reproduce:\n");
+        let _ = writeln!(o, "```sh");
+        for c in &s.commands {
+            let _ = writeln!(o, "{c}");
+        }
+        let _ = writeln!(o, "```\n");
+        let _ = writeln!(o, "| quantity | thesis | ours | difference | |");
+        let _ = writeln!(o, "|---|---|---|---|---|");
+        for r in &s.rows {
+            let _ = writeln!(o, "| {} | {} | {} | {} | {} |", r.quantity, r.thesis, r.ours, r.diff, if r.verdict == Verdict::Match { "match" } else { "**differs**" });
+        }
+        let _ = writeln!(o);
+        for n in &s.notes {
+            let _ = writeln!(o, "- {n}");
+        }
+        let _ = writeln!(o);
+        for p in &s.plots {
+            let _ = writeln!(o, "![{p}]({p})");
+        }
+        let _ = writeln!(o);
+    }
+    o
+}
+
+/// Every picture file the document refers to, relative to the document.
+pub fn plots(sections: &[Section]) -> Vec<String> {
+    sections.iter().flat_map(|s| s.plots.clone()).collect()
+}
+
+/// Keeps every n-th sample (and every sample with a nonzero contact force, so peaks stay), to keep
+/// the committed SVGs small.
+fn thin(h: &[Sample], n: usize) -> Vec<Sample> {
+    h.iter().enumerate().filter(|(i, s)| i % n == 0 || s.f_contact > 0.0).map(|(_, s)| *s).collect()
+}
+
+/// Draws every picture into `dir` (the `validation/` folder).
+pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let cx = Ctx { scenes: scenes.to_path_buf() };
+    let history = |name: &str, sets: &[(&str, f64)], file: &str| -> Result<(), String> {
+        let sc = cx.scene(name, sets)?;
+        let (s, h) = sim::run(&sc, true).map_err(|e| format!("{name}: {e}"))?;
+        let object = matches!(sc.target.kind, crate::scene::TargetKind::Object { .. });
+        report::plot::draw(&dir.join(file), &s, &thin(&h, 4), object, sc.robot.is_none())
+    };
+    // Fig. 2: V_p against e, free and rigid tool, eq 1 and eq 4 dashed.
+    {
+        let free = cx.sweep("figures/fig2_free_tool.toml", &[("target.restitution", 0.0, 1.0, 21, false)])?;
+        let rigid = cx.sweep("figures/fig2_rigid_tool.toml", &[("target.restitution", 0.0, 1.0, 21, false)])?;
+        let es = &free.values[0];
+        let series = vec![
+            Series { name: "rigid tool, simulated".into(), points: es.iter().copied().zip(rigid.metric("object_final_velocity")).collect(), color: PALETTE[1], style: Style::Line },
+            Series { name: "eq 1: (1 + e) v_t".into(), points: es.iter().map(|&e| (e, 1.0 + e)).collect(), color: PALETTE[5], style: Style::Dashed },
+            Series { name: "free tool, simulated".into(), points: es.iter().copied().zip(free.metric("object_final_velocity")).collect(), color: PALETTE[0], style: Style::Line },
+            Series { name: "eq 4: m_t (1 + e) v_t / (m_t + m_p)".into(), points: es.iter().map(|&e| (e, 0.125 * (1.0 + e) / 0.375)).collect(), color: PALETTE[3], style: Style::Dashed },
+        ];
+        splot::lines(&dir.join("fig2.svg"), "Fig. 2: object velocity after the impact against e (m_t = 0.125 kg, m_p = 0.25 kg, v_t = 1 m/s)", &XAxis { label: "e".into(), log: false }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, marks: vec![], y_log: false }])?;
+    }
+    // Fig. 3: V_p against m_t for three e.
+    {
+        let r = cx.sweep("figures/fig2_free_tool.toml", &[("tool.mass", 0.02, 2.0, 21, true), ("target.restitution", 0.0, 1.0, 3, false)])?;
+        let mut series = Vec::new();
+        for (j, &e) in r.values[1].iter().enumerate() {
+            let pts: Vec<(f64, f64)> = r.values[0].iter().enumerate().map(|(i, &m)| (m, r.at(&[i, j]).map_or(f64::NAN, obj))).collect();
+            series.push(Series { name: format!("e = {e}, simulated"), points: pts, color: PALETTE[j], style: Style::Line });
+            series.push(Series { name: format!("e = {e}, eq 4"), points: r.values[0].iter().map(|&m| (m, m * (1.0 + e) / (m + 0.25))).collect(), color: PALETTE[j], style: Style::Dashed });
+        }
+        splot::lines(&dir.join("fig3.svg"), "Fig. 3: object velocity against the moving mass (free tool, m_p = 0.25 kg)", &XAxis { label: "m_t [kg]".into(), log: true }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, marks: vec![], y_log: false }])?;
+    }
+    history("figures/fig13_compliant_robot.toml", &[], "fig13b.svg")?;
+    history("figures/fig13_compliant_robot.toml", &[("target.mass", 2.5)], "fig14a.svg")?;
+    history("figures/fig13_compliant_robot.toml", &[("target.mass", 2.5), ("target.stiffness", 1e6)], "fig14b.svg")?;
+    // Fig. 16 / 18: V_p against k_t, one line per k_c.
+    for (e, file, title) in [(1.0, "fig16.svg", "Fig. 16: e = 1"), (0.1, "fig18.svg", "Fig. 18: e = 0.1 asked (eq 7 achieves about 0.5)")] {
+        let axes = vec![Axis::new("decoupler.stiffness", 10.0, 1000.0, 13, Spacing::Log).map_err(|e| e.to_string())?, Axis::new("target.stiffness", 1e3, 1e6, 4, Spacing::Log).map_err(|e| e.to_string())?];
+        let t = cx.template("table2_linear.toml")?.with_base(&[("target.restitution", e)]).map_err(|e| e.to_string())?;
+        let r = Sweep::new(&t, axes).map_err(|e| e.to_string())?.run(Progress::Hidden);
+        let series: Vec<Series> = r.values[1].iter().enumerate().map(|(j, &kc)| Series { name: format!("k_c = {kc:.0e} N/m^1.5"), points: r.values[0].iter().enumerate().map(|(i, &kt)| (kt, r.at(&[i, j]).map_or(f64::NAN, obj))).collect(), color: PALETTE[j], style: Style::Line }).collect();
+        splot::lines(&dir.join(file), &format!("{title}: object velocity against k_t (zeta = 1, Table 2 masses, v_t = 1 m/s)"), &XAxis { label: "k_t [N/m]".into(), log: true }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, marks: vec![], y_log: false }])?;
+    }
+    history("table2_bistable.toml", &[], "fig24a.svg")?;
+    history("table2_linear.toml", &[], "fig24b.svg")?;
+    history("table2_rigid.toml", &[], "fig26.svg")?;
+    history("tables5-7_rigid.toml", &[], "fig39.svg")?;
+    history("tables5-7_bistable.toml", &[], "fig40.svg")?;
+    history("tables5-7_bistable_v025.toml", &[], "fig41.svg")?;
+    for (k, m, f) in [("tool.mass", "peak_contact_force", "fig42.svg"), ("target.stiffness", "peak_contact_force", "fig43.svg"), ("decoupler.spring_rate", "peak_contact_force", "fig44.svg"), ("motion.dead_time", "peak_contact_force", "fig45.svg"), ("tool.mass", "peak_robot_force", "fig46.svg"), ("motion.dead_time", "peak_robot_force", "fig49.svg")] {
+        let r = cx.sweep(CH3, &ch3_axes(Grid::Plot, k))?;
+        splot::draw(&dir.join(f), &r, m)?;
+    }
+    for s in ["table12_hydraulic_object", "table13_bistable_object", "table14_hydraulic_surface", "table15_bistable_surface", "table14_hydraulic_surface_dt10", "table15_bistable_surface_dt10", "table4_bistable_136g"] {
+        history(&format!("{s}.toml"), &[], &format!("{s}.svg"))?;
+    }
+    Ok(())
+}
+
+/// Runs `flinch validate`.
+pub fn run(a: &ValidateArgs) -> Result<(), String> {
+    let sections = tables(&a.scenes)?;
+    let md = markdown(&sections);
+    if a.check {
+        print!("{md}");
+        return Ok(());
+    }
+    draw_all(&a.scenes, &a.out.join("validation"))?;
+    let path = a.out.join("validation.md");
+    std::fs::write(&path, &md).map_err(|e| format!("{}: {e}", path.display()))?;
+    let differ = sections.iter().flat_map(|s| &s.rows).filter(|r| r.verdict == Verdict::Differs).count();
+    eprintln!("{}: {} sections, {} comparisons, {differ} differ; pictures in {}", path.display(), sections.len(), sections.iter().map(|s| s.rows.len()).sum::<usize>(), a.out.join("validation").display());
+    Ok(())
+}
