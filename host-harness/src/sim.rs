@@ -193,6 +193,8 @@ pub struct Simulation {
     warnings: Vec<String>,
     /// Contact and robot-force magnitude at the end of the last step (t, (N, N)).
     last_end: (f64, (f64, f64)),
+    /// s' at the end of the last step, m/s.
+    last_end_s_dot: f64,
     /// Relative accuracy the in-step peak search stops at.
     peak_rtol: f64,
     fidelity: Fidelity,
@@ -302,19 +304,29 @@ impl Hybrid<N, E> for Simulation {
     }
 
     fn on_step(&mut self, t0: f64, t1: f64, y1: &State, dense: &dyn Fn(f64) -> State) {
-        if let Some(dt) = self.record_every {
-            while self.next_record <= t1 {
-                let tr = self.next_record.max(t0);
-                let y = if tr >= t1 { *y1 } else { dense(tr) };
-                let (k, f) = self.observe(tr, &y);
-                self.history.push(sample(tr, &k, &f));
-                self.next_record += dt;
+        match self.record_every {
+            // output_interval = 0: every step's end (adding 0 to next_record would never end).
+            Some(dt) if dt <= 0.0 => {
+                let (k, f) = self.observe(t1, y1);
+                self.history.push(sample(t1, &k, &f));
             }
+            Some(dt) => {
+                while self.next_record <= t1 {
+                    let tr = self.next_record.max(t0);
+                    let y = if tr >= t1 { *y1 } else { dense(tr) };
+                    let (k, f) = self.observe(tr, &y);
+                    self.history.push(sample(tr, &k, &f));
+                    self.next_record += dt;
+                }
+            }
+            None => {}
         }
         let (k, f) = self.observe(t1, y1);
         let at1 = (f.contact, f.robot.abs());
         // Peaks fall between step ends: while a contact is active, search the step's interpolant too.
-        if t1 > t0 && (self.in_contact || self.on_back) {
+        // On the front stop only while the tool moves against it (an impact), not at rest there.
+        let front_impact = self.on_front && (k.s_dot.abs() > 1e-4 || self.last_end_s_dot.abs() > 1e-4);
+        if t1 > t0 && (self.in_contact || self.on_back || front_impact) {
             let at0 = if self.last_end.0 == t0 { self.last_end.1 } else {
                 let f0 = self.observe(t0, &dense(t0)).1;
                 (f0.contact, f0.robot.abs())
@@ -324,6 +336,7 @@ impl Hybrid<N, E> for Simulation {
             self.peak_robot = self.peak_robot.max(r);
         }
         self.last_end = (t1, at1);
+        self.last_end_s_dot = k.s_dot;
         self.peak_contact = self.peak_contact.max(f.contact);
         self.peak_robot = self.peak_robot.max(f.robot.abs());
         self.peak_object_v = self.peak_object_v.max(k.vp);
@@ -356,18 +369,33 @@ fn refine_max(f: impl Fn(f64) -> f64, ts: [f64; 5], fs: [f64; 5], rtol: f64) -> 
             (i, best) = (k, fs[k]);
         }
     }
-    if i == 0 || i == 4 {
-        return best;
-    }
-    let (mut a, mut fa, mut b, mut fb, mut c, mut fcc) = (ts[i - 1], fs[i - 1], ts[i], fs[i], ts[i + 1], fs[i + 1]);
-    for _ in 0..6 {
-        let p = (b - a) * (fb - fcc);
+    let vertex = |a: f64, fa: f64, b: f64, fb: f64, c: f64, fc: f64| {
+        let p = (b - a) * (fb - fc);
         let q = (b - c) * (fb - fa);
         let den = p - q;
-        if den == 0.0 {
-            break;
+        if den == 0.0 { f64::NAN } else { b - 0.5 * ((b - a) * p - (b - c) * q) / den }
+    };
+    let (mut a, mut fa, mut b, mut fb, mut c, mut fcc);
+    if i == 0 || i == 4 {
+        // The largest sample is an end of the step: a peak just inside it would be missed by this
+        // step and the next alike. The parabola through the three samples nearest that end says
+        // whether one is there.
+        let j = if i == 0 { 1 } else { 3 };
+        let x = vertex(ts[j - 1], fs[j - 1], ts[j], fs[j], ts[j + 1], fs[j + 1]);
+        let (lo, hi) = if i == 0 { (ts[0], ts[1]) } else { (ts[3], ts[4]) };
+        if !(x > lo && x < hi) {
+            return best;
         }
-        let x = b - 0.5 * ((b - a) * p - (b - c) * q) / den;
+        let fx = f(x);
+        if fx <= best {
+            return best;
+        }
+        (a, fa, b, fb, c, fcc) = (lo, if i == 0 { fs[0] } else { fs[3] }, x, fx, hi, if i == 0 { fs[1] } else { fs[4] });
+    } else {
+        (a, fa, b, fb, c, fcc) = (ts[i - 1], fs[i - 1], ts[i], fs[i], ts[i + 1], fs[i + 1]);
+    }
+    for _ in 0..8 {
+        let x = vertex(a, fa, b, fb, c, fcc);
         if !(x > a && x < c) || x == b {
             break;
         }
@@ -446,6 +474,7 @@ impl Simulation {
             history: Vec::new(),
             warnings,
             last_end: (f64::NAN, (0.0, 0.0)),
+            last_end_s_dot: 0.0,
             fidelity: scene.solver.fidelity,
             simplified,
             peak_rtol: scene.solver.rtol.max(1e-12),
