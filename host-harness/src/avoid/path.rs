@@ -9,6 +9,7 @@
 
 use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, Watchdog};
 use flinch_firmware::avoidance::num::I16F16;
+use flinch_hal_sim::serial::SimSerial;
 
 use super::calib::{preprocess, zigzag, Calibration};
 use super::depth::{render, Rng};
@@ -62,11 +63,14 @@ impl StepEngine for RefEngine {
     }
 }
 
-/// The firmware as on the target, in number type `R` with Gaussian `G`: frames through a
-/// [`Receiver`], truncated-window field, controller, weights-age watchdog.
+/// The firmware as on the target, in number type `R` with Gaussian `G`: frames written by the host
+/// onto a `hal-sim` serial line and polled by the firmware's [`Receiver`] (as on the MCU),
+/// truncated-window field, controller, weights-age watchdog.
 pub struct FwEngine<R, G> {
     ctl: Controller<R>,
     rx: Box<Receiver<R>>,
+    /// The host's end of the line and the MCU's.
+    line: (SimSerial, SimSerial),
     gauss: G,
     watchdog: Watchdog,
 }
@@ -77,6 +81,7 @@ impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
         Ok(FwEngine {
             ctl: Controller::new(gains(scene)?),
             rx: Box::new(Receiver::new(200, 20)),
+            line: SimSerial::pair(),
             gauss,
             watchdog: Watchdog {
                 slow_after_ms: (3.0 * scene.frame_period_s * 1e3) as u32,
@@ -87,12 +92,15 @@ impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
 }
 
 impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
-    fn new_field(&mut self, field: &Field, seq: u32, now_ms: u32) -> Result<(), String> {
-        self.rx.feed(&field.to_frame(seq, 0)?, now_ms);
+    fn new_field(&mut self, field: &Field, seq: u32, _now_ms: u32) -> Result<(), String> {
+        // Sent now; the firmware reads it from the line on its next step.
+        let frame = field.to_frame(seq, 0)?;
+        embedded_io::Write::write_all(&mut self.line.0, &frame).map_err(|e| format!("serial line: {e:?}"))?;
         Ok(())
     }
     fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32) -> [f64; 2] {
-        self.rx.tick(now_ms);
+        // Bounded per call, as on the MCU: what is left is read on the next steps.
+        let _ = self.rx.poll(&mut self.line.1, now_ms);
         let q = R::from_f64;
         let s = fw::sample(self.rx.grid(), &self.gauss, q(p[0]), q(p[1]));
         let wd = self.watchdog.factor::<R>(self.rx.weights_age_ms(now_ms));
