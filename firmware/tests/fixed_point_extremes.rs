@@ -53,12 +53,35 @@ fn velocity_estimate_saturates_at_full_speed_with_the_right_sign() {
     raw.set(u16::MAX);
     let up = s.sample(Micros(1));
     assert_eq!(up.velocity_um_per_s, mm_to_um(Mm::MAX), "saturated high");
-    raw.set(0);
-    let down = s.sample(Micros(2));
-    assert_eq!(down.velocity_um_per_s, mm_to_um(Mm::MIN), "saturated low, not wrapped to positive");
     // The same timestamp twice: no division by zero, the estimate is kept.
-    let same = s.sample(Micros(2));
-    assert_eq!(same.velocity_um_per_s, down.velocity_um_per_s);
+    let same = s.sample(Micros(1));
+    assert_eq!(same.velocity_um_per_s, up.velocity_um_per_s);
+    // Full scale down from rest: saturated low, not wrapped to positive.
+    let raw = Cell::new(u16::MAX);
+    let mut s = AnalogTravel::new(Raw(&raw), cfg);
+    s.sample(Micros(0));
+    raw.set(0);
+    assert_eq!(s.sample(Micros(1)).velocity_um_per_s, mm_to_um(Mm::MIN));
+}
+
+/// Found by this suite, left to the firmware's owner (the issue forbids changing firmware
+/// behaviour here): from a saturated +full-scale estimate, a full-scale reversal in one tick gives
+/// -1 um/s instead of the saturated -full scale, because `v_new - v` saturates at I16F16::MIN and
+/// adding it back to v = MAX lands on -1 LSB. Only a glitch of more than 32 m/s can get there (the
+/// plausibility window and 2 m/s speeds keep real readings far below), and the stroke budget then
+/// falls back on the configured speed. Fix: form `v + ((v_new - v) >> shift)` in i64 and clamp.
+#[test]
+#[ignore = "known firmware quirk, see the doc comment; run with --ignored"]
+fn full_scale_reversal_saturates_low() {
+    let raw = Cell::new(0u16);
+    let mut cfg = open_window(AnalogConfig::linear_12bit(0, Mm::MAX, Mm::from_num(5)));
+    cfg.velocity_shift = 0;
+    let mut s = AnalogTravel::new(Raw(&raw), cfg);
+    s.sample(Micros(0));
+    raw.set(u16::MAX);
+    s.sample(Micros(1));
+    raw.set(0);
+    assert_eq!(s.sample(Micros(2)).velocity_um_per_s, mm_to_um(Mm::MIN));
 }
 
 #[test]
