@@ -2,8 +2,9 @@
 //!
 //! Layout: `scene` reads and validates scene files; `plant` holds one physical element per file;
 //! `solver` integrates; `sim` runs a scene and summarises it; `report` prints, plots and writes
-//! what a run produced; `avoid` is collision avoidance (Ch. 5).
+//! what a run produced; `avoid` is collision avoidance (Ch. 5); `bench` is the speed/accuracy study (`flinch bench`).
 pub mod avoid;
+pub mod bench;
 pub mod check;
 pub mod design;
 pub mod hil;

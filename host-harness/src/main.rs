@@ -20,6 +20,9 @@ enum Command {
     Hil(HilArgs),
     /// Check that the decoupler's stroke absorbs the stopping distance, and confirm by simulation.
     Check(CheckArgs),
+    /// Speed against accuracy: every scene over methods and tolerances against the reference, the
+    /// firmware's fixed point against f64; CSV tables and a Pareto plot (docs/accuracy.md).
+    Bench(BenchArgs),
     /// Collision avoidance (Ch. 5): fit the depth image, run the potential field, report the path.
     Avoid(flinch_harness::avoid::AvoidArgs),
     /// Run a scene over a grid of one or two of its keys (all cores): CSV and a line chart or heat map.
@@ -78,6 +81,24 @@ struct CheckArgs {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Scene files (default: every scenes/*.toml except avoid_*).
+    scenes: Vec<PathBuf>,
+    /// Directory the shipped scenes are read from when none is given.
+    #[arg(long, value_name = "DIR", default_value = "scenes")]
+    scenes_dir: PathBuf,
+    /// Output directory for runs.csv, summary.csv, pareto.svg and fixed_point.csv.
+    #[arg(long, value_name = "DIR", default_value = "target/bench")]
+    out: PathBuf,
+    /// Timed repetitions of every configuration (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+    /// A shorter sweep.
+    #[arg(long)]
+    quick: bool,
 }
 
 fn write_outputs(out: &Output, sc: &scene::Scene, summary: &sim::Summary, history: &[sim::Sample]) -> Result<(), String> {
@@ -165,6 +186,7 @@ fn main() -> ExitCode {
         Command::Run(a) => run(a).map(|_| true),
         Command::Hil(a) => hil_cmd(a).map(|_| true),
         Command::Check(a) => check_cmd(a),
+        Command::Bench(a) => flinch_harness::bench::run(&flinch_harness::bench::Options { scenes: a.scenes.clone(), scenes_dir: a.scenes_dir.clone(), out: a.out.clone(), repeats: a.repeats, quick: a.quick }).map(|_| true),
         Command::Avoid(a) => flinch_harness::avoid::run(a).map(|_| true),
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a).map(|_| true),
         Command::Design(a) => flinch_harness::design::run(a),
