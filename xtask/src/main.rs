@@ -7,7 +7,9 @@
 //!   3. QEMU self-test: the `qemu` binary in `qemu-system-arm -machine mps2-an386` over semihosting,
 //!      its output compared with `firmware/qemu/expected.txt` (skipped without `qemu-system-arm`);
 //!   4. instruction count: the self-test's `icount:` line, `pend_to_stop <= 100` (issue 3);
-//!   5. size: flash and static RAM of the release `board` ELF, under 32 KiB / 8 KiB.
+//!   5. size: flash and static RAM of the release `board` ELF, under 32 KiB / 8 KiB;
+//!   6. avoidance step cost: `firmware/avoid-cost` in QEMU, at most 5,000 instructions per step on
+//!      a 15 x 15 grid for every number type (issue 4).
 //!
 //!   Exits non-zero if any stage failed; skipped stages do not fail the run.
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
@@ -87,7 +89,8 @@ fn test() -> ExitCode {
         let why = "no firmware build".to_string();
         results.push(("qemu self-test", Outcome::Skip(why.clone())));
         results.push(("instruction count", Outcome::Skip(why.clone())));
-        results.push(("size", Outcome::Skip(why)));
+        results.push(("size", Outcome::Skip(why.clone())));
+        results.push(("avoidance step cost", Outcome::Skip(why)));
     } else {
         if which("qemu-system-arm").is_none() {
             println!("SKIPPED on-target part: qemu-system-arm not found");
@@ -127,6 +130,17 @@ fn test() -> ExitCode {
                     s.flash, FLASH_LIMIT, s.ram, RAM_LIMIT
                 )),
                 Err(e) => Outcome::Fail(e),
+            },
+        ));
+        results.push((
+            "avoidance step cost",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match run_avoid_cost().and_then(|out| check_avoid_cost(&out)) {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
             },
         ));
     }
@@ -234,6 +248,66 @@ struct QemuRun {
 
 /// Run the QEMU self-test ELF: AN386 (Cortex-M4), semihosting for output and exit status, and
 /// `-icount shift=6` (64 ns of virtual time per instruction) for the instruction count.
+/// Instructions per avoidance step in QEMU (`firmware/avoid-cost`, its own crate whose runner is
+/// `qemu-system-arm ... -icount shift=6`); prints what it measured.
+fn run_avoid_cost() -> Result<String, String> {
+    let dir = repo_root().join("firmware/avoid-cost");
+    let mut child = cargo()
+        .args(["run", "--release", "--quiet"])
+        .current_dir(&dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .map_err(|e| format!("could not run cargo in {}: {e}", dir.display()))?;
+    // The build comes first: give it the build's time on top of QEMU's.
+    let limit = QEMU_TIMEOUT * 10;
+    let start = Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(s)) => break s,
+            Ok(None) if start.elapsed() > limit => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!("avoid-cost did not finish within {} s", limit.as_secs()));
+            }
+            Ok(None) => sleep(Duration::from_millis(50)),
+            Err(e) => return Err(format!("waiting for avoid-cost: {e}")),
+        }
+    };
+    let mut stdout = String::new();
+    if let Some(mut out) = child.stdout.take() {
+        use std::io::Read;
+        out.read_to_string(&mut stdout).map_err(|e| format!("reading avoid-cost output: {e}"))?;
+    }
+    print!("{stdout}");
+    if !status.success() {
+        return Err(format!("avoid-cost (cargo run --release in firmware/avoid-cost) exited with {status}"));
+    }
+    Ok(stdout)
+}
+
+/// Issue 4's target: at most 5,000 instructions per step for a 15 x 15 grid, in every number type.
+fn check_avoid_cost(out: &str) -> Result<String, String> {
+    const LIMIT: u32 = 5_000;
+    let mut worst: Option<(u32, String)> = None;
+    for line in out.lines().filter(|l| l.starts_with("avoid_cost grid=15x15")) {
+        let max = line
+            .split_whitespace()
+            .find_map(|w| w.strip_prefix("max="))
+            .and_then(|v| v.parse::<u32>().ok())
+            .ok_or_else(|| format!("no max= in avoid-cost line: {line}"))?;
+        if worst.as_ref().map_or(true, |(m, _)| max > *m) {
+            worst = Some((max, line.to_string()));
+        }
+    }
+    match worst {
+        None => Err("avoid-cost printed no 15x15 measurement".into()),
+        Some((m, line)) if m > LIMIT => Err(format!("{m} instructions per step > {LIMIT}: {line}")),
+        Some((m, _)) => Ok(format!("worst 15 x 15 variant {m} <= {LIMIT} instructions per step (instruction count, not cycles)")),
+    }
+}
+
 fn run_qemu() -> Result<QemuRun, String> {
     let elf = elf_path("qemu");
     let mut child = Command::new("qemu-system-arm")
