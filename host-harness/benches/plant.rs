@@ -1,6 +1,7 @@
 //! The plant's speed: the Tables 5-7 bi-stable scene (0.6 s simulated) at default accuracy, and
 //! its rigid twin. Target: at least 1,000 times faster than real time on one core, i.e. under
-//! 600 us a run. Prints steps and RHS evaluations beside the timings.
+//! 600 us a run. Prints steps and RHS evaluations beside the timings. The whole trade study over
+//! every scene and method is `flinch bench` (docs/accuracy.md); this is the quick check.
 //!
 //! Run: `cargo bench -p flinch-harness --bench plant`
 

@@ -26,7 +26,8 @@ use std::time::Instant;
 /// What to run and where to write it.
 #[derive(Debug, Clone)]
 pub struct Options {
-    /// Scene files; empty means every `*.toml` of `scenes_dir` except `avoid_*`.
+    /// Scene files; empty means every `*.toml` of `scenes_dir` and `scenes_dir/extremes` except
+    /// `avoid_*`.
     pub scenes: Vec<PathBuf>,
     /// Where the shipped scenes are.
     pub scenes_dir: PathBuf,
@@ -469,7 +470,17 @@ pub fn pareto_svg(path: &Path, aggs: &[Aggregate]) -> Result<(), String> {
 
 /// The whole study: every scene, the CSVs, the plot, the fixed-point table. Prints a summary.
 pub fn run(o: &Options) -> Result<(), String> {
-    let files = if o.scenes.is_empty() { shipped_scenes(&o.scenes_dir)? } else { o.scenes.clone() };
+    let files = if o.scenes.is_empty() {
+        // The thesis scenes, and the study scenes of docs/accuracy.md under extremes/.
+        let mut v = shipped_scenes(&o.scenes_dir)?;
+        let extra = o.scenes_dir.join("extremes");
+        if extra.is_dir() {
+            v.extend(shipped_scenes(&extra)?);
+        }
+        v
+    } else {
+        o.scenes.clone()
+    };
     std::fs::create_dir_all(&o.out).map_err(|e| format!("{}: {e}", o.out.display()))?;
     let configs = sweep(o.quick);
     let mut rows = Vec::new();

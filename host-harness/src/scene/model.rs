@@ -263,7 +263,7 @@ pub struct SolverSettings {
 /// The accuracy a scene asks for (docs/accuracy.md gives what each costs and buys).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Fidelity {
-    /// Looser tolerance, and the simplifications that are safe for the scene.
+    /// Looser tolerance, and the simplifications that are safe for the scene (`sim::simplified`).
     Fast,
     /// The measured default: within 1 % of the reference on peak forces and detection time.
     Default,
