@@ -248,20 +248,14 @@ struct QemuRun {
 
 /// Run the QEMU self-test ELF: AN386 (Cortex-M4), semihosting for output and exit status, and
 /// `-icount shift=6` (64 ns of virtual time per instruction) for the instruction count.
-/// Instructions per avoidance step in QEMU (`firmware/avoid-cost`, its own crate whose runner is
-/// `qemu-system-arm ... -icount shift=6`); prints what it measured.
-fn run_avoid_cost() -> Result<String, String> {
-    let dir = repo_root().join("firmware/avoid-cost");
-    let mut child = cargo()
-        .args(["run", "--release", "--quiet"])
-        .current_dir(&dir)
+/// Runs `cmd` with stdout captured (stderr passed through), killing it after `limit`.
+fn run_captured(mut cmd: Command, what: &str, limit: Duration) -> Result<(String, std::process::ExitStatus), String> {
+    let mut child = cmd
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()
-        .map_err(|e| format!("could not run cargo in {}: {e}", dir.display()))?;
-    // The build comes first: give it the build's time on top of QEMU's.
-    let limit = QEMU_TIMEOUT * 10;
+        .map_err(|e| format!("could not start {what}: {e}"))?;
     let start = Instant::now();
     let status = loop {
         match child.try_wait() {
@@ -269,17 +263,27 @@ fn run_avoid_cost() -> Result<String, String> {
             Ok(None) if start.elapsed() > limit => {
                 let _ = child.kill();
                 let _ = child.wait();
-                return Err(format!("avoid-cost did not finish within {} s", limit.as_secs()));
+                return Err(format!("{what} did not exit within {} s", limit.as_secs()));
             }
-            Ok(None) => sleep(Duration::from_millis(50)),
-            Err(e) => return Err(format!("waiting for avoid-cost: {e}")),
+            Ok(None) => sleep(Duration::from_millis(20)),
+            Err(e) => return Err(format!("waiting for {what}: {e}")),
         }
     };
     let mut stdout = String::new();
     if let Some(mut out) = child.stdout.take() {
         use std::io::Read;
-        out.read_to_string(&mut stdout).map_err(|e| format!("reading avoid-cost output: {e}"))?;
+        out.read_to_string(&mut stdout).map_err(|e| format!("reading {what} output: {e}"))?;
     }
+    Ok((stdout, status))
+}
+
+/// Instructions per avoidance step in QEMU (`firmware/avoid-cost`, its own crate whose runner is
+/// `qemu-system-arm ... -icount shift=6`); prints what it measured.
+fn run_avoid_cost() -> Result<String, String> {
+    let mut cmd = cargo();
+    cmd.args(["run", "--release", "--quiet"]).current_dir(repo_root().join("firmware/avoid-cost"));
+    // The build comes first: give it the build's time on top of QEMU's.
+    let (stdout, status) = run_captured(cmd, "avoid-cost (cargo run --release in firmware/avoid-cost)", QEMU_TIMEOUT * 10)?;
     print!("{stdout}");
     if !status.success() {
         return Err(format!("avoid-cost (cargo run --release in firmware/avoid-cost) exited with {status}"));
@@ -309,34 +313,11 @@ fn check_avoid_cost(out: &str) -> Result<String, String> {
 }
 
 fn run_qemu() -> Result<QemuRun, String> {
-    let elf = elf_path("qemu");
-    let mut child = Command::new("qemu-system-arm")
-        .args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
+    let mut cmd = Command::new("qemu-system-arm");
+    cmd.args(["-cpu", "cortex-m4", "-machine", "mps2-an386", "-nographic", "-monitor", "none"])
         .args(["-semihosting-config", "enable=on,target=native", "-icount", "shift=6", "-kernel"])
-        .arg(&elf)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
-    let start = Instant::now();
-    let status = loop {
-        match child.try_wait() {
-            Ok(Some(s)) => break s,
-            Ok(None) if start.elapsed() > QEMU_TIMEOUT => {
-                let _ = child.kill();
-                let _ = child.wait();
-                return Err(format!("qemu did not exit within {} s", QEMU_TIMEOUT.as_secs()));
-            }
-            Ok(None) => sleep(Duration::from_millis(20)),
-            Err(e) => return Err(format!("waiting for qemu: {e}")),
-        }
-    };
-    let mut stdout = String::new();
-    if let Some(mut out) = child.stdout.take() {
-        use std::io::Read;
-        out.read_to_string(&mut stdout).map_err(|e| format!("reading qemu output: {e}"))?;
-    }
+        .arg(elf_path("qemu"));
+    let (stdout, status) = run_captured(cmd, "qemu-system-arm", QEMU_TIMEOUT)?;
     Ok(QemuRun { stdout, success: status.success() })
 }
 

@@ -21,7 +21,8 @@ pub fn draw(path: &Path, summary: &Summary, history: &[Sample], object: bool, ri
 
 type DrawResult = Result<(), Box<dyn std::error::Error>>;
 
-fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+/// The range of the finite values, padded by 5 % (a constant series gets a band around it).
+pub(crate) fn finite_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite()) {
         lo = lo.min(v);
@@ -30,7 +31,11 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     if !lo.is_finite() {
         return (0.0, 1.0);
     }
-    let pad = ((hi - lo) * 0.05).max(1e-9);
+    if hi - lo < 1e-12 * lo.abs().max(1.0) {
+        let pad = lo.abs().max(1.0) * 0.05;
+        return (lo - pad, hi + pad);
+    }
+    let pad = (hi - lo) * 0.05;
     (lo - pad, hi + pad)
 }
 
@@ -55,7 +60,7 @@ where
     if object {
         vel.push(("x_p' object", RGBColor(0, 150, 60), Box::new(|x: &Sample| x.v_p)));
     }
-    let (lo, hi) = range(vel.iter().flat_map(|(_, _, f)| h.iter().map(f)));
+    let (lo, hi) = finite_range(vel.iter().flat_map(|(_, _, f)| h.iter().map(f)));
     let mut chart = ChartBuilder::on(&top)
         .caption(format!("{}: velocities", s.scene), ("sans-serif", 18))
         .margin(10).x_label_area_size(35).y_label_area_size(60)
@@ -74,7 +79,7 @@ where
     chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
 
     // (b) forces, drawn positive as the thesis does (Fig. 39b, 40b)
-    let (lo, hi) = range(h.iter().flat_map(|x| [x.f_contact, x.f_robot.abs(), 0.0]));
+    let (lo, hi) = finite_range(h.iter().flat_map(|x| [x.f_contact, x.f_robot.abs(), 0.0]));
     let mut chart = ChartBuilder::on(&bottom)
         .caption("contact force and force on the robot", ("sans-serif", 18))
         .margin(10).x_label_area_size(35).y_label_area_size(60)

@@ -4,6 +4,7 @@
 
 use super::{Spacing, SweepResult};
 use plotters::coord::Shift;
+use crate::report::plot::finite_range;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -97,22 +98,6 @@ fn backend(path: &Path, size: (u32, u32), f: &dyn Fn(&DrawingArea<SVGBackend, Sh
     res.map_err(|e| format!("{}: could not draw the plot: {e}", path.display()))
 }
 
-fn finite_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in values.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if !lo.is_finite() {
-        return (0.0, 1.0);
-    }
-    if hi - lo < 1e-12 * lo.abs().max(1.0) {
-        let pad = lo.abs().max(1.0) * 0.05;
-        return (lo - pad, hi + pad);
-    }
-    let pad = (hi - lo) * 0.05;
-    (lo - pad, hi + pad)
-}
 
 /// Draws stacked panels sharing an x axis into `path`.
 pub fn lines(path: &Path, title: &str, x: &XAxis, panels: &[Panel]) -> Result<(), String> {
