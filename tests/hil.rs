@@ -25,18 +25,24 @@ fn worst_phase_reproduces_flinch_run_with_one_scan_cycle_of_dead_time() {
     assert_eq!(sc.motion.dead_time, SCAN, "the scene's DT is the Viper's scan cycle");
     let plain = sim::run(&sc, false).unwrap().0;
     let t_sw = plain.t_detect.unwrap();
-    // The controller sampled just before the switch fired: it sees the stop one cycle later.
-    let phase = ((t_sw - 1e-6) / SCAN).fract();
+    // The controller sampled 0.1 ms before the switch fired: it sees the stop one cycle later, so
+    // the dead time is one scan cycle less 0.1 ms (0.1 ms keeps the sample on the right side of the
+    // crossing whatever the solver's error; the limit, a sample just before it, is DT = SCAN).
+    const EARLY: f64 = 1e-4;
+    let phase = ((t_sw - EARLY) / SCAN).fract();
     let h = hil_at(&sc, phase);
     let f = &h.firmware;
-    assert!((f.switch_time.unwrap() - t_sw).abs() < 1e-9, "same plant, same crossing");
+    // The two runs step differently (the lockstep lands on every controller sample), so they agree
+    // to the solver's accuracy, not bit for bit: 1e-5 s on a 0.1 s detection delay.
+    const SOLVER: f64 = 1e-5;
+    assert!((f.switch_time.unwrap() - t_sw).abs() < SOLVER, "same plant, same crossing");
     let latency = f.firmware_latency.unwrap();
     // The firmware's clock counts whole microseconds: its timestamp is within 1 us of the edge.
     assert!(latency.abs() <= 1e-6, "edge to timestamp: {latency}");
     let dt = f.observed_dead_time.unwrap();
-    assert!((dt - SCAN).abs() < 2e-6, "worst-case dead time {dt}");
-    let dr = h.summary.reaction_time.unwrap() - plain.reaction_time.unwrap();
-    assert!(dr.abs() < 2e-6, "reaction time differs by {dr} s");
+    assert!((dt - (SCAN - EARLY)).abs() < SOLVER, "worst-case dead time {dt}");
+    let dr = h.summary.reaction_time.unwrap() - (plain.reaction_time.unwrap() - EARLY);
+    assert!(dr.abs() < SOLVER, "reaction time differs by {dr} s");
     assert!((h.summary.peak_contact_force - plain.peak_contact_force).abs() / plain.peak_contact_force < 1e-3);
     assert_eq!(h.summary.mode, plain.mode);
     assert_eq!(f.event_log.len(), 1);
