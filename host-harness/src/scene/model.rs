@@ -263,8 +263,8 @@ pub struct SolverSettings {
 /// The accuracy a scene asks for (docs/accuracy.md gives what each costs and buys).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Fidelity {
-    /// Looser tolerance (`FAST_*`): within 3e-4 of the reference on the shipped scenes, 1.2-1.5x
-    /// faster than the default (docs/accuracy.md).
+    /// Looser tolerance (`FAST_*`): within 1.2e-3 of the reference on the shipped scenes, about
+    /// 1.2-1.4x faster than the default (docs/accuracy.md).
     Fast,
     /// The measured default: within 1 % of the reference on peak forces and detection time.
     Default,
