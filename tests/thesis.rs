@@ -127,7 +127,7 @@ damping_ratio = 0.0"#;
     let vt = (0.125 * 1.0 - 0.25 * vp) / 0.125;
     let before = 0.5 * 0.125;
     let after = 0.5 * 0.125 * vt * vt + 0.5 * 0.25 * vp * vp;
-    // The default tolerance (rtol 1e-7) integrates the impact to about 1e-6 in energy.
+    // The default tolerance integrates the impact to about 1e-6 in energy (docs/accuracy.md).
     assert!(((after - before) / before).abs() < 1e-5, "before {before} J, after {after} J");
 }
 

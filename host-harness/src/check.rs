@@ -10,6 +10,17 @@ use crate::sim::{self, Summary};
 use flinch_firmware::stopping_distance_um;
 use serde::Serialize;
 
+/// Micro-units rounded up: for what lengthens the stopping distance (speed, dead time), so the
+/// integer budget never under-estimates it.
+pub(crate) fn um_up(x: f64) -> u32 {
+    (x * 1e6).ceil().clamp(0.0, u32::MAX as f64) as u32
+}
+
+/// Micro-units rounded down: for what shortens it or bounds it (deceleration, stroke).
+pub(crate) fn um_down(x: f64) -> u32 {
+    (x * 1e6).floor().clamp(0.0, u32::MAX as f64) as u32
+}
+
 /// The budget and its confirmation.
 #[derive(Debug, Clone, Serialize)]
 pub struct BudgetCheck {
@@ -40,8 +51,7 @@ pub fn check(scene: &Scene) -> Result<BudgetCheck, String> {
         return Err("sensor.kind: flinch check needs a travel switch (sensor.kind = \"travel\")".into());
     };
     let m = &scene.motion;
-    let to_um = |x: f64| (x * 1e6).round().clamp(0.0, u32::MAX as f64) as u32;
-    let stop = stopping_distance_um(to_um(m.speed), to_um(m.dead_time), to_um(m.decel)) as f64 * 1e-6;
+    let stop = stopping_distance_um(um_up(m.speed), um_up(m.dead_time), um_down(m.decel).max(1)) as f64 * 1e-6;
     let remaining = stroke - threshold;
     let (simulated, _) = sim::run(scene, false).map_err(|e| e.to_string())?;
     Ok(BudgetCheck { stopping_distance: stop, stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits: stop <= remaining, simulated })

@@ -8,6 +8,7 @@
 //! time is what comes out, between the firmware latency and one scan cycle more (Ch. 3.1.2: "in
 //! the worst case ... it is necessary to wait a full scan cycle").
 
+use crate::check::{um_down, um_up};
 use crate::scene::{Controller, Decoupler, Scene, Sensor};
 use crate::sim::{Run, Sample, Summary};
 use flinch_firmware::{BudgetConfig, Config, ResetPolicy, SwitchKind};
@@ -82,6 +83,7 @@ fn um(x: f64) -> u32 {
     (x * 1e6).round().clamp(0.0, u32::MAX as f64) as u32
 }
 
+
 /// Runs `scene` with the firmware in the loop and the controller `ctl`; `step` is the lockstep
 /// interval in seconds. `record` keeps the time history.
 pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(HilReport, Vec<Sample>), String> {
@@ -96,10 +98,10 @@ pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(
     // low-on-trip so that a cut wire reads as a trip (fail-safe) for both.
     let kind = if matches!(scene.decoupler, Decoupler::Hydraulic(_)) { SwitchKind::Magnetic { trip_high: false } } else { SwitchKind::Inductive };
     let budget = BudgetConfig {
-        robot_speed_um_per_s: um(scene.motion.speed),
-        dead_time_us: um(ctl.scan_cycle),
-        decel_um_per_s2: um(scene.motion.decel),
-        stroke_um: um(stroke(scene)) as i32,
+        robot_speed_um_per_s: um_up(scene.motion.speed),
+        dead_time_us: um_up(ctl.scan_cycle),
+        decel_um_per_s2: um_down(scene.motion.decel).max(1),
+        stroke_um: um_down(stroke(scene)) as i32,
     };
     let mut cfg = Config::new(um(ctl.firmware_tick).max(1), budget);
     cfg.reset = ResetPolicy::Input; // latched for the whole run
