@@ -771,20 +771,7 @@ fn bistable(
     let height = cx.number(t, "height", Rule::gt(0.0, "m"), true);
     let front_stroke = cx.number(t, "front_stroke", Rule::gt(0.0, "m"), true);
     let back_stroke = cx.number(t, "back_stroke", Rule::gt(0.0, "m"), true);
-    let front_stop = cx.table(
-        t,
-        "front_stop",
-        true,
-        "{ stiffness, damping } or { stiffness, restitution }",
-    );
-    let front_stop = front_stop.and_then(|s| linear_stop(cx, &s, tool_mass));
-    let back_stop = cx.table(
-        t,
-        "back_stop",
-        true,
-        "{ stiffness, restitution, damping_law } or { stiffness, chi }",
-    );
-    let back_stop = back_stop.and_then(|s| nonlinear_stop(cx, &s));
+    let (front_stop, back_stop) = end_stops(cx, t, tool_mass);
     let friction = match cx.table(
         t,
         "friction",
@@ -866,20 +853,7 @@ fn hydraulic(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<Hydraulic>
         true => cx.number(t, "friction_v0", Rule::gt(0.0, "m/s"), false),
         false => Some(DEFAULT_HYDRAULIC_FRICTION_V0),
     };
-    let front_stop = cx.table(
-        t,
-        "front_stop",
-        true,
-        "{ stiffness, damping } or { stiffness, restitution }",
-    );
-    let front_stop = front_stop.and_then(|s| linear_stop(cx, &s, tool_mass));
-    let back_stop = cx.table(
-        t,
-        "back_stop",
-        true,
-        "{ stiffness, restitution, damping_law } or { stiffness, chi }",
-    );
-    let back_stop = back_stop.and_then(|s| nonlinear_stop(cx, &s));
+    let (front_stop, back_stop) = end_stops(cx, t, tool_mass);
 
     if let (Some(rp), Some(ro)) = (piston_radius, orifice_radius) {
         if ro >= rp {
@@ -934,6 +908,26 @@ fn zeta_from_restitution(e: f64) -> f64 {
     }
     let l = e.ln();
     -l / (std::f64::consts::PI.powi(2) + l * l).sqrt()
+}
+
+/// The `front_stop` (linear) and `back_stop` (nonlinear) tables that the bi-stable and hydraulic
+/// decouplers share, both required.
+fn end_stops(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> (Option<LinearStop>, Option<NonlinearStop>) {
+    let front_stop = cx.table(
+        t,
+        "front_stop",
+        true,
+        "{ stiffness, damping } or { stiffness, restitution }",
+    );
+    let front_stop = front_stop.and_then(|s| linear_stop(cx, &s, tool_mass));
+    let back_stop = cx.table(
+        t,
+        "back_stop",
+        true,
+        "{ stiffness, restitution, damping_law } or { stiffness, chi }",
+    );
+    let back_stop = back_stop.and_then(|s| nonlinear_stop(cx, &s));
+    (front_stop, back_stop)
 }
 
 fn linear_stop(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<LinearStop> {
