@@ -1,0 +1,111 @@
+//! `front_stop` and `back_stop`: the elastomer end-stops the bi-stable and hydraulic decouplers
+//! share (eq 28-29, 37-38; `plant/decoupler/end_stop.rs`). The front stop is linear, the back stop
+//! (the flange) a nonlinear contact whose damping keys are those of `scene/contact.rs`.
+use super::super::check::{Bound::*, Ctx, Key, Tab, Ty};
+use super::super::contact::{self, contact_damping};
+use super::super::model::{DampingLaw, LinearStop, NonlinearStop};
+
+/// Damping law of the back end-stop when only a restitution is given (the thesis, eq 29/37).
+pub const DEFAULT_BACK_STOP_LAW: DampingLaw = DampingLaw::HuntCrossley;
+
+/// The `front_stop` table of a decoupler.
+pub const FRONT: Key = Key::of(
+    "front_stop",
+    Ty::Table("{ stiffness, damping } or { stiffness, restitution }"),
+    "the linear front end-stop where the tool rests (eq 28/38)",
+);
+/// The `back_stop` table of a decoupler.
+pub const BACK: Key = Key::of(
+    "back_stop",
+    Ty::Table("{ stiffness, restitution, damping_law } or { stiffness, chi }"),
+    "the nonlinear back end-stop, the flange (eq 29/37)",
+);
+
+/// k_fe.
+pub const FRONT_STIFFNESS: Key = Key::number("stiffness", "N/m", Excl(0.0), Open, "", "k_fe, the front stop's stiffness");
+/// c_fe.
+pub const FRONT_DAMPING: Key = Key::number("damping", "N s/m", Incl(0.0), Open, "", "c_fe, the front stop's damping")
+    .optional("give restitution instead");
+/// e_fe.
+pub const FRONT_RESTITUTION: Key = Key::number("restitution", "", Incl(0.0), Incl(1.0), "a restitution is a ratio of speeds: 0 (plastic) to 1 (elastic)", "e_fe, converted to c_fe = 2 zeta sqrt(k_fe m_t), zeta = -ln e / sqrt(pi^2 + ln^2 e) (Table 11)")
+    .optional("give damping instead");
+/// k_be.
+pub const BACK_STIFFNESS: Key = Key::number("stiffness", "N/m^1.5", Excl(0.0), Open, "", "k_be, the back stop's Hertz stiffness");
+/// The back stop's damping law (defaults to the thesis's).
+pub const BACK_DAMPING_LAW: Key = contact::DAMPING_LAW.optional("hunt-crossley, as the thesis (eq 29/37)");
+
+/// The keys of `front_stop`.
+pub const FRONT_KEYS: &[Key] = &[FRONT_STIFFNESS, FRONT_DAMPING, FRONT_RESTITUTION];
+/// The keys of `back_stop`.
+pub const BACK_KEYS: &[Key] = &[BACK_STIFFNESS, contact::RESTITUTION, BACK_DAMPING_LAW, contact::CHI];
+
+/// Damping ratio of a linear oscillator whose restitution is `e`.
+pub(in super::super) fn zeta_from_restitution(e: f64) -> f64 {
+    if e <= 0.0 {
+        return 1.0;
+    }
+    let l = e.ln();
+    -l / (std::f64::consts::PI.powi(2) + l * l).sqrt()
+}
+
+/// The `front_stop` (linear) and `back_stop` (nonlinear) tables, both required.
+pub(super) fn end_stops(
+    cx: &mut Ctx,
+    t: &Tab,
+    tool_mass: Option<f64>,
+) -> (Option<LinearStop>, Option<NonlinearStop>) {
+    let front_stop = cx.table(t, &FRONT);
+    let front_stop = front_stop.and_then(|s| linear_stop(cx, &s, tool_mass));
+    let back_stop = cx.table(t, &BACK);
+    let back_stop = back_stop.and_then(|s| nonlinear_stop(cx, &s));
+    (front_stop, back_stop)
+}
+
+fn linear_stop(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<LinearStop> {
+    cx.check_keys(t, FRONT_KEYS, "");
+    let stiffness = cx.number(t, &FRONT_STIFFNESS);
+    match (t.has(FRONT_DAMPING.name), t.has(FRONT_RESTITUTION.name)) {
+        (true, true) => {
+            cx.bad(
+                t,
+                FRONT_RESTITUTION.name,
+                "give either damping (N s/m) or restitution, not both".into(),
+            );
+            None
+        }
+        (false, false) => {
+            cx.missing(
+                t,
+                FRONT_DAMPING.name,
+                "damping (N s/m >= 0), or restitution in [0, 1] converted with the tool mass",
+            );
+            None
+        }
+        (true, false) => {
+            let damping = cx.number(t, &FRONT_DAMPING);
+            Some(LinearStop {
+                stiffness: stiffness?,
+                damping: damping?,
+            })
+        }
+        (false, true) => {
+            let e = cx.number(t, &FRONT_RESTITUTION)?;
+            let (k, m) = (stiffness?, tool_mass?);
+            let damping = 2.0 * zeta_from_restitution(e) * (k * m).sqrt();
+            Some(LinearStop {
+                stiffness: k,
+                damping,
+            })
+        }
+    }
+}
+
+fn nonlinear_stop(cx: &mut Ctx, t: &Tab) -> Option<NonlinearStop> {
+    cx.check_keys(t, BACK_KEYS, "");
+    let stiffness = cx.number(t, &BACK_STIFFNESS);
+    let damping = contact_damping(cx, t, Some(DEFAULT_BACK_STOP_LAW));
+    Some(NonlinearStop {
+        stiffness: stiffness?,
+        damping: damping?,
+    })
+}

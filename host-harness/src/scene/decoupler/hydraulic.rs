@@ -1,0 +1,115 @@
+//! `kind = "hydraulic"`: a hydraulic cylinder with an orifice and a gas spring (eq 46-56, Tables 12
+//! and 14; `plant/decoupler/hydraulic.rs`). Travel u >= 0 is measured back from the front stop.
+use super::super::check::{approx, num, Bound::*, Ctx, Key, Tab};
+use super::super::model::Hydraulic;
+use super::end_stop::{self, end_stops};
+use super::KIND;
+
+/// Adiabatic exponent of air (eq 47).
+pub const DEFAULT_ADIABATIC_EXPONENT: f64 = 1.4;
+/// Velocity regularising sgn() in the hydraulic dry friction (eq 48), m/s.
+pub const DEFAULT_HYDRAULIC_FRICTION_V0: f64 = 1e-3;
+
+/// L.
+pub const STROKE: Key = Key::number("stroke", "m", Excl(0.0), Open, "", "L, the piston stroke");
+/// R_p.
+pub const PISTON_RADIUS: Key = Key::number("piston_radius", "m", Excl(0.0), Open, "", "R_p, the main cylinder's radius");
+/// R_o.
+pub const ORIFICE_RADIUS: Key = Key::number("orifice_radius", "m", Excl(0.0), Open, "", "R_o, the orifice's radius (< R_p)");
+/// p10.
+pub const GAS_PRESSURE: Key = Key::number("gas_pressure", "Pa", Excl(0.0), Open, "", "p10, the gas preload pressure at the front stop");
+/// V_g0.
+pub const GAS_VOLUME: Key = Key::number("gas_volume", "m^3", Excl(0.0), Open, "", "V_g0, the gas volume at the front stop (> pi R_p^2 L)");
+/// c0.
+pub const DISCHARGE_COEFFICIENT: Key = Key::number("discharge_coefficient", "", Excl(0.0), Open, "", "c0, the orifice's discharge coefficient (eq 50)");
+/// rho_L.
+pub const LIQUID_DENSITY: Key = Key::number("liquid_density", "kg/m^3", Excl(0.0), Open, "", "rho_L, the liquid's density");
+/// d.
+pub const DRY_FRICTION: Key = Key::number("dry_friction", "N", Incl(0.0), Open, "", "d, the seals' dry friction (eq 48)");
+/// b.
+pub const VISCOUS_FRICTION: Key = Key::number("viscous_friction", "N s/m", Incl(0.0), Open, "", "b, the viscous friction (eq 48)");
+/// kappa: 1 is isothermal, 5/3 a monatomic gas: nothing outside is a gas.
+pub const ADIABATIC_EXPONENT: Key = Key::number("adiabatic_exponent", "", Incl(1.0), Incl(5.0 / 3.0), "1 is isothermal, 5/3 a monatomic gas: nothing outside is a gas", "kappa, the gas's adiabatic exponent (eq 47)")
+    .default(DEFAULT_ADIABATIC_EXPONENT);
+/// v0 of the dry friction.
+pub const FRICTION_V0: Key = Key::number("friction_v0", "m/s", Excl(0.0), Open, "", "the velocity regularising sgn() in the dry friction (eq 48)")
+    .default(DEFAULT_HYDRAULIC_FRICTION_V0);
+
+/// The keys of a hydraulic decoupler.
+pub const KEYS: &[Key] = &[
+    KIND,
+    STROKE,
+    PISTON_RADIUS,
+    ORIFICE_RADIUS,
+    GAS_PRESSURE,
+    GAS_VOLUME,
+    DISCHARGE_COEFFICIENT,
+    LIQUID_DENSITY,
+    DRY_FRICTION,
+    VISCOUS_FRICTION,
+    ADIABATIC_EXPONENT,
+    FRICTION_V0,
+    end_stop::FRONT,
+    end_stop::BACK,
+];
+
+/// Reads a hydraulic decoupler: the orifice inside the piston, the gas never driven to zero volume.
+pub(in super::super) fn hydraulic(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<Hydraulic> {
+    let stroke = cx.number(t, &STROKE);
+    let piston_radius = cx.number(t, &PISTON_RADIUS);
+    let orifice_radius = cx.number(t, &ORIFICE_RADIUS);
+    let gas_pressure = cx.number(t, &GAS_PRESSURE);
+    let gas_volume = cx.number(t, &GAS_VOLUME);
+    let discharge_coefficient = cx.number(t, &DISCHARGE_COEFFICIENT);
+    let liquid_density = cx.number(t, &LIQUID_DENSITY);
+    let dry_friction = cx.number(t, &DRY_FRICTION);
+    let viscous_friction = cx.number(t, &VISCOUS_FRICTION);
+    let adiabatic_exponent = cx.number(t, &ADIABATIC_EXPONENT);
+    let friction_v0 = cx.number(t, &FRICTION_V0);
+    let (front_stop, back_stop) = end_stops(cx, t, tool_mass);
+
+    if let (Some(rp), Some(ro)) = (piston_radius, orifice_radius) {
+        if ro >= rp {
+            cx.bad(
+                t,
+                ORIFICE_RADIUS.name,
+                format!(
+                    "must be < decoupler.piston_radius = {} m, got {}",
+                    num(rp),
+                    num(ro)
+                ),
+            );
+            return None;
+        }
+    }
+    if let (Some(rp), Some(l), Some(vg)) = (piston_radius, stroke, gas_volume) {
+        let swept = std::f64::consts::PI * rp * rp * l;
+        if swept >= vg {
+            cx.bad(
+                t,
+                GAS_VOLUME.name,
+                format!(
+                    "must be > the volume the piston sweeps, pi * piston_radius^2 * stroke = {} m^3 (else the gas is driven to zero volume), got {}",
+                    approx(swept),
+                    num(vg)
+                ),
+            );
+            return None;
+        }
+    }
+    Some(Hydraulic {
+        stroke: stroke?,
+        piston_radius: piston_radius?,
+        orifice_radius: orifice_radius?,
+        gas_pressure: gas_pressure?,
+        gas_volume: gas_volume?,
+        discharge_coefficient: discharge_coefficient?,
+        liquid_density: liquid_density?,
+        dry_friction: dry_friction?,
+        viscous_friction: viscous_friction?,
+        adiabatic_exponent: adiabatic_exponent?,
+        friction_v0: friction_v0?,
+        front_stop: front_stop?,
+        back_stop: back_stop?,
+    })
+}

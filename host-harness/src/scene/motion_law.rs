@@ -1,0 +1,56 @@
+//! `[motion]`: the commanded flange motion (MODEL.md element 1, `plant/motion_law.rs`): accelerate
+//! at `accel` to `speed`, cruise; braking at `decel` starts `dead_time` after detection.
+use super::check::{Bound::*, Ctx, Key, Tab, Ty};
+use super::model::Motion;
+
+/// The `[motion]` table in the top level.
+pub const TABLE: Key = Key::of("motion", Ty::Table("the commanded flange motion"), "the commanded flange motion");
+
+/// V_c.
+pub const SPEED: Key = Key::number("speed", "m/s", Excl(0.0), Open, "", "V_c, the commanded cruise speed of the flange");
+/// a_c.
+pub const ACCEL: Key = Key::number("accel", "m/s^2", Excl(0.0), Open, "", "a_c, the commanded acceleration up to V_c");
+/// d_c.
+pub const DECEL: Key = Key::number("decel", "m/s^2", Excl(0.0), Open, "", "d_c, the braking deceleration once the robot reacts");
+/// DT.
+pub const DEAD_TIME: Key = Key::number("dead_time", "s", Incl(0.0), Open, "", "DT, from detection to the start of braking");
+/// Gravity along the approach.
+pub const GRAVITY: Key = Key::number("gravity", "m/s^2", Open, Open, "", "gravity along the approach direction (9.81 for a tool moving down, -9.81 up)");
+/// Start already cruising.
+pub const START_AT_SPEED: Key = Key::of("start_at_speed", Ty::Bool, "flange, robot and tool already cruise at V_c at t = 0 (the Ch. 2 set-ups); accel is then unused")
+    .optional("false: the motion starts from rest");
+
+/// The keys of `[motion]`.
+pub const KEYS: &[Key] = &[SPEED, ACCEL, DECEL, DEAD_TIME, GRAVITY, START_AT_SPEED];
+
+/// Reads `[motion]`.
+pub(super) fn motion(cx: &mut Ctx, t: &Tab) -> Option<Motion> {
+    cx.check_keys(t, KEYS, "");
+    let speed = cx.number(t, &SPEED);
+    let accel = cx.number(t, &ACCEL);
+    let decel = cx.number(t, &DECEL);
+    let dead_time = cx.number(t, &DEAD_TIME);
+    let gravity = cx.number(t, &GRAVITY);
+    let start_at_speed = cx.boolean(t, &START_AT_SPEED);
+    Some(Motion {
+        speed: speed?,
+        accel: accel?,
+        decel: decel?,
+        dead_time: dead_time?,
+        gravity: gravity?,
+        start_at_speed: start_at_speed?.unwrap_or(false),
+    })
+}
+
+/// Commanded flange travel in `t` s with no braking (trapezoid, or cruising from t = 0).
+pub(super) fn cruise_travel(m: &Motion, t: f64) -> f64 {
+    if m.start_at_speed {
+        return m.speed * t;
+    }
+    let t_acc = m.speed / m.accel;
+    if t <= t_acc {
+        0.5 * m.accel * t * t
+    } else {
+        0.5 * m.speed * t_acc + m.speed * (t - t_acc)
+    }
+}
