@@ -158,7 +158,7 @@ fn sweep_cmd(scene: &str, axes: &[(&str, f64, f64, usize, bool)], metric: &str, 
     for &(k, a, b, n, log) in axes {
         let _ = write!(c, " --vary {k}={}{a}:{b}:{n}", if log { "log:" } else { "" });
     }
-    let _ = write!(c, " --metric {metric} --plot {plot}");
+    let _ = write!(c, " --metric {metric}{} --plot {plot}", if metric == "peak_robot_force" { " --log-color" } else { "" });
     c
 }
 
@@ -554,7 +554,8 @@ pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
     history("tables5-7_bistable_v025.toml", &[], "fig41.svg")?;
     for (k, m, f) in [("tool.mass", "peak_contact_force", "fig42.svg"), ("target.stiffness", "peak_contact_force", "fig43.svg"), ("decoupler.spring_rate", "peak_contact_force", "fig44.svg"), ("motion.dead_time", "peak_contact_force", "fig45.svg"), ("tool.mass", "peak_robot_force", "fig46.svg"), ("motion.dead_time", "peak_robot_force", "fig49.svg")] {
         let r = cx.sweep(CH3, &ch3_axes(Grid::Plot, k))?;
-        splot::draw(&dir.join(f), &r, m)?;
+        // The force on the robot spans decades (3 N in mode 1, 40 N in mode 2): a log colour scale.
+        splot::draw_with(&dir.join(f), &r, m, m == "peak_robot_force")?;
     }
     for s in ["table12_hydraulic_object", "table13_bistable_object", "table14_hydraulic_surface", "table15_bistable_surface", "table14_hydraulic_surface_dt10", "table15_bistable_surface_dt10", "table4_bistable_136g"] {
         history(&format!("{s}.toml"), &[], &format!("{s}.svg"))?;
