@@ -94,11 +94,11 @@ fn order_is_deterministic_and_row_major_on_any_thread_count() {
         assert!((r.0 - w.0).abs() < 1e-12 && (r.1 - w.1).abs() < 1e-12, "{rows:?}");
     }
     assert_eq!(rows.len(), 9);
-    // The CSV: header with the swept keys, every summary field and the error column; one row a point.
+    // The CSV: header with the swept keys, every summary field, status and reason; one row a point.
     let csv = one.csv();
     let header = csv.lines().next().unwrap();
     assert!(header.starts_with("motion.speed,motion.dead_time,scene,t_contact,"), "{header}");
-    assert!(header.ends_with(",error"));
+    assert!(header.ends_with(",status,reason"), "{header}");
     for f in ["peak_contact_force", "peak_robot_force", "mode", "stroke_exhausted", "max_travel", "warnings"] {
         assert!(header.split(',').any(|h| h == f), "{f} missing from {header}");
     }

@@ -19,7 +19,7 @@ use serde::Serialize;
 pub const DEFAULT_STEP: f64 = 1e-5;
 
 /// One entry of the firmware's event log, in simulation seconds.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct LoggedEvent {
     /// Sequence number.
     pub seq: u16,
@@ -35,24 +35,32 @@ pub struct LoggedEvent {
     pub travel_m: f64,
 }
 
-/// What the firmware in the loop adds to the run's summary.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+/// What the firmware in the loop adds to the run's summary. JSON names carry their unit
+/// (docs/conventions.md).
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct FirmwareFigures {
     /// The controller's scan cycle, s.
+    #[serde(rename = "scan_cycle_s")]
     pub scan_cycle: f64,
     /// Phase of its first sample, fraction of a cycle.
     pub phase: f64,
     /// The firmware's tick period, s.
+    #[serde(rename = "firmware_tick_s")]
     pub firmware_tick: f64,
     /// When the plant's travel crossed the switch threshold (located event), s.
+    #[serde(rename = "switch_time_s")]
     pub switch_time: Option<f64>,
     /// The firmware's own detection timestamp, s.
+    #[serde(rename = "firmware_detect_s")]
     pub firmware_detect: Option<f64>,
     /// firmware_detect - switch_time, s.
+    #[serde(rename = "firmware_latency_s")]
     pub firmware_latency: Option<f64>,
     /// The controller sample that saw the stop request, s (= t_brake).
+    #[serde(rename = "stop_seen_s")]
     pub stop_seen: Option<f64>,
     /// Observed dead time t_brake - switch_time, s.
+    #[serde(rename = "observed_dead_time_s")]
     pub observed_dead_time: Option<f64>,
     /// The firmware asked for a category-0 stop (stroke budget exceeded).
     pub category0: bool,
@@ -61,7 +69,7 @@ pub struct FirmwareFigures {
 }
 
 /// The `flinch hil --json` object: the run's summary plus the firmware's figures.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct HilReport {
     /// Same fields as `flinch run --json`.
     #[serde(flatten)]

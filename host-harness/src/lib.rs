@@ -11,6 +11,7 @@ pub mod hil;
 pub mod plant;
 pub mod report;
 pub mod scene;
+pub mod shipped;
 pub mod sim;
 pub mod solver;
 pub mod sweep;

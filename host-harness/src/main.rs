@@ -1,12 +1,26 @@
-//! `flinch`: run a scene, run it with the firmware in the loop, check a stroke budget.
+//! `flinch`: run a scene, run it with the firmware in the loop, check a stroke budget, sweep, size
+//! a module, compare with measurements.
+//!
+//! Conventions (docs/conventions.md): results on standard output, messages on standard error, `-`
+//! is standard output for every file option (and standard input for a scene), exit codes 0 ran
+//! (favourable verdict), 1 ran (unfavourable verdict), 2 bad input, 3 runtime failure, 130
+//! interrupted, 141 the reader of standard output went away.
 
 use clap::{Parser, Subcommand};
-use flinch_harness::{check, hil, report, scene, sim};
+use flinch_harness::report::output::{self, Failure};
+use flinch_harness::report::{self, measured, stream, trace::HilSignals, trace::Trace};
+use flinch_harness::{check, hil, scene, shipped};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+const AFTER_HELP: &str = "A SCENE is a TOML file, `-` for standard input, or the name of a shipped scene \
+(`flinch scenes list`). The scene contract (every key, unit and range) is docs/SCENES.md, the model \
+docs/MODEL.md, the output convention and exit codes docs/conventions.md, the JSON Schemas docs/schema/.\n\
+Exit codes: 0 ran (favourable verdict), 1 ran (unfavourable verdict: does not fit, not safe), 2 bad input, \
+3 runtime failure, 130 interrupted (Ctrl-C), 141 standard output closed by its reader.";
+
 #[derive(Parser)]
-#[command(name = "flinch", version, about = "Collision management for robot end-effectors: simulate, check, and run the firmware in the loop")]
+#[command(name = "flinch", version, about = "Collision management for robot end-effectors: simulate, check, and run the firmware in the loop", after_help = AFTER_HELP)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -31,32 +45,53 @@ enum Command {
     Design(flinch_harness::design::DesignArgs),
     /// Regenerate docs/validation.md and its pictures: the thesis's figures against ours.
     Validate(flinch_harness::validate::ValidateArgs),
+    /// The shipped scenes, built into this binary: list them, or print one to start your own.
+    Scenes {
+        #[command(subcommand)]
+        what: ScenesCmd,
+    },
+}
+
+#[derive(Subcommand)]
+enum ScenesCmd {
+    /// Every shipped scene, with its first comment line.
+    List,
+    /// Print a shipped scene's TOML (e.g. `flinch scenes show tables5-7_bistable > my.toml`).
+    Show {
+        /// The scene's name, as `flinch scenes list` prints it.
+        name: String,
+    },
 }
 
 #[derive(clap::Args)]
 struct Output {
-    /// Print the JSON summary instead of the human one.
+    /// Print the JSON summary instead of the human one (schema: docs/schema/).
     #[arg(long)]
     json: bool,
-    /// Write the time history to this CSV file.
+    /// Write the time history to this CSV file (`-`: standard output); rows stream as they are made.
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
-    /// Draw velocities and forces against time to this .svg or .png file.
+    /// Draw velocities, forces, travel (and gas pressure, firmware signals) against time to this .svg or .png file.
     #[arg(long, value_name = "FILE")]
     plot: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
 struct RunArgs {
-    /// The scene file (TOML, SI units; see shared/SCENES.md).
+    /// The scene: a TOML file, `-`, or a shipped scene's name (docs/SCENES.md).
     scene: PathBuf,
     #[command(flatten)]
     out: Output,
+    /// Compare with measured traces: a CSV with `t_s` and any of v_t_mps, v_r_mps, v_p_mps, v_c_mps,
+    /// f_contact_n, f_robot_n, travel_m, s_m. Reports RMS and peak errors and the time shift, and
+    /// draws the measured traces on --plot.
+    #[arg(long, value_name = "FILE.csv")]
+    measured: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
 struct HilArgs {
-    /// The scene file; its [controller] table, if any, gives the defaults below.
+    /// The scene; its [controller] table, if any, gives the defaults below.
     scene: PathBuf,
     /// The robot controller's scan cycle, s (e.g. 0.016 Viper, 0.07 experiments, 0.0001 EtherCAT).
     #[arg(long, value_name = "S")]
@@ -76,7 +111,7 @@ struct HilArgs {
 
 #[derive(clap::Args)]
 struct CheckArgs {
-    /// The scene file.
+    /// The scene.
     scene: PathBuf,
     /// Print JSON.
     #[arg(long)]
@@ -101,29 +136,74 @@ struct BenchArgs {
     quick: bool,
 }
 
-fn write_outputs(out: &Output, sc: &scene::Scene, summary: &sim::Summary, history: &[sim::Sample]) -> Result<(), String> {
-    if let Some(path) = &out.csv {
-        let mut f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        report::csv::write(&mut f, history).map_err(|e| format!("{}: {e}", path.display()))?;
+fn load(scene: &Path) -> Result<scene::Scene, Failure> {
+    shipped::load(scene).map_err(Failure::bad_input)
+}
+
+/// Refuses option combinations that would write two things to standard output.
+fn check_outputs(out: &Output, extra: Option<&Path>) -> Result<(), Failure> {
+    if let Some(p) = &out.plot {
+        report::figure::check_extension(p).map_err(|e| Failure::bad_input(format!("--plot {e}")))?;
     }
-    if let Some(path) = &out.plot {
-        let object = matches!(sc.target.kind, scene::TargetKind::Object { .. });
-        report::plot::draw(path, summary, history, object, sc.robot.is_none())?;
+    if out.csv.as_deref().is_some_and(output::is_stdout) && out.json {
+        return Err(Failure::bad_input("--json and --csv - both write to standard output; give --csv a file name"));
+    }
+    if let Some(m) = extra {
+        if output::is_stdout(m) {
+            return Err(Failure::bad_input("--measured -: standard input is not supported for the measured file; give a file name"));
+        }
     }
     Ok(())
 }
 
-fn run(args: &RunArgs) -> Result<(), String> {
-    let sc = scene::load(&args.scene).map_err(|e| e.to_string())?;
-    let record = args.out.csv.is_some() || args.out.plot.is_some();
-    let (summary, history) = sim::run(&sc, record).map_err(|e| format!("{}: {e}", args.scene.display()))?;
-    write_outputs(&args.out, &sc, &summary, &history)?;
-    if args.out.json {
-        println!("{}", report::json(&summary));
+/// Prints a summary where it belongs: standard output, or standard error when the CSV has it.
+fn print_result(out: &Output, text: &str) -> Result<(), Failure> {
+    if out.csv.as_deref().is_some_and(output::is_stdout) {
+        output::note(text.trim_end());
+        Ok(())
     } else {
-        print!("{}", report::human(&summary));
+        output::print(text)
     }
-    Ok(())
+}
+
+fn wrote(path: &Path, what: &str) {
+    if !output::is_stdout(path) {
+        output::note(&format!("wrote {} ({what})", path.display()));
+    }
+}
+
+fn run(args: &RunArgs) -> Result<bool, Failure> {
+    check_outputs(&args.out, args.measured.as_deref())?;
+    let sc = load(&args.scene)?;
+    let meas = match &args.measured {
+        Some(p) => Some(measured::Measured::load(p).map_err(Failure::bad_input)?),
+        None => None,
+    };
+    let resampler = meas.as_ref().map(|m| measured::Resampler::new(m, Trace::new(&sc)));
+    let r = stream::run(&sc, args.out.csv.as_deref(), args.out.plot.is_some(), resampler).map_err(|f| Failure { message: format!("{}: {}", args.scene.display(), f.message), ..f })?;
+    if let Some(p) = &args.out.csv {
+        wrote(p, &format!("{} rows", r.rows));
+    }
+    let comparisons = match (&meas, &r.resampled) {
+        (Some(m), Some(rs)) => Some(rs.compare(m)),
+        _ => None,
+    };
+    if let Some(p) = &args.out.plot {
+        let overlay = meas.as_ref().map(measured::overlay).unwrap_or_default();
+        report::plot::draw(p, &sc, &r.summary, &r.plotted, &Trace::new(&sc), &overlay).map_err(Failure::runtime)?;
+        wrote(p, "plot");
+    }
+    let text = if args.out.json {
+        report::to_json(&report::RunJson { schema_version: report::SCHEMA_VERSION, summary: &r.summary, measured: comparisons.as_deref() })
+    } else {
+        let mut t = report::human(&r.summary);
+        if let (Some(m), Some(c)) = (&meas, &comparisons) {
+            t.push_str(&report::human_measured(&m.file, c));
+        }
+        t
+    };
+    print_result(&args.out, &text)?;
+    Ok(true)
 }
 
 fn controller(args: &HilArgs, sc: &scene::Scene, file: &Path) -> Result<scene::Controller, String> {
@@ -131,14 +211,16 @@ fn controller(args: &HilArgs, sc: &scene::Scene, file: &Path) -> Result<scene::C
     let scan_cycle = args.scan_cycle.or(base.map(|c| c.scan_cycle)).ok_or_else(|| format!("{}: [controller] scan_cycle is missing: add a [controller] table or pass --scan-cycle", file.display()))?;
     let phase = args.phase.or(base.map(|c| c.phase)).unwrap_or(0.0);
     let firmware_tick = args.tick.or(base.map(|c| c.firmware_tick)).unwrap_or(1e-4);
+    // Name where a value came from: the option, or the scene's [controller] table.
+    let from = |given: bool, opt: &str, key: &str| if given { opt.to_string() } else { format!("{}: [controller] {key}", file.display()) };
     if !(scan_cycle > 0.0 && scan_cycle.is_finite()) {
-        return Err(format!("--scan-cycle: must be > 0 s, got {scan_cycle}"));
+        return Err(format!("{}: must be > 0 s, got {scan_cycle}", from(args.scan_cycle.is_some(), "--scan-cycle", "scan_cycle")));
     }
     if !(0.0..1.0).contains(&phase) {
-        return Err(format!("--phase: must be in [0, 1), got {phase}"));
+        return Err(format!("{}: must be in [0, 1), got {phase}", from(args.phase.is_some(), "--phase", "phase")));
     }
-    if !(firmware_tick >= 1e-6 && firmware_tick <= 0.1) {
-        return Err(format!("--tick: must be in [1e-6, 0.1] s, got {firmware_tick}"));
+    if !(1e-6..=0.1).contains(&firmware_tick) {
+        return Err(format!("{}: must be in [1e-6, 0.1] s, got {firmware_tick}", from(args.tick.is_some(), "--tick", "firmware_tick")));
     }
     if !(args.step >= 1e-7 && args.step <= firmware_tick) {
         return Err(format!("--step: must be in [1e-7 s, the firmware tick {firmware_tick} s], got {}", args.step));
@@ -146,59 +228,115 @@ fn controller(args: &HilArgs, sc: &scene::Scene, file: &Path) -> Result<scene::C
     Ok(scene::Controller { scan_cycle, phase, firmware_tick })
 }
 
-fn hil_cmd(args: &HilArgs) -> Result<(), String> {
-    let sc = scene::load(&args.scene).map_err(|e| e.to_string())?;
-    let ctl = controller(args, &sc, &args.scene)?;
+fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
+    check_outputs(&args.out, None)?;
+    let sc = load(&args.scene)?;
+    let ctl = controller(args, &sc, &args.scene).map_err(Failure::bad_input)?;
     let record = args.out.csv.is_some() || args.out.plot.is_some();
-    let (rep, history) = hil::run(&sc, &ctl, args.step, record).map_err(|e| format!("{}: {e}", args.scene.display()))?;
-    write_outputs(&args.out, &sc, &rep.summary, &history)?;
-    if args.out.json {
-        println!("{}", serde_json::to_string_pretty(&rep).map_err(|e| e.to_string())?);
+    let (rep, history) = hil::run(&sc, &ctl, args.step, record).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
+    let trace = Trace::new(&sc).with_hil(HilSignals::new(&sc, &rep));
+    if let Some(p) = &args.out.csv {
+        let mut w = output::create(p)?;
+        report::csv::write(&mut w, &history, &trace).map_err(|e| output::write_error(p, &e))?;
+        wrote(p, &format!("{} rows", history.len()));
+    }
+    if let Some(p) = &args.out.plot {
+        let shown = stream::decimate(&history, sc.duration_s);
+        report::plot::draw(p, &sc, &rep.summary, &shown, &trace, &Vec::new()).map_err(Failure::runtime)?;
+        wrote(p, "plot");
+    }
+    let text = if args.out.json {
+        report::to_json(&report::HilJson { schema_version: report::SCHEMA_VERSION, report: &rep })
     } else {
-        print!("{}", report::human(&rep.summary));
         let f = &rep.firmware;
         let ms = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{:.3} ms", v * 1e3));
-        println!("  firmware in the loop: scan cycle {:.3} ms, phase {:.2}, tick {:.3} ms", f.scan_cycle * 1e3, f.phase, f.firmware_tick * 1e3);
-        println!("    switch {}   firmware timestamp {}   latency {}   controller saw the stop {}", ms(f.switch_time), ms(f.firmware_detect), ms(f.firmware_latency), ms(f.stop_seen));
-        println!("    observed dead time {}{}   event log: {} entr{}", ms(f.observed_dead_time), if f.category0 { "   CATEGORY 0 requested (stroke budget exceeded)" } else { "" }, f.event_log.len(), if f.event_log.len() == 1 { "y" } else { "ies" });
-    }
-    Ok(())
+        let mut t = report::human(&rep.summary);
+        t.push_str(&format!("  firmware in the loop: scan cycle {:.3} ms, phase {:.2}, tick {:.3} ms\n", f.scan_cycle * 1e3, f.phase, f.firmware_tick * 1e3));
+        t.push_str(&format!("    switch {}   firmware timestamp {}   latency {}   controller saw the stop {}\n", ms(f.switch_time), ms(f.firmware_detect), ms(f.firmware_latency), ms(f.stop_seen)));
+        t.push_str(&format!("    observed dead time {}{}   event log: {} entr{}\n", ms(f.observed_dead_time), if f.category0 { "   CATEGORY 0 requested (stroke budget exceeded)" } else { "" }, f.event_log.len(), if f.event_log.len() == 1 { "y" } else { "ies" }));
+        t
+    };
+    print_result(&args.out, &text)?;
+    Ok(true)
 }
 
-fn check_cmd(args: &CheckArgs) -> Result<bool, String> {
-    let sc = scene::load(&args.scene).map_err(|e| e.to_string())?;
-    let c = check::check(&sc).map_err(|e| format!("{}: {e}", args.scene.display()))?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&c).map_err(|e| e.to_string())?);
+fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
+    let sc = load(&args.scene)?;
+    let c = check::check(&sc).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
+    let text = if args.json {
+        let mut v = serde_json::to_value(&c).map_err(|e| Failure::runtime(e.to_string()))?;
+        if let Some(o) = v.as_object_mut() {
+            o.insert("schema_version".into(), report::SCHEMA_VERSION.into());
+        }
+        report::to_json(&v)
     } else {
-        println!("{}", sc.name);
-        println!("  stopping distance after detection v DT + v^2/2d = {:.2} mm", c.stopping_distance * 1e3);
-        println!("  stroke C = {:.2} mm, switch travel {:.2} mm, left at detection {:.2} mm", c.stroke * 1e3, c.switch_travel * 1e3, c.remaining * 1e3);
-        println!("  budget: {} (margin {:+.2} mm)", if c.fits { "FITS" } else { "DOES NOT FIT: escalate to a category-0 stop" }, c.margin * 1e3);
-        println!("  simulation: max travel {:.2} mm, flange reached the target: {}", c.simulated.max_travel * 1e3, if c.simulated.stroke_exhausted { "YES" } else { "no" });
-    }
+        let mut t = format!("{}\n", sc.name);
+        t.push_str(&format!("  stopping distance after detection v DT + v^2/2d = {:.2} mm\n", c.stopping_distance * 1e3));
+        t.push_str(&format!("  stroke C = {:.2} mm, switch travel {:.2} mm, left at detection {:.2} mm\n", c.stroke * 1e3, c.switch_travel * 1e3, c.remaining * 1e3));
+        t.push_str(&format!("  budget: {} (margin {:+.2} mm)\n", if c.fits { "FITS" } else { "DOES NOT FIT: escalate to a category-0 stop" }, c.margin * 1e3));
+        t.push_str(&format!("  simulation: max travel {:.2} mm, flange reached the target: {}\n", c.simulated.max_travel * 1e3, if c.simulated.stroke_exhausted { "YES" } else { "no" }));
+        t
+    };
+    output::print(&text)?;
     Ok(c.fits)
 }
 
+fn scenes_cmd(what: &ScenesCmd) -> Result<bool, Failure> {
+    match what {
+        ScenesCmd::List => {
+            let width = shipped::names().map(str::len).max().unwrap_or(0);
+            let mut t = String::new();
+            for (name, text) in shipped::SCENES {
+                let mut d = shipped::description(text);
+                if d.chars().count() > 100 {
+                    d = d.chars().take(97).collect::<String>() + "...";
+                }
+                t.push_str(&format!("{name:width$}  {d}\n"));
+            }
+            output::print(&t)?;
+        }
+        ScenesCmd::Show { name } => match shipped::get(name) {
+            Some(text) => output::print(text)?,
+            None => {
+                let near = shipped::close_to(name);
+                return Err(Failure::bad_input(format!("{name}: no shipped scene of that name; {}", if near.is_empty() { "`flinch scenes list` lists them".to_string() } else { format!("close: {}", near.join(", ")) })));
+            }
+        },
+    }
+    Ok(true)
+}
+
+/// A module outside this file returns its errors as text: a scene it cannot read is bad input,
+/// anything after that a runtime failure.
+fn classify(scene_ok: Result<(), String>, r: Result<bool, String>) -> Result<bool, Failure> {
+    scene_ok.map_err(Failure::bad_input)?;
+    r.map_err(Failure::runtime)
+}
+
 fn main() -> ExitCode {
+    output::install_print_guard();
+    report::font::ensure();
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Run(a) => run(a).map(|_| true),
-        Command::Hil(a) => hil_cmd(a).map(|_| true),
+        Command::Run(a) => run(a),
+        Command::Hil(a) => hil_cmd(a),
         Command::Check(a) => check_cmd(a),
-        Command::Bench(a) => flinch_harness::bench::run(&flinch_harness::bench::Options { scenes: a.scenes.clone(), scenes_dir: a.scenes_dir.clone(), out: a.out.clone(), repeats: a.repeats, quick: a.quick }).map(|_| true),
-        Command::Avoid(a) => flinch_harness::avoid::run(a).map(|_| true),
-        Command::Sweep(a) => flinch_harness::sweep::cli::run(a).map(|_| true),
-        Command::Design(a) => flinch_harness::design::run(a),
-        Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true),
+        Command::Scenes { what } => scenes_cmd(what),
+        Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
+        Command::Bench(a) => flinch_harness::bench::run(&flinch_harness::bench::Options { scenes: a.scenes.clone(), scenes_dir: a.scenes_dir.clone(), out: a.out.clone(), repeats: a.repeats, quick: a.quick }).map(|_| true).map_err(Failure::runtime),
+        Command::Avoid(a) => classify(flinch_harness::avoid::scene::Avoid::load(&a.scene).map(|_| ()), flinch_harness::avoid::run(a).map(|_| true)),
+        Command::Design(a) => classify(shipped::load(&a.scene).map(|_| ()), flinch_harness::design::run(a)),
+        Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,
-        // A budget that does not fit is an answer, not an error: exit 1 so scripts can branch.
-        Ok(false) => ExitCode::from(1),
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
+        // An unfavourable verdict is an answer, not an error: exit 1 so scripts can branch.
+        Ok(false) => ExitCode::from(output::EXIT_VERDICT),
+        Err(f) => {
+            if !f.message.is_empty() {
+                output::note(&format!("error: {}", f.message));
+            }
+            ExitCode::from(f.code)
         }
     }
 }

@@ -56,7 +56,7 @@ pub struct Sample {
 }
 
 /// What a run reports: the `--json` contract of SCENES.md plus extras.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct Summary {
     /// Scene name.
     pub scene: String,
@@ -192,6 +192,9 @@ pub struct Simulation {
     next_record: f64,
     /// The recorded time history (empty unless recording).
     pub history: Vec<Sample>,
+    /// Where recorded samples go as each step makes them (a streamed CSV, a decimated plot: memory
+    /// stays bounded whatever the duration); `None` keeps them in `history`.
+    pub sink: Option<Box<dyn FnMut(&Sample)>>,
     warnings: Vec<String>,
     /// Contact and robot-force magnitude at the end of the last step (t, (N, N)).
     last_end: (f64, (f64, f64)),
@@ -322,6 +325,9 @@ impl Hybrid<N, E> for Simulation {
                 }
             }
             None => {}
+        }
+        if let Some(sink) = self.sink.as_mut() {
+            self.history.drain(..).for_each(|s| sink(&s));
         }
         let (k, f) = self.observe(t1, y1);
         let at1 = (f.contact, f.robot.abs());
@@ -474,6 +480,7 @@ impl Simulation {
             record_every: record.then_some(scene.solver.output_interval.max(0.0)),
             next_record: 0.0,
             history: Vec::new(),
+            sink: None,
             warnings,
             last_end: (f64::NAN, (0.0, 0.0)),
             last_end_s_dot: 0.0,

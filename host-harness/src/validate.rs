@@ -158,7 +158,7 @@ fn sweep_cmd(scene: &str, axes: &[(&str, f64, f64, usize, bool)], metric: &str, 
     for &(k, a, b, n, log) in axes {
         let _ = write!(c, " --vary {k}={}{a}:{b}:{n}", if log { "log:" } else { "" });
     }
-    let _ = write!(c, " --metric {metric} --plot {plot}");
+    let _ = write!(c, " --metric {metric}{} --plot {plot}", if metric == "peak_robot_force" { " --log-color" } else { "" });
     c
 }
 
@@ -500,12 +500,6 @@ pub fn plots(sections: &[Section]) -> Vec<String> {
     sections.iter().flat_map(|s| s.plots.clone()).collect()
 }
 
-/// Keeps every n-th sample (and every sample with a nonzero contact force, so peaks stay), to keep
-/// the committed SVGs small.
-fn thin(h: &[Sample], n: usize) -> Vec<Sample> {
-    h.iter().enumerate().filter(|(i, s)| i % n == 0 || s.f_contact > 0.0).map(|(_, s)| *s).collect()
-}
-
 /// Draws every picture into `dir` (the `validation/` folder).
 pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -513,8 +507,9 @@ pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
     let history = |name: &str, sets: &[(&str, f64)], file: &str| -> Result<(), String> {
         let sc = cx.scene(name, sets)?;
         let (s, h) = sim::run(&sc, true).map_err(|e| format!("{name}: {e}"))?;
-        let object = matches!(sc.target.kind, crate::scene::TargetKind::Object { .. });
-        report::plot::draw(&dir.join(file), &s, &thin(&h, 4), object, sc.robot.is_none())
+        // Peak-preserving decimation keeps the committed SVGs small.
+        let shown = report::stream::decimate_to(&h, sc.duration_s, 2_000, 400);
+        report::plot::draw(&dir.join(file), &sc, &s, &shown, &report::trace::Trace::new(&sc), &Vec::new())
     };
     // Fig. 2: V_p against e, free and rigid tool, eq 1 and eq 4 dashed.
     {
@@ -522,12 +517,12 @@ pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
         let rigid = cx.sweep("figures/fig2_rigid_tool.toml", &[("target.restitution", 0.0, 1.0, 21, false)])?;
         let es = &free.values[0];
         let series = vec![
-            Series { name: "rigid tool, simulated".into(), points: es.iter().copied().zip(rigid.metric("object_final_velocity")).collect(), color: PALETTE[1], style: Style::Line },
+            Series { name: "rigid tool, simulated".into(), points: es.iter().copied().zip(rigid.metric("object_final_velocity")).collect(), color: PALETTE[1], style: Style::LineMarked },
             Series { name: "eq 1: (1 + e) v_t".into(), points: es.iter().map(|&e| (e, 1.0 + e)).collect(), color: PALETTE[5], style: Style::Dashed },
-            Series { name: "free tool, simulated".into(), points: es.iter().copied().zip(free.metric("object_final_velocity")).collect(), color: PALETTE[0], style: Style::Line },
+            Series { name: "free tool, simulated".into(), points: es.iter().copied().zip(free.metric("object_final_velocity")).collect(), color: PALETTE[0], style: Style::LineMarked },
             Series { name: "eq 4: m_t (1 + e) v_t / (m_t + m_p)".into(), points: es.iter().map(|&e| (e, 0.125 * (1.0 + e) / 0.375)).collect(), color: PALETTE[3], style: Style::Dashed },
         ];
-        splot::lines(&dir.join("fig2.svg"), "Fig. 2: object velocity after the impact against e (m_t = 0.125 kg, m_p = 0.25 kg, v_t = 1 m/s)", &XAxis { label: "e".into(), log: false }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, marks: vec![], y_log: false }])?;
+        splot::lines(&dir.join("fig2.svg"), "Fig. 2: object velocity after the impact against e (m_t = 0.125 kg, m_p = 0.25 kg, v_t = 1 m/s)", &XAxis { label: "e".into(), log: false }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, ..Default::default() }])?;
     }
     // Fig. 3: V_p against m_t for three e.
     {
@@ -535,10 +530,10 @@ pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
         let mut series = Vec::new();
         for (j, &e) in r.values[1].iter().enumerate() {
             let pts: Vec<(f64, f64)> = r.values[0].iter().enumerate().map(|(i, &m)| (m, r.at(&[i, j]).map_or(f64::NAN, obj))).collect();
-            series.push(Series { name: format!("e = {e}, simulated"), points: pts, color: PALETTE[j], style: Style::Line });
+            series.push(Series { name: format!("e = {e}, simulated"), points: pts, color: PALETTE[j], style: Style::LineMarked });
             series.push(Series { name: format!("e = {e}, eq 4"), points: r.values[0].iter().map(|&m| (m, m * (1.0 + e) / (m + 0.25))).collect(), color: PALETTE[j], style: Style::Dashed });
         }
-        splot::lines(&dir.join("fig3.svg"), "Fig. 3: object velocity against the moving mass (free tool, m_p = 0.25 kg)", &XAxis { label: "m_t [kg]".into(), log: true }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, marks: vec![], y_log: false }])?;
+        splot::lines(&dir.join("fig3.svg"), "Fig. 3: object velocity against the moving mass (free tool, m_p = 0.25 kg)", &XAxis { label: "m_t [kg]".into(), log: true }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, ..Default::default() }])?;
     }
     history("figures/fig13_compliant_robot.toml", &[], "fig13b.svg")?;
     history("figures/fig13_compliant_robot.toml", &[("target.mass", 2.5)], "fig14a.svg")?;
@@ -548,8 +543,8 @@ pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
         let axes = vec![Axis::new("decoupler.stiffness", 10.0, 1000.0, 13, Spacing::Log).map_err(|e| e.to_string())?, Axis::new("target.stiffness", 1e3, 1e6, 4, Spacing::Log).map_err(|e| e.to_string())?];
         let t = cx.template("table2_linear.toml")?.with_base(&[("target.restitution", e)]).map_err(|e| e.to_string())?;
         let r = Sweep::new(&t, axes).map_err(|e| e.to_string())?.run(Progress::Hidden);
-        let series: Vec<Series> = r.values[1].iter().enumerate().map(|(j, &kc)| Series { name: format!("k_c = {kc:.0e} N/m^1.5"), points: r.values[0].iter().enumerate().map(|(i, &kt)| (kt, r.at(&[i, j]).map_or(f64::NAN, obj))).collect(), color: PALETTE[j], style: Style::Line }).collect();
-        splot::lines(&dir.join(file), &format!("{title}: object velocity against k_t (zeta = 1, Table 2 masses, v_t = 1 m/s)"), &XAxis { label: "k_t [N/m]".into(), log: true }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, marks: vec![], y_log: false }])?;
+        let series: Vec<Series> = r.values[1].iter().enumerate().map(|(j, &kc)| Series { name: format!("k_c = {kc:.0e} N/m^1.5"), points: r.values[0].iter().enumerate().map(|(i, &kt)| (kt, r.at(&[i, j]).map_or(f64::NAN, obj))).collect(), color: PALETTE[j], style: Style::LineMarked }).collect();
+        splot::lines(&dir.join(file), &format!("{title}: object velocity against k_t (zeta = 1, Table 2 masses, v_t = 1 m/s)"), &XAxis { label: "k_t [N/m]".into(), log: true }, &[Panel { caption: "V_p".into(), y_label: "V_p [m/s]".into(), series, ..Default::default() }])?;
     }
     history("table2_bistable.toml", &[], "fig24a.svg")?;
     history("table2_linear.toml", &[], "fig24b.svg")?;
@@ -559,7 +554,8 @@ pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
     history("tables5-7_bistable_v025.toml", &[], "fig41.svg")?;
     for (k, m, f) in [("tool.mass", "peak_contact_force", "fig42.svg"), ("target.stiffness", "peak_contact_force", "fig43.svg"), ("decoupler.spring_rate", "peak_contact_force", "fig44.svg"), ("motion.dead_time", "peak_contact_force", "fig45.svg"), ("tool.mass", "peak_robot_force", "fig46.svg"), ("motion.dead_time", "peak_robot_force", "fig49.svg")] {
         let r = cx.sweep(CH3, &ch3_axes(Grid::Plot, k))?;
-        splot::draw(&dir.join(f), &r, m)?;
+        // The force on the robot spans decades (3 N in mode 1, 40 N in mode 2): a log colour scale.
+        splot::draw_with(&dir.join(f), &r, m, m == "peak_robot_force")?;
     }
     for s in ["table12_hydraulic_object", "table13_bistable_object", "table14_hydraulic_surface", "table15_bistable_surface", "table14_hydraulic_surface_dt10", "table15_bistable_surface_dt10", "table4_bistable_136g"] {
         history(&format!("{s}.toml"), &[], &format!("{s}.svg"))?;

@@ -1,4 +1,4 @@
-//! `cargo xtask`: the project's test driver (std only, no dependencies).
+//! `cargo xtask`: the project's test driver (std, and `object` to read the firmware ELF).
 //!
 //! * `cargo xtask test`: every stage below, then one closing line `N passed, N failed, N skipped`.
 //!   1. host tests: `cargo test --workspace` at the repo root (its output is shown as is);
@@ -11,7 +11,11 @@
 //!   6. avoidance step cost: `firmware/avoid-cost` in QEMU, at most 5,000 instructions per step on
 //!      a 15 x 15 grid for every number type (issue 4).
 //!
-//!   Exits non-zero if any stage failed; skipped stages do not fail the run.
+//!   7. no fontconfig: the `flinch` binary built with `PKG_CONFIG_PATH` pointing nowhere and
+//!      `FONTCONFIG_FILE` empty draws a PNG and an SVG, and `ldd` lists only the C runtime (issue 16).
+//!
+//!   Exits non-zero if any stage failed; skipped stages do not fail the run, except in CI (`CI` set):
+//!   there a missing target, QEMU or tool is a failure, never a quiet pass.
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
 
@@ -143,6 +147,20 @@ fn test() -> ExitCode {
                 }
             },
         ));
+    }
+
+    results.push(("no fontconfig", match no_fontconfig() {
+        Ok(m) => Outcome::Pass(m),
+        Err(e) => Outcome::Fail(e),
+    }));
+
+    // In CI nothing is skipped quietly: a missing target or tool fails the run.
+    if env::var_os("CI").is_some_and(|v| !v.is_empty() && v != "false" && v != "0") {
+        for (_, outcome) in results.iter_mut() {
+            if let Outcome::Skip(m) = outcome {
+                *outcome = Outcome::Fail(format!("skipped in CI: {m}"));
+            }
+        }
     }
 
     println!();
@@ -372,31 +390,21 @@ struct Size {
 /// values), every allocated section in RAM (address 0x2000_0000 and up: `.data`, `.bss`, `.uninit`)
 /// is static RAM. The stack is not counted: it takes what RAM is left.
 fn elf_size(path: &Path) -> Result<Size, String> {
-    let b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let rd = |off: usize, n: usize| -> Result<u64, String> {
-        let s = b.get(off..off + n).ok_or_else(|| format!("{}: truncated ELF", path.display()))?;
-        Ok(s.iter().rev().fold(0u64, |acc, &x| (acc << 8) | u64::from(x)))
-    };
-    if b.get(0..4) != Some(b"\x7fELF") || b.get(4) != Some(&1) || b.get(5) != Some(&1) {
-        return Err(format!("{}: not a 32-bit little-endian ELF", path.display()));
-    }
-    let shoff = rd(0x20, 4)? as usize;
-    let shentsize = rd(0x2E, 2)? as usize;
-    let shnum = rd(0x30, 2)? as usize;
-    const SHT_NOBITS: u64 = 8;
+    use object::{Object, ObjectSection, SectionFlags, SectionKind};
     const SHF_ALLOC: u64 = 2;
+    let b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let elf = object::File::parse(&*b).map_err(|e| format!("{}: not an ELF object: {e}", path.display()))?;
     let (mut flash, mut ram) = (0, 0);
-    for i in 0..shnum {
-        let sh = shoff + i * shentsize;
-        let (typ, flags, addr, size) = (rd(sh + 4, 4)?, rd(sh + 8, 4)?, rd(sh + 12, 4)?, rd(sh + 20, 4)?);
-        if flags & SHF_ALLOC == 0 {
+    for sec in elf.sections() {
+        let alloc = matches!(sec.flags(), SectionFlags::Elf { sh_flags } if sh_flags & SHF_ALLOC != 0);
+        if !alloc {
             continue;
         }
-        if typ != SHT_NOBITS {
-            flash += size;
+        if sec.kind() != SectionKind::UninitializedData {
+            flash += sec.size();
         }
-        if addr >= 0x2000_0000 {
-            ram += size;
+        if sec.address() >= 0x2000_0000 {
+            ram += sec.size();
         }
     }
     Ok(Size { flash, ram })
@@ -410,4 +418,44 @@ fn check_size(s: &Size) -> Result<(), String> {
         return Err(format!("static RAM {} B > {} B", s.ram, RAM_LIMIT));
     }
     Ok(())
+}
+
+/// The plots need no system font and the binary no font library: build `flinch` with pkg-config
+/// pointing nowhere (a `-sys` crate that needs libfontconfig1-dev fails to build), draw a PNG and
+/// an SVG with fontconfig disabled (`FONTCONFIG_FILE` empty), and check that `ldd` lists only the
+/// C runtime. Uses the dev-profile binary the host tests already built, so it adds seconds.
+fn no_fontconfig() -> Result<String, String> {
+    let start = Instant::now();
+    let nowhere = repo_root().join("target").join("no-pkg-config");
+    let env = [("PKG_CONFIG_PATH", nowhere.as_os_str()), ("PKG_CONFIG_LIBDIR", nowhere.as_os_str()), ("FONTCONFIG_FILE", "".as_ref()), ("FONTCONFIG_PATH", nowhere.as_os_str())];
+    let status = cargo().args(["build", "--quiet", "-p", "flinch-harness", "--bin", "flinch"]).envs(env).current_dir(repo_root()).status().map_err(|e| format!("could not run cargo: {e}"))?;
+    if !status.success() {
+        return Err(format!("cargo build -p flinch-harness --bin flinch without pkg-config exited with {status}"));
+    }
+    let bin = target_dir().join("debug").join("flinch");
+    let out = env::temp_dir().join(format!("flinch-no-fontconfig-{}", std::process::id()));
+    fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    for ext in ["png", "svg"] {
+        let plot = out.join(format!("x.{ext}"));
+        let o = Command::new(&bin).args(["run", "tables5-7_bistable", "--plot"]).arg(&plot).envs(env).current_dir(&out).output().map_err(|e| format!("could not run {}: {e}", bin.display()))?;
+        if !o.status.success() {
+            return Err(format!("flinch run --plot x.{ext} failed: {}", String::from_utf8_lossy(&o.stderr)));
+        }
+        let bytes = fs::read(&plot).map_err(|e| format!("{}: {e}", plot.display()))?;
+        if bytes.len() < 20_000 {
+            return Err(format!("{}: only {} bytes: the plot is broken", plot.display(), bytes.len()));
+        }
+        if ext == "svg" && !String::from_utf8_lossy(&bytes).contains("peak contact force") {
+            return Err(format!("{}: the SVG has no text", plot.display()));
+        }
+    }
+    let _ = fs::remove_dir_all(&out);
+    let ldd = Command::new("ldd").arg(&bin).output().map_err(|e| format!("could not run ldd: {e}"))?;
+    let listing = String::from_utf8_lossy(&ldd.stdout).to_string();
+    const C_RUNTIME: [&str; 8] = ["linux-vdso", "libc.so", "libm.so", "libgcc_s.so", "ld-linux", "libpthread.so", "libdl.so", "librt.so"];
+    let extra: Vec<&str> = listing.lines().map(str::trim).filter(|l| !l.is_empty() && !C_RUNTIME.iter().any(|c| l.contains(c))).collect();
+    if !extra.is_empty() {
+        return Err(format!("ldd {} lists more than the C runtime: {}", bin.display(), extra.join("; ")));
+    }
+    Ok(format!("built without pkg-config, PNG and SVG drawn without fontconfig, ldd lists only the C runtime ({} libraries), {:.1} s", listing.lines().count(), start.elapsed().as_secs_f64()))
 }

@@ -1,11 +1,27 @@
-//! What a run produced, for people and for scripts: the human summary, the `--json` object
-//! (SCENES.md), the CSV time history and the plots.
+//! What a run produced, for people and for scripts: the human summary, the `--json` documents
+//! (versioned, their JSON Schemas in docs/schema/), the CSV time history and the plots, and how a
+//! command writes them (docs/conventions.md).
 
 pub mod csv;
+pub mod figure;
+pub mod font;
+pub mod measured;
+pub mod output;
 pub mod plot;
+pub mod schema;
+pub mod stream;
+pub mod trace;
 
+use crate::hil::HilReport;
 use crate::sim::Summary;
+use measured::Comparison;
+use schemars::JsonSchema;
+use serde::Serialize;
 use std::fmt::Write;
+
+/// The version of every JSON document Flinch writes (`schema_version`): raised when a field is
+/// renamed, removed or changes meaning; adding a field does not raise it.
+pub const SCHEMA_VERSION: u32 = 1;
 
 fn ms(t: Option<f64>) -> String {
     t.map_or("-".into(), |t| format!("{:.1} ms", t * 1e3))
@@ -32,7 +48,7 @@ pub fn human(s: &Summary) -> String {
         let _ = writeln!(o, "  first contact: approach {:.4} m/s, achieved restitution {:.3}", s.approach_velocity.unwrap_or(0.0), e);
     }
     if let Some(p) = s.peak_gas_pressure {
-        let _ = writeln!(o, "  peak gas pressure {:.0} Pa", p);
+        let _ = writeln!(o, "  peak gas pressure {:.2} kPa", p * 1e-3);
     }
     let _ = writeln!(o, "  solver {}: {} steps ({} rejected), {} RHS evaluations, {} events", s.method, s.steps, s.rejected_steps, s.rhs_evals, s.events);
     for w in &s.warnings {
@@ -41,7 +57,58 @@ pub fn human(s: &Summary) -> String {
     o
 }
 
+/// The comparison with a measured file, for people.
+pub fn human_measured(file: &str, c: &[Comparison]) -> String {
+    let mut o = String::new();
+    let _ = writeln!(o, "  measured ({file}):");
+    for m in c {
+        let (k, u) = match m.unit.as_str() {
+            "m" => (1e3, "mm"),
+            u => (1.0, u),
+        };
+        let _ = writeln!(
+            o,
+            "    {}: RMS error {:.3} {u}; peak {:.3} simulated vs {:.3} measured ({:+.3} {u}, {:+.1} %); time shift {:+.1} ms (RMS {:.3} {u} after it)",
+            m.column, m.rms_error * k, m.peak_simulated * k, m.peak_measured * k, m.peak_error * k,
+            if m.peak_measured != 0.0 { m.peak_error / m.peak_measured.abs() * 100.0 } else { f64::NAN },
+            m.time_shift_s * 1e3, m.rms_error_shifted * k
+        );
+    }
+    o
+}
+
+/// `flinch run --json`: the summary object of the scene contract (docs/SCENES.md), with its
+/// schema version and, with `--measured`, the comparison.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct RunJson<'a> {
+    /// Version of this document's schema (docs/schema/run.json).
+    pub schema_version: u32,
+    /// The summary (its field names are the scene contract's).
+    #[serde(flatten)]
+    pub summary: &'a Summary,
+    /// With `--measured FILE.csv`: every measured column against the run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measured: Option<&'a [Comparison]>,
+}
+
+/// `flinch hil --json`.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct HilJson<'a> {
+    /// Version of this document's schema (docs/schema/hil.json).
+    pub schema_version: u32,
+    /// The run's summary and the firmware's figures.
+    #[serde(flatten)]
+    pub report: &'a HilReport,
+}
+
+/// A JSON document, pretty-printed, with a trailing newline.
+pub fn to_json<T: Serialize>(doc: &T) -> String {
+    let mut s = serde_json::to_string_pretty(doc).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
+    s.push('\n');
+    s
+}
+
 /// The `--json` summary, one object.
 pub fn json(s: &Summary) -> String {
-    serde_json::to_string_pretty(s).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    to_json(&RunJson { schema_version: SCHEMA_VERSION, summary: s, measured: None })
 }

@@ -1,102 +1,129 @@
-//! Plots of a run the way the thesis draws them (Fig. 39-41, 47): (a) velocities x_c', x_r', x_t'
-//! (and x_p') against time, (b) the contact force and the force on the robot, both with the
-//! contact, detection and braking instants marked. SVG or PNG by the file's extension.
+//! The picture of one run, the way the thesis draws them (Figs. 39-41, 47, 72-73, 78): velocities,
+//! forces (each reported peak marked where the trace tops out, since the summary's peak is found
+//! between samples), the decoupler's travel against the switch threshold and the end of the stroke,
+//! the gas pressure of a hydraulic module, and with the firmware in the loop its signals: the
+//! switch, the stop output and the controller's samples. Contact, detection and braking are marked
+//! in every panel; a `--measured` file is drawn under the simulated traces.
 
+use super::figure::{self, Level, Mark, Note, Panel, Series, Style, XAxis, PALETTE};
+use super::trace::Trace;
+use crate::scene::{Decoupler, Scene, Sensor, TargetKind};
 use crate::sim::{Sample, Summary};
-use plotters::coord::Shift;
-use plotters::prelude::*;
+use plotters::style::RGBColor;
 use std::path::Path;
 
-/// Draws the two panels into `path` (.svg or .png).
-pub fn draw(path: &Path, summary: &Summary, history: &[Sample], object: bool, rigid_robot: bool) -> Result<(), String> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let size = (1000, 800);
-    let res = match ext.as_str() {
-        "svg" => panels(&SVGBackend::new(path, size).into_drawing_area(), summary, history, object, rigid_robot),
-        "png" => panels(&BitMapBackend::new(path, size).into_drawing_area(), summary, history, object, rigid_robot),
-        _ => return Err(format!("{}: the plot file must end in .svg or .png", path.display())),
-    };
-    res.map_err(|e| format!("{}: could not draw the plot: {e}", path.display()))
-}
+/// Extra traces over a run: measured columns by convention name.
+pub type Overlay = Vec<(String, Vec<(f64, f64)>)>;
 
-type DrawResult = Result<(), Box<dyn std::error::Error>>;
+const GREY: RGBColor = RGBColor(110, 110, 110);
+const MEASURED: RGBColor = RGBColor(150, 150, 150);
 
-/// The range of the finite values, padded by 5 % (a constant series gets a band around it).
-pub(crate) fn finite_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in values.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if !lo.is_finite() {
-        return (0.0, 1.0);
-    }
-    if hi - lo < 1e-12 * lo.abs().max(1.0) {
-        let pad = lo.abs().max(1.0) * 0.05;
-        return (lo - pad, hi + pad);
-    }
-    let pad = (hi - lo) * 0.05;
-    (lo - pad, hi + pad)
-}
-
-fn panels<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Summary, h: &[Sample], object: bool, rigid_robot: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
-    let (top, bottom) = root.split_vertically(400);
-    let t_end = h.last().map_or(1.0, |x| x.t);
-    let marks: Vec<(f64, &str, RGBColor)> = [(s.t_contact, "contact", RGBColor(120, 120, 120)), (s.t_detect, "detection", RGBColor(200, 120, 0)), (s.t_brake, "braking", RGBColor(180, 0, 0))]
+fn event_marks(s: &Summary) -> Vec<Mark> {
+    [(s.t_contact, "first contact", GREY), (s.t_detect, "detection", RGBColor(230, 159, 0)), (s.t_brake, "braking starts", RGBColor(200, 0, 0))]
         .into_iter()
-        .filter_map(|(t, n, c)| t.map(|t| (t, n, c)))
-        .collect();
+        .filter_map(|(t, n, c)| t.map(|x| Mark { x, label: n.to_string(), color: c }))
+        .collect()
+}
 
-    // (a) velocities
-    let mut vel: Vec<(&str, RGBColor, Box<dyn Fn(&Sample) -> f64>)> = vec![("x_c' commanded", RGBColor(0, 0, 0), Box::new(|x: &Sample| x.v_c))];
-    if !rigid_robot {
-        vel.push(("x_r' robot", RGBColor(0, 90, 200), Box::new(|x: &Sample| x.v_r)));
+/// The end of the stroke (travel at the back stop), m, if the decoupler has one.
+fn stroke(scene: &Scene) -> Option<f64> {
+    match &scene.decoupler {
+        Decoupler::Bistable(b) => Some(b.front_stroke + b.back_stroke),
+        Decoupler::Hydraulic(h) => Some(h.stroke),
+        _ => None,
     }
-    vel.push(("x_t' tool", RGBColor(220, 60, 0), Box::new(|x: &Sample| x.v_t)));
+}
+
+/// The panels of a run.
+pub fn panels(scene: &Scene, s: &Summary, h: &[Sample], trace: &Trace, measured: &Overlay) -> Vec<Panel> {
+    let marks = event_marks(s);
+    let series = |name: &str, c: RGBColor, style: Style, f: &dyn Fn(&Sample) -> f64| Series { name: name.into(), points: h.iter().map(|x| (x.t, f(x))).collect(), color: c, style };
+    let overlay = |col: &str, scale: f64, label: &str| -> Option<Series> {
+        measured.iter().find(|(c, _)| c == col).map(|(_, p)| Series { name: format!("measured {label}"), points: p.iter().map(|&(t, v)| (t, v * scale)).collect(), color: MEASURED, style: Style::Thin })
+    };
+    let object = matches!(scene.target.kind, TargetKind::Object { .. });
+    let mut out = Vec::new();
+
+    // Velocities.
+    let mut vel: Vec<Series> = ["v_t_mps", "v_r_mps", "v_p_mps", "v_c_mps"].iter().zip(["tool x_t'", "robot x_r'", "object x_p'", "commanded x_c'"]).filter_map(|(c, l)| overlay(c, 1.0, l)).collect();
+    vel.push(series("commanded x_c'", PALETTE[6], Style::Dashed, &|x| x.v_c));
+    if scene.robot.is_some() {
+        vel.push(series("robot flange x_r'", PALETTE[0], Style::Line, &|x| x.v_r));
+    }
+    if !matches!(scene.decoupler, Decoupler::Rigid) {
+        vel.push(series("tool x_t'", PALETTE[1], Style::Line, &|x| x.v_t));
+    }
     if object {
-        vel.push(("x_p' object", RGBColor(0, 150, 60), Box::new(|x: &Sample| x.v_p)));
+        vel.push(series("object x_p'", PALETTE[2], Style::Line, &|x| x.v_p));
     }
-    let (lo, hi) = finite_range(vel.iter().flat_map(|(_, _, f)| h.iter().map(f)));
-    let mut chart = ChartBuilder::on(&top)
-        .caption(format!("{}: velocities", s.scene), ("sans-serif", 18))
-        .margin(10).x_label_area_size(35).y_label_area_size(60)
-        .build_cartesian_2d(0.0..t_end, lo..hi)?;
-    chart.configure_mesh().x_desc("t [s]").y_desc("velocity [m/s]").draw()?;
-    for (name, color, f) in &vel {
-        chart.draw_series(LineSeries::new(h.iter().map(|x| (x.t, f(x))), color.stroke_width(2)))?
-            .label(*name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-    }
-    for &(t, name, c) in &marks {
-        chart.draw_series(LineSeries::new(vec![(t, lo), (t, hi)], c.stroke_width(1)))?
-            .label(name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-    }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    out.push(Panel { caption: "velocities".into(), y_label: "velocity [m/s]".into(), series: vel, marks: marks.clone(), ..Default::default() });
 
-    // (b) forces, drawn positive as the thesis does (Fig. 39b, 40b)
-    let (lo, hi) = finite_range(h.iter().flat_map(|x| [x.f_contact, x.f_robot.abs(), 0.0]));
-    let mut chart = ChartBuilder::on(&bottom)
-        .caption("contact force and force on the robot", ("sans-serif", 18))
-        .margin(10).x_label_area_size(35).y_label_area_size(60)
-        .build_cartesian_2d(0.0..t_end, lo..hi)?;
-    chart.configure_mesh().x_desc("t [s]").y_desc("force [N]").draw()?;
-    let fc = RGBColor(200, 0, 120);
-    let fr = RGBColor(0, 90, 200);
-    chart.draw_series(LineSeries::new(h.iter().map(|x| (x.t, x.f_contact)), fc.stroke_width(2)))?
-        .label(format!("contact force (peak {:.1} N)", s.peak_contact_force))
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], fc.stroke_width(2)));
-    chart.draw_series(LineSeries::new(h.iter().map(|x| (x.t, x.f_robot.abs())), fr.stroke_width(2)))?
-        .label(format!("|force on robot| (peak {:.1} N)", s.peak_robot_force))
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], fr.stroke_width(2)));
-    for &(t, _, c) in &marks {
-        chart.draw_series(LineSeries::new(vec![(t, lo), (t, hi)], c.stroke_width(1)))?;
+    // Forces, the reported peaks marked where their traces top out.
+    let mut forces: Vec<Series> = [("f_contact_n", "contact force", 1.0), ("f_robot_n", "|force on robot|", 1.0)].iter().filter_map(|&(c, l, k)| overlay(c, k, l)).map(|mut o| {
+        if o.name.contains("robot") {
+            o.points.iter_mut().for_each(|p| p.1 = p.1.abs());
+        }
+        o
+    }).collect();
+    forces.push(series("contact force", PALETTE[3], Style::Line, &|x| x.f_contact));
+    forces.push(series("|force on robot|", PALETTE[0], Style::Line, &|x| x.f_robot.abs()));
+    let mut notes = Vec::new();
+    let at_max = |f: &dyn Fn(&Sample) -> f64| h.iter().map(|x| (x.t, f(x))).fold((f64::NAN, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a }).0;
+    if s.peak_contact_force > 0.0 {
+        notes.push(Note { at: (at_max(&|x| x.f_contact), s.peak_contact_force), text: format!("peak contact force {:.2} N", s.peak_contact_force), color: PALETTE[3] });
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
-    root.present()?;
-    Ok(())
+    if s.peak_robot_force > 0.0 {
+        notes.push(Note { at: (at_max(&|x| x.f_robot.abs()), s.peak_robot_force), text: format!("peak on robot {:.2} N", s.peak_robot_force), color: PALETTE[0] });
+    }
+    out.push(Panel { caption: "forces (triangles: the reported peaks, located between samples)".into(), y_label: "force [N]".into(), series: forces, marks: marks.clone(), notes, ..Default::default() });
+
+    // Travel against the switch threshold and the end of the stroke.
+    if !matches!(scene.decoupler, Decoupler::Rigid) {
+        let mut levels = Vec::new();
+        if let Some(Sensor::Travel { threshold }) = scene.sensor {
+            levels.push(Level { y: threshold * 1e3, label: format!("switch threshold {:.1} mm", threshold * 1e3), color: RGBColor(230, 159, 0) });
+        }
+        if let Some(c) = stroke(scene) {
+            levels.push(Level { y: c * 1e3, label: format!("end of stroke {:.1} mm", c * 1e3), color: RGBColor(200, 0, 0) });
+        }
+        let mut tr: Vec<Series> = overlay("travel_m", 1e3, "travel").into_iter().collect();
+        tr.push(series("travel back from the front stop", PALETTE[1], Style::Line, &|x| trace.travel(x) * 1e3));
+        out.push(Panel { caption: format!("decoupler travel (max {:.2} mm)", s.max_travel * 1e3), y_label: "travel [mm]".into(), series: tr, marks: marks.clone(), levels, ..Default::default() });
+    }
+
+    // Gas pressure of a hydraulic module.
+    if trace.has_gas() {
+        let p = series("gas pressure p1 (eq 47)", PALETTE[2], Style::Line, &|x| trace.gas_pressure(x).unwrap_or(f64::NAN) * 1e-3);
+        out.push(Panel { caption: "hydraulic gas spring".into(), y_label: "gas pressure [kPa]".into(), series: vec![p], marks: marks.clone(), ..Default::default() });
+    }
+
+    // Firmware in the loop.
+    if let Some(hil) = &trace.hil {
+        let row = |base: f64, on: &dyn Fn(&Sample) -> bool| -> Vec<(f64, f64)> { h.iter().map(|x| (x.t, base + if on(x) { 0.7 } else { 0.0 })).collect() };
+        let mut sig = vec![
+            Series { name: "switch tripped (travel >= threshold)".into(), points: row(2.0, &|x| trace.switch_tripped(x) == Some(true)), color: PALETTE[1], style: Style::Steps },
+            Series { name: "firmware stop output dropped (latched)".into(), points: row(1.0, &|x| trace.stop_requested(x.t) == Some(true)), color: RGBColor(200, 0, 0), style: Style::Steps },
+            Series { name: "stop as the controller sampled it".into(), points: row(0.0, &|x| trace.stop_seen(x.t) == Some(true)), color: PALETTE[0], style: Style::Steps },
+        ];
+        if hil.controller_samples_s.len() <= 400 {
+            sig.push(Series { name: "controller samples (scan cycle)".into(), points: hil.controller_samples_s.iter().map(|&t| (t, 0.35)).collect(), color: PALETTE[0], style: Style::Points });
+        }
+        out.push(Panel {
+            caption: "firmware in the loop".into(),
+            y_label: "signal".into(),
+            series: sig,
+            marks: marks.clone(),
+            y_range: Some((-0.2, 2.9)),
+            y_ticks: vec![(0.0, "controller".into()), (1.0, "stop out".into()), (2.0, "switch".into())],
+            weight: 0.8,
+            ..Default::default()
+        });
+    }
+    out
+}
+
+/// Draws a run into `path` (.svg or .png).
+pub fn draw(path: &Path, scene: &Scene, summary: &Summary, history: &[Sample], trace: &Trace, measured: &Overlay) -> Result<(), String> {
+    let p = panels(scene, summary, history, trace, measured);
+    figure::draw(path, &summary.scene, &XAxis { label: "t [s]".into(), log: false }, &p)
 }

@@ -1,6 +1,7 @@
 //! The `flinch sweep` command line.
 
 use super::{check_metric, plot, Axis, Progress, Sweep, SweepError, Template};
+use crate::report::output::{self, Failure};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -20,7 +21,7 @@ pub struct SweepArgs {
     /// Write sweep.csv and sweep.svg into this folder.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Write the CSV here (one row per point, every summary field).
+    /// Write the CSV here (`-`: standard output; one row per point: every summary field, status, reason).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Draw the plot here (.svg or .png): lines for one axis, a heat map for two.
@@ -29,6 +30,13 @@ pub struct SweepArgs {
     /// The summary field a heat map shows.
     #[arg(long, default_value = "peak_robot_force")]
     pub metric: String,
+    /// Colour the heat map on a logarithmic scale (a metric spanning decades: 3 N and 40 N apart).
+    #[arg(long)]
+    pub log_color: bool,
+    /// Refuse the whole sweep if the validator refuses any point (default: such points become rows
+    /// with status "refused" and the reason, drawn as grey crosses).
+    #[arg(long)]
+    pub strict: bool,
     /// Threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -51,46 +59,54 @@ pub fn axes(vary: &[String], log: &[String]) -> Result<Vec<Axis>, SweepError> {
     Ok(parsed)
 }
 
-/// Runs `flinch sweep`.
-pub fn run(args: &SweepArgs) -> Result<(), String> {
-    let axes = axes(&args.vary, &args.log).map_err(|e| e.to_string())?;
-    check_metric(&args.metric).map_err(|e| e.to_string())?;
+/// Runs `flinch sweep`: exit 0 when every point ran, 3 when the solver failed at any, 2 for a
+/// sweep that cannot be built (or, with `--strict`, a refused point).
+pub fn run(args: &SweepArgs) -> Result<bool, Failure> {
+    let axes = axes(&args.vary, &args.log).map_err(|e| Failure::bad_input(e.to_string()))?;
+    check_metric(&args.metric).map_err(|e| Failure::bad_input(e.to_string()))?;
     let (csv, svg) = match &args.out {
         Some(dir) => {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            std::fs::create_dir_all(dir).map_err(|e| Failure::runtime(format!("{}: {e}", dir.display())))?;
             (Some(args.csv.clone().unwrap_or_else(|| dir.join("sweep.csv"))), Some(args.plot.clone().unwrap_or_else(|| dir.join("sweep.svg"))))
         }
         None => (args.csv.clone(), args.plot.clone()),
     };
     if let Some(p) = &svg {
-        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        if ext != "svg" && ext != "png" {
-            return Err(format!("--plot {}: the plot file must end in .svg or .png", p.display()));
-        }
+        crate::report::figure::check_extension(p).map_err(|e| Failure::bad_input(format!("--plot {e}")))?;
     }
-    let template = Template::load(&args.scene).map_err(|e| e.to_string())?;
-    let sweep = Sweep::new(&template, axes).map_err(|e| e.to_string())?;
+    let template = Template::load(&args.scene).map_err(|e| Failure::bad_input(e.to_string()))?;
+    let built = if args.strict { Sweep::new(&template, axes) } else { Sweep::keep_going(&template, axes) };
+    let sweep = built.map_err(|e| Failure::bad_input(e.to_string()))?;
+    if sweep.refused_count() == sweep.len() {
+        let first = (0..sweep.len()).find_map(|k| sweep.refusal(k)).unwrap_or_default();
+        return Err(Failure::bad_input(format!("the validator refuses all {} points; the first: {first}", sweep.len())));
+    }
     // A tool that meets the target while the flange is still accelerating never sees V_c: say so,
     // since a speed sweep of such a scene saturates at sqrt(2 a_c gap).
     let early = (0..sweep.len())
+        .filter(|&k| sweep.refusal(k).is_none())
         .filter(|&k| {
             let s = sweep.scene(k);
             !s.motion.start_at_speed && s.target.gap < s.motion.speed * s.motion.speed / (2.0 * s.motion.accel)
         })
         .count();
     if early > 0 {
-        eprintln!("note: at {early} of {} points the tool meets the target before the flange reaches motion.speed (gap < V_c^2 / 2 a_c): the impact speed there is sqrt(2 a_c gap), not V_c; raise target.gap or set motion.start_at_speed = true", sweep.len());
+        output::note(&format!("note: at {early} of {} points the tool meets the target before the flange reaches motion.speed (gap < V_c^2 / 2 a_c): the impact speed there is sqrt(2 a_c gap), not V_c; raise target.gap or set motion.start_at_speed = true", sweep.len()));
     }
     let t0 = Instant::now();
-    let result = sweep.run_with_jobs(Progress::Auto, args.jobs).map_err(|e| e.to_string())?;
+    let result = sweep.run_with_jobs(Progress::Auto, args.jobs).map_err(|e| Failure::bad_input(e.to_string()))?;
     let wall = t0.elapsed().as_secs_f64();
-    match &csv {
-        Some(path) => std::fs::write(path, result.csv()).map_err(|e| format!("{}: {e}", path.display()))?,
-        None if svg.is_none() => print!("{}", result.csv()),
-        None => {}
+    let csv_out = match (&csv, &svg) {
+        (Some(p), _) => Some(p.clone()),
+        (None, None) => Some(PathBuf::from("-")),
+        (None, Some(_)) => None,
+    };
+    if let Some(path) = &csv_out {
+        let mut w = output::create(path)?;
+        result.write_csv(&mut w).and_then(|_| w.flush()).map_err(|e| output::write_error(path, &e))?;
     }
     if let Some(path) = &svg {
-        plot::draw(path, &result, &args.metric)?;
+        plot::draw_with(path, &result, &args.metric, args.log_color).map_err(Failure::runtime)?;
     }
     let exhausted = result.metric("stroke_exhausted").iter().filter(|&&e| e == 1.0).count();
     let modes: Vec<String> = (1..=3u8)
@@ -98,19 +114,20 @@ pub fn run(args: &SweepArgs) -> Result<(), String> {
         .filter(|&(_, n)| n > 0)
         .map(|(m, n)| format!("mode {m}: {n}"))
         .collect();
-    eprintln!(
-        "{}: {} points in {:.2} s ({} threads){}{}{}{}",
+    output::note(&format!(
+        "{}: {} points in {:.2} s ({} threads){}{}{}{}{}",
         template.base.name,
         result.points.len(),
         wall,
         args.jobs.unwrap_or_else(rayon::current_num_threads),
         if modes.is_empty() { String::new() } else { format!("; {}", modes.join(", ")) },
         if exhausted > 0 { format!("; stroke exhausted at {exhausted}") } else { String::new() },
-        if result.failures() > 0 { format!("; SOLVER FAILED at {} (see the error column)", result.failures()) } else { String::new() },
-        [csv.as_ref().map(|p| format!("; csv {}", p.display())), svg.as_ref().map(|p| format!("; plot {}", p.display()))].into_iter().flatten().collect::<String>(),
-    );
+        if result.refused() > 0 { format!("; REFUSED by the validator at {} (status and reason columns; --strict refuses the sweep)", result.refused()) } else { String::new() },
+        if result.failures() > 0 { format!("; SOLVER FAILED at {} (status and reason columns)", result.failures()) } else { String::new() },
+        [csv_out.as_ref().filter(|p| !output::is_stdout(p)).map(|p| format!("; csv {}", p.display())), svg.as_ref().map(|p| format!("; plot {}", p.display()))].into_iter().flatten().collect::<String>(),
+    ));
     if result.failures() > 0 {
-        return Err(format!("the solver failed at {} of {} points", result.failures(), result.points.len()));
+        return Err(Failure::runtime(format!("the solver failed at {} of {} points", result.failures(), result.points.len())));
     }
-    Ok(())
+    Ok(true)
 }

@@ -3,8 +3,8 @@
 //! A sweep edits the scene's parsed TOML document (a dotted key path such as `motion.speed`,
 //! `decoupler.spring_rate` or `decoupler.front_stop.stiffness`) and re-validates every edited
 //! text with [`scene::parse`], the same validator `flinch run` uses. Every point of the grid is
-//! built and checked *before* anything runs, so a bad key, a bad range or a value the validator
-//! refuses stops the sweep with a message naming what is wrong, and no time is spent simulating.
+//! built and checked *before* anything runs, so a bad key or a bad range stops the sweep with a
+//! message naming what is wrong, and no time is spent simulating.
 //!
 //! Axes are `KEY=START:STOP:N` (linear steps) or `KEY=log:START:STOP:N` (geometric steps, START > 0);
 //! `--log KEY` makes an axis geometric too. Points are ordered with the first axis varying slowest
@@ -12,7 +12,9 @@
 //!
 //! The CSV has one row per point: the swept values, then every field of the run's [`Summary`] in
 //! its declaration order (found by serialising it, so a field added to `Summary` appears here
-//! without a change), then `error` (empty unless the solver failed at that point).
+//! without a change), then `status` (`ok`, `refused` by the validator, `failed` in the solver) and
+//! `reason`. A point the validator refuses does not stop `flinch sweep`: it becomes such a row and
+//! is drawn as such (`--strict` restores refusing the whole sweep, as [`Sweep::new`] does).
 
 pub mod cli;
 pub mod plot;
@@ -211,20 +213,9 @@ fn numeric_keys_of(item: &Item, prefix: &str, out: &mut Vec<String>) {
     }
 }
 
-/// Edit distance (Levenshtein), for "did you mean".
+/// Edit distance (Levenshtein, `strsim`), for "did you mean".
 fn distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
+    strsim::levenshtein(a, b)
 }
 
 /// Keys of `candidates` close to `key`: a small edit distance on the whole path or on its last
@@ -247,9 +238,10 @@ pub fn close_matches(key: &str, candidates: &[String]) -> Vec<String> {
 
 impl Template {
     /// Reads and validates a scene file.
+    /// Reads a scene argument (a file, `-`, or a shipped scene's name: [`crate::shipped::read`]).
     pub fn load(path: &Path) -> Result<Self, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SweepError(format!("{}: cannot read the scene file: {e}", path.display())))?;
-        Self::from_text(&text, &path.display().to_string())
+        let (file, text) = crate::shipped::read(path).map_err(|e| SweepError(e.0))?;
+        Self::from_text(&text, &file)
     }
 
     /// A template from scene text; `file` names it in messages.
@@ -342,15 +334,40 @@ impl Template {
     }
 }
 
-/// A sweep checked and built: every point's scene exists and is valid.
+/// A sweep checked and built: every point's scene is valid, or (built with
+/// [`Sweep::keep_going`]) refused with the validator's reason.
 pub struct Sweep {
     /// The swept axes (one or two), first varying slowest.
     pub axes: Vec<Axis>,
     /// The values of each axis.
     pub values: Vec<Vec<f64>>,
     scenes: Vec<Scene>,
+    /// Per point: the validator's reason when it refused the point's scene (the point does not run).
+    refused: Vec<Option<String>>,
     /// Scene name, for titles.
     pub scene_name: String,
+}
+
+/// What became of a point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// Ran; the summary is there.
+    Ok,
+    /// The scene validator refused the point's values; it did not run.
+    Refused,
+    /// It ran and the solver gave up.
+    Failed,
+}
+
+impl Status {
+    /// As the CSV writes it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Ok => "ok",
+            Self::Refused => "refused",
+            Self::Failed => "failed",
+        }
+    }
 }
 
 /// One point of a sweep and its outcome.
@@ -360,8 +377,10 @@ pub struct Point {
     pub values: Vec<f64>,
     /// Index of each value on its axis.
     pub index: Vec<usize>,
-    /// The summary, or the solver's error.
+    /// The summary, or why there is none (the validator's or the solver's message).
     pub outcome: Result<Summary, String>,
+    /// Ok, refused or failed.
+    pub status: Status,
 }
 
 /// A finished sweep, points in row-major order (first axis slowest).
@@ -396,8 +415,19 @@ fn grid_index(sizes: &[usize], mut k: usize) -> Vec<usize> {
 }
 
 impl Sweep {
-    /// Checks the axes against the template and builds every point's scene. Nothing runs.
+    /// Checks the axes against the template and builds every point's scene. Nothing runs. A point
+    /// whose values the validator refuses refuses the whole sweep (`flinch sweep --strict`).
     pub fn new(template: &Template, axes: Vec<Axis>) -> Result<Self, SweepError> {
+        Self::build(template, axes, true)
+    }
+
+    /// As [`Sweep::new`], but a refused point becomes a row with status `refused` and the
+    /// validator's reason instead of refusing the sweep; bad axes or keys still refuse it.
+    pub fn keep_going(template: &Template, axes: Vec<Axis>) -> Result<Self, SweepError> {
+        Self::build(template, axes, false)
+    }
+
+    fn build(template: &Template, axes: Vec<Axis>, strict: bool) -> Result<Self, SweepError> {
         if axes.is_empty() {
             return err("nothing to sweep: give --vary KEY=START:STOP:N once or twice");
         }
@@ -424,18 +454,27 @@ impl Sweep {
                 template.with(&sets)
             })
             .collect();
-        let refused = built.iter().filter(|b| b.is_err()).count();
+        let n_refused = built.iter().filter(|b| b.is_err()).count();
         let mut scenes = Vec::with_capacity(total);
+        let mut refused = Vec::with_capacity(total);
         for b in built {
             match b {
-                Ok(s) => scenes.push(s),
-                Err(e) => {
-                    let of = if total > 1 { format!("{refused} of {total} points refused; the first: ") } else { String::new() };
+                Ok(s) => {
+                    scenes.push(s);
+                    refused.push(None);
+                }
+                Err(e) if strict => {
+                    let of = if total > 1 { format!("{n_refused} of {total} points refused; the first: ") } else { String::new() };
                     return err(format!("{of}{e}"));
+                }
+                Err(e) => {
+                    // Never run; the template's scene stands in so indices stay aligned.
+                    scenes.push(template.base.clone());
+                    refused.push(Some(e.0));
                 }
             }
         }
-        Ok(Self { axes, values, scenes, scene_name: template.base.name.clone() })
+        Ok(Self { axes, values, scenes, refused, scene_name: template.base.name.clone() })
     }
 
     /// Number of points.
@@ -448,9 +487,19 @@ impl Sweep {
         self.scenes.is_empty()
     }
 
-    /// The scene of point `k` (row-major).
+    /// The scene of point `k` (row-major); for a refused point, the template's (it does not run).
     pub fn scene(&self, k: usize) -> &Scene {
         &self.scenes[k]
+    }
+
+    /// Why point `k` was refused, if it was.
+    pub fn refusal(&self, k: usize) -> Option<&str> {
+        self.refused.get(k).and_then(|r| r.as_deref())
+    }
+
+    /// Points the validator refused.
+    pub fn refused_count(&self) -> usize {
+        self.refused.iter().filter(|r| r.is_some()).count()
     }
 
     /// Runs every point on the current rayon pool; the order of the result does not depend on it.
@@ -473,9 +522,15 @@ impl Sweep {
             .map(|(k, sc)| {
                 let index = grid_index(&sizes, k);
                 let values = index.iter().zip(&self.values).map(|(&i, v)| v[i]).collect();
-                let outcome = sim::run(sc, false).map(|(s, _)| s).map_err(|e| e.to_string());
+                let (outcome, status) = match &self.refused[k] {
+                    Some(why) => (Err(why.clone()), Status::Refused),
+                    None => match sim::run(sc, false) {
+                        Ok((s, _)) => (Ok(s), Status::Ok),
+                        Err(e) => (Err(e.to_string()), Status::Failed),
+                    },
+                };
                 bar.inc(1);
-                Point { values, index, outcome }
+                Point { values, index, outcome, status }
             })
             .collect();
         bar.finish_and_clear();
@@ -557,44 +612,41 @@ fn csv_cell(v: &Json) -> String {
         Json::Null => String::new(),
         Json::Bool(b) => b.to_string(),
         Json::Number(n) => n.to_string(),
-        Json::String(s) => quote(s),
-        Json::Array(a) => quote(&a.iter().map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string)).collect::<Vec<_>>().join("; ")),
-        Json::Object(_) => quote(&v.to_string()),
-    }
-}
-
-fn quote(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
+        Json::String(s) => s.clone(),
+        Json::Array(a) => a.iter().map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string)).collect::<Vec<_>>().join("; "),
+        Json::Object(_) => v.to_string(),
     }
 }
 
 impl SweepResult {
-    /// Writes the CSV: the swept keys, every `Summary` field, `error`.
+    /// Writes the CSV (the `csv` crate quotes): the swept keys, every `Summary` field, then
+    /// `status` (ok, refused, failed) and `reason` (the validator's or the solver's message).
     pub fn write_csv(&self, out: &mut dyn Write) -> io::Result<()> {
         let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).collect()).unwrap_or_default();
-        let mut header: Vec<String> = self.axes.iter().map(|a| quote(&a.key)).collect();
+        let mut w = csv::Writer::from_writer(out);
+        let mut header: Vec<String> = self.axes.iter().map(|a| a.key.clone()).collect();
         header.extend(names.iter().cloned());
-        header.push("error".into());
-        writeln!(out, "{}", header.join(","))?;
+        header.push("status".into());
+        header.push("reason".into());
+        w.write_record(&header)?;
         for p in &self.points {
             let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
             match &p.outcome {
                 Ok(s) => {
                     let fields = summary_fields(s);
                     row.extend(names.iter().map(|n| fields.iter().find(|(k, _)| k == n).map_or(String::new(), |(_, v)| csv_cell(v))));
+                    row.push(p.status.as_str().into());
                     row.push(String::new());
                 }
                 Err(e) => {
                     row.extend(names.iter().map(|_| String::new()));
-                    row.push(quote(e));
+                    row.push(p.status.as_str().into());
+                    row.push(e.clone());
                 }
             }
-            writeln!(out, "{}", row.join(","))?;
+            w.write_record(&row)?;
         }
-        Ok(())
+        w.flush()
     }
 
     /// The CSV as a string.
@@ -621,7 +673,12 @@ impl SweepResult {
 
     /// Points whose solver failed.
     pub fn failures(&self) -> usize {
-        self.points.iter().filter(|p| p.outcome.is_err()).count()
+        self.points.iter().filter(|p| p.status == Status::Failed).count()
+    }
+
+    /// Points the validator refused.
+    pub fn refused(&self) -> usize {
+        self.points.iter().filter(|p| p.status == Status::Refused).count()
     }
 }
 

@@ -1,77 +1,21 @@
-//! Pictures of sweeps: line charts for one axis, heat maps with the working-mode regions of
-//! Fig. 46 outlined for two. SVG or PNG by the file's extension. Log axes are drawn on log10 of the
-//! value, labelled with the value itself.
+//! Pictures of sweeps: line charts for one axis (the working mode as steps), heat maps for two,
+//! with the working-mode regions of Fig. 46 outlined, a colour bar with the metric's unit (linear,
+//! or logarithmic with `--log-color` so that 3 N and 40 N regions look different), round ticks on
+//! logarithmic axes (plotters' `log_scale`), and every point that did not run drawn as such:
+//! refused by the validator (light grey, a cross) or failed in the solver (dark grey).
 
-use super::{Spacing, SweepResult};
+use super::{Spacing, Status, SweepResult};
+use crate::report::figure::{self, with_backend, DrawResult};
+pub use crate::report::figure::{finite_range, fmt_num, Series, Style, XAxis, PALETTE};
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
-use crate::report::plot::finite_range;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 
-type DrawResult = Result<(), Box<dyn std::error::Error>>;
-
-/// One horizontal axis: its label and whether it is logarithmic.
-#[derive(Debug, Clone)]
-pub struct XAxis {
-    /// Label, with unit.
-    pub label: String,
-    /// Draw on log10.
-    pub log: bool,
-}
-
-impl XAxis {
-    fn fwd(&self, x: f64) -> f64 {
-        if self.log { x.log10() } else { x }
-    }
-    fn label_of(&self, u: f64) -> String {
-        fmt_num(if self.log { 10f64.powf(u) } else { u })
-    }
-}
-
-/// A number for tick labels: short, exponent when large or small.
-pub fn fmt_num(x: f64) -> String {
-    let a = x.abs();
-    if x == 0.0 {
-        "0".into()
-    } else if !(1e-3..1e5).contains(&a) {
-        format!("{x:.1e}")
-    } else if a >= 100.0 {
-        format!("{x:.0}")
-    } else if a >= 1.0 {
-        let s = format!("{x:.2}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        let s = format!("{x:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    }
-}
-
-/// How a series is drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Style {
-    /// Solid line with markers at the points.
-    Line,
-    /// Dashed line, no markers (a formula drawn beside simulated points).
-    Dashed,
-    /// Markers only.
-    Points,
-}
-
-/// A named series of (x, y) points; NaN y values break the line.
-#[derive(Debug, Clone)]
-pub struct Series {
-    /// Legend text.
-    pub name: String,
-    /// The points, x in the axis's own units (not log10).
-    pub points: Vec<(f64, f64)>,
-    /// Colour.
-    pub color: RGBColor,
-    /// Line style.
-    pub style: Style,
-}
-
-/// One panel of a line chart.
-#[derive(Debug, Clone)]
+/// One panel of a line chart, in the short form sweeps and `design` use (see
+/// [`figure::Panel`] for every option).
+#[derive(Debug, Clone, Default)]
 pub struct Panel {
     /// Panel caption.
     pub caption: String,
@@ -81,90 +25,34 @@ pub struct Panel {
     pub series: Vec<Series>,
     /// Vertical marks (x, label).
     pub marks: Vec<(f64, String)>,
-    /// Draw y on log10.
+    /// Draw y on a log scale.
     pub y_log: bool,
 }
 
-/// A palette for series, distinguishable in print.
-pub const PALETTE: [RGBColor; 6] = [RGBColor(0, 90, 200), RGBColor(200, 0, 120), RGBColor(0, 150, 60), RGBColor(220, 120, 0), RGBColor(110, 60, 170), RGBColor(0, 0, 0)];
-
-fn backend(path: &Path, size: (u32, u32), f: &dyn Fn(&DrawingArea<SVGBackend, Shift>) -> DrawResult, g: &dyn Fn(&DrawingArea<BitMapBackend, Shift>) -> DrawResult) -> Result<(), String> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let res = match ext.as_str() {
-        "svg" => f(&SVGBackend::new(path, size).into_drawing_area()),
-        "png" => g(&BitMapBackend::new(path, size).into_drawing_area()),
-        _ => return Err(format!("{}: the plot file must end in .svg or .png", path.display())),
-    };
-    res.map_err(|e| format!("{}: could not draw the plot: {e}", path.display()))
-}
-
-
-/// Draws stacked panels sharing an x axis into `path`.
-pub fn lines(path: &Path, title: &str, x: &XAxis, panels: &[Panel]) -> Result<(), String> {
-    let h = 60 + 360 * panels.len() as u32;
-    backend(path, (1000, h), &|r| lines_on(r, title, x, panels), &|r| lines_on(r, title, x, panels))
-}
-
-fn lines_on<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, x: &XAxis, panels: &[Panel]) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
-    let root = root.titled(title, ("sans-serif", 20))?;
-    let areas = root.split_evenly((panels.len().max(1), 1));
-    let xs = panels.iter().flat_map(|p| p.series.iter().flat_map(|s| s.points.iter().map(|q| x.fwd(q.0))).chain(p.marks.iter().map(|m| x.fwd(m.0))));
-    let (x0, x1) = finite_range(xs);
-    for (area, p) in areas.iter().zip(panels) {
-        let yf = |y: f64| if p.y_log { if y > 0.0 { y.log10() } else { f64::NAN } } else { y };
-        let (y0, y1) = finite_range(p.series.iter().flat_map(|s| s.points.iter().map(|q| yf(q.1))));
-        let mut chart = ChartBuilder::on(area).caption(&p.caption, ("sans-serif", 16)).margin(10).x_label_area_size(35).y_label_area_size(70).build_cartesian_2d(x0..x1, y0..y1)?;
-        let ylab = |u: &f64| fmt_num(if p.y_log { 10f64.powf(*u) } else { *u });
-        chart.configure_mesh().x_desc(&x.label).y_desc(&p.y_label).x_label_formatter(&|u| x.label_of(*u)).y_label_formatter(&ylab).draw()?;
-        for s in &p.series {
-            let c = s.color;
-            let pts: Vec<(f64, f64)> = s.points.iter().map(|&(a, b)| (x.fwd(a), yf(b))).collect();
-            // Split at NaN so a missing value breaks the line instead of joining across it.
-            let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
-            for q in &pts {
-                if q.1.is_finite() && q.0.is_finite() {
-                    runs.last_mut().expect("never empty").push(*q);
-                } else if !runs.last().expect("never empty").is_empty() {
-                    runs.push(Vec::new());
-                }
-            }
-            let mut first = true;
-            for run in runs.iter().filter(|r| !r.is_empty()) {
-                let anno = match s.style {
-                    Style::Line => chart.draw_series(LineSeries::new(run.clone(), c.stroke_width(2)).point_size(3))?,
-                    Style::Dashed => chart.draw_series(DashedLineSeries::new(run.clone(), 6, 4, c.stroke_width(2)))?,
-                    Style::Points => chart.draw_series(run.iter().map(|&q| Circle::new(q, 4, c.filled())))?,
-                };
-                if first {
-                    anno.label(&s.name).legend(move |(a, b)| PathElement::new(vec![(a, b), (a + 20, b)], c.stroke_width(2)));
-                    first = false;
-                }
-            }
+impl From<&Panel> for figure::Panel {
+    fn from(p: &Panel) -> Self {
+        let colours = [RGBColor(110, 110, 110), RGBColor(200, 0, 0), RGBColor(0, 120, 120)];
+        Self {
+            caption: p.caption.clone(),
+            y_label: p.y_label.clone(),
+            series: p.series.clone(),
+            marks: p.marks.iter().enumerate().map(|(k, (x, l))| figure::Mark { x: *x, label: l.clone(), color: colours[k % 3] }).collect(),
+            y_log: p.y_log,
+            ..Default::default()
         }
-        for (k, (m, label)) in p.marks.iter().enumerate() {
-            let u = x.fwd(*m);
-            let red = [RGBColor(120, 120, 120), RGBColor(180, 0, 0), RGBColor(0, 120, 120)][k % 3];
-            chart.draw_series(LineSeries::new(vec![(u, y0), (u, y1)], red.stroke_width(2)))?.label(label.as_str()).legend(move |(a, b)| PathElement::new(vec![(a, b), (a + 20, b)], red.stroke_width(2)));
-        }
-        chart.configure_series_labels().position(SeriesLabelPosition::UpperLeft).background_style(WHITE.mix(0.85)).border_style(BLACK).draw()?;
     }
-    root.present()?;
-    Ok(())
 }
 
-/// Viridis, sampled at nine points and interpolated (the `colormaps` feature of plotters is off).
+/// Draws stacked panels sharing an x axis into `path` (see [`figure::draw`]).
+pub fn lines(path: &Path, title: &str, x: &XAxis, panels: &[Panel]) -> Result<(), String> {
+    let full: Vec<figure::Panel> = panels.iter().map(figure::Panel::from).collect();
+    figure::draw(path, title, x, &full)
+}
+
+/// Viridis (plotters' `colormaps`) at f in [0, 1].
 pub fn viridis(f: f64) -> RGBColor {
-    const V: [(u8, u8, u8); 9] = [(68, 1, 84), (71, 44, 122), (59, 81, 139), (44, 113, 142), (33, 144, 141), (39, 173, 129), (92, 200, 99), (170, 220, 50), (253, 231, 37)];
     let f = if f.is_finite() { f.clamp(0.0, 1.0) } else { 0.0 };
-    let x = f * (V.len() - 1) as f64;
-    let i = (x.floor() as usize).min(V.len() - 2);
-    let t = x - i as f64;
-    let lerp = |a: u8, b: u8| (a as f64 + (b as f64 - a as f64) * t).round() as u8;
-    RGBColor(lerp(V[i].0, V[i + 1].0), lerp(V[i].1, V[i + 1].1), lerp(V[i].2, V[i + 1].2))
+    ViridisRGB.get_color(f)
 }
 
 /// A heat map over an nx x ny grid.
@@ -180,35 +68,71 @@ pub struct HeatMap {
     pub y: XAxis,
     /// y values.
     pub ys: Vec<f64>,
-    /// The metric, row-major with x slowest (`z[i * ny + j]` at xs[i], ys[j]); NaN is grey.
+    /// The metric, row-major with x slowest (`z[i * ny + j]` at xs[i], ys[j]); NaN is no value.
     pub z: Vec<f64>,
-    /// Colour-bar label.
+    /// Colour-bar label, with unit.
     pub z_label: String,
+    /// Colour on log10 of the metric.
+    pub z_log: bool,
     /// Working mode per cell (outlined where it changes), if the decoupler has one.
     pub modes: Vec<Option<u8>>,
-    /// Cells where the stroke ran out (crossed).
+    /// Cells where the stroke ran out (red cross).
     pub exhausted: Vec<bool>,
+    /// Status of every cell (refused and failed cells are drawn as such).
+    pub status: Vec<Status>,
 }
 
-/// Cell edges in drawing coordinates: midpoints between values, half a step beyond the ends.
+/// Cell edges in value coordinates: midpoints between values (geometric on a log axis), half a
+/// step beyond the ends.
 fn edges(ax: &XAxis, v: &[f64]) -> Vec<f64> {
-    let u: Vec<f64> = v.iter().map(|&x| ax.fwd(x)).collect();
+    let fwd = |x: f64| if ax.log { x.ln() } else { x };
+    let back = |u: f64| if ax.log { u.exp() } else { u };
+    let u: Vec<f64> = v.iter().map(|&x| fwd(x)).collect();
     let n = u.len();
-    let mut e = Vec::with_capacity(n + 1);
     if n == 1 {
-        return vec![u[0] - 0.5, u[0] + 0.5];
+        return vec![back(u[0] - 0.5), back(u[0] + 0.5)];
     }
+    let mut e = Vec::with_capacity(n + 1);
     e.push(u[0] - 0.5 * (u[1] - u[0]));
     for i in 0..n - 1 {
         e.push(0.5 * (u[i] + u[i + 1]));
     }
     e.push(u[n - 1] + 0.5 * (u[n - 1] - u[n - 2]));
-    e
+    e.into_iter().map(back).collect()
+}
+
+/// Round tick values over [lo, hi]: 1-2-5 steps, or 1-2-5 per decade on a log scale.
+pub fn ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
+    if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
+        return vec![lo];
+    }
+    if log {
+        let mut out = Vec::new();
+        let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        let per: &[f64] = if b - a > 4 { &[1.0] } else if b - a > 1 { &[1.0, 2.0, 5.0] } else { &[1.0, 1.5, 2.0, 3.0, 5.0, 7.0] };
+        for e in a..=b {
+            for m in per {
+                let v = m * 10f64.powi(e);
+                if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
+                    out.push(v);
+                }
+            }
+        }
+        if out.len() < 2 {
+            return vec![lo, hi];
+        }
+        return out;
+    }
+    let raw = (hi - lo) / 6.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(10.0 * mag);
+    let first = (lo / step).ceil() * step;
+    (0..).map(|k| first + k as f64 * step).take_while(|v| *v <= hi + step * 1e-9).map(|v| if v.abs() < step * 1e-9 { 0.0 } else { v }).collect()
 }
 
 /// Draws a heat map into `path`.
 pub fn heat_map(path: &Path, h: &HeatMap) -> Result<(), String> {
-    backend(path, (1000, 760), &|r| heat_on(r, h), &|r| heat_on(r, h))
+    with_backend(path, (1150, 780), &|r| heat_on(r, h), &|r| heat_on(r, h))
 }
 
 fn heat_on<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, h: &HeatMap) -> DrawResult
@@ -216,37 +140,82 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let root = root.titled(&h.title, ("sans-serif", 20))?;
-    let (main, bar) = root.split_horizontally(860);
-    let (nx, ny) = (h.xs.len(), h.ys.len());
+    let root = root.titled(&h.title, ("sans-serif", 19))?;
+    let (main, side) = root.split_horizontally(860);
     let ex = edges(&h.x, &h.xs);
     let ey = edges(&h.y, &h.ys);
-    let mut chart = ChartBuilder::on(&main).margin(15).x_label_area_size(45).y_label_area_size(75).build_cartesian_2d(ex[0]..ex[nx], ey[0]..ey[ny])?;
-    chart.configure_mesh().disable_mesh().x_desc(&h.x.label).y_desc(&h.y.label).x_label_formatter(&|u| h.x.label_of(*u)).y_label_formatter(&|u| h.y.label_of(*u)).draw()?;
-    let (zlo, zhi) = {
-        let f: Vec<f64> = h.z.iter().copied().filter(|v| v.is_finite()).collect();
-        let lo = f.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = f.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        if lo.is_finite() { (lo, if hi > lo { hi } else { lo + 1.0 }) } else { (0.0, 1.0) }
-    };
-    let grey = RGBColor(190, 190, 190);
+    let (nx, ny) = (h.xs.len(), h.ys.len());
+    let (x0, x1, y0, y1) = (ex[0], ex[nx], ey[0], ey[ny]);
+    // The colour scale: the finite values (positive ones on a log scale).
+    let finite: Vec<f64> = h.z.iter().copied().filter(|v| v.is_finite() && (!h.z_log || *v > 0.0)).collect();
+    let lo = finite.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (zlo, zhi) = if !lo.is_finite() { (0.0, 1.0) } else if hi > lo { (lo, hi) } else if h.z_log { (lo / 2.0, lo * 2.0) } else { (lo - 0.5, lo + 0.5) };
+    let frac = |z: f64| if h.z_log { (z.ln() - zlo.ln()) / (zhi.ln() - zlo.ln()) } else { (z - zlo) / (zhi - zlo) };
+    match (h.x.log, h.y.log) {
+        (false, false) => cells(&main, h, x0..x1, y0..y1, &ex, &ey, &frac)?,
+        (true, false) => cells(&main, h, (x0..x1).log_scale(), y0..y1, &ex, &ey, &frac)?,
+        (false, true) => cells(&main, h, x0..x1, (y0..y1).log_scale(), &ex, &ey, &frac)?,
+        (true, true) => cells(&main, h, (x0..x1).log_scale(), (y0..y1).log_scale(), &ex, &ey, &frac)?,
+    }
+    colour_bar(&side, h, zlo, zhi)?;
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn cells<DB: DrawingBackend, X, Y>(area: &DrawingArea<DB, Shift>, h: &HeatMap, xr: X, yr: Y, ex: &[f64], ey: &[f64], frac: &dyn Fn(f64) -> f64) -> DrawResult
+where
+    DB::ErrorType: 'static,
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
+    let (nx, ny) = (h.xs.len(), h.ys.len());
+    let mut chart = ChartBuilder::on(area).margin(15).margin_right(25).x_label_area_size(48).y_label_area_size(80).build_cartesian_2d(xr, yr)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc(&h.x.label)
+        .y_desc(&h.y.label)
+        .x_label_formatter(&|v| fmt_num(*v))
+        .y_label_formatter(&|v| fmt_num(*v))
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 15))
+        .draw()?;
+    let refused = RGBColor(215, 215, 215);
+    let failed = RGBColor(120, 120, 120);
+    let status = |i: usize, j: usize| h.status.get(i * ny + j).copied().unwrap_or(Status::Ok);
     chart.draw_series((0..nx).flat_map(|i| (0..ny).map(move |j| (i, j))).map(|(i, j)| {
         let z = h.z[i * ny + j];
-        let c = if z.is_finite() { viridis((z - zlo) / (zhi - zlo)) } else { grey };
+        let c = match status(i, j) {
+            Status::Refused => refused,
+            Status::Failed => failed,
+            Status::Ok if z.is_finite() && (!h.z_log || z > 0.0) => viridis(frac(z)),
+            Status::Ok => refused,
+        };
         Rectangle::new([(ex[i], ey[j]), (ex[i + 1], ey[j + 1])], c.filled())
     }))?;
-    // Stroke exhausted: a cross in the cell.
-    let red = RGBColor(230, 30, 30);
+    // A cross in a cell: red where the stroke ran out, dark grey where the validator refused it.
+    let mut cross = |i: usize, j: usize, c: RGBColor| -> DrawResult {
+        let p = |a: f64, b: f64, t: f64| a + (b - a) * t;
+        let mid = |e: &[f64], k: usize, t: f64, log: bool| if log { (p(e[k].ln(), e[k + 1].ln(), t)).exp() } else { p(e[k], e[k + 1], t) };
+        let (a, b) = (mid(ex, i, 0.25, h.x.log), mid(ex, i, 0.75, h.x.log));
+        let (c0, d) = (mid(ey, j, 0.25, h.y.log), mid(ey, j, 0.75, h.y.log));
+        chart.draw_series(LineSeries::new(vec![(a, c0), (b, d)], c.stroke_width(2)))?;
+        chart.draw_series(LineSeries::new(vec![(a, d), (b, c0)], c.stroke_width(2)))?;
+        Ok(())
+    };
     for i in 0..nx {
         for j in 0..ny {
-            if h.exhausted.get(i * ny + j).copied().unwrap_or(false) {
-                let (a, b, c, d) = (ex[i] + 0.25 * (ex[i + 1] - ex[i]), ex[i + 1] - 0.25 * (ex[i + 1] - ex[i]), ey[j] + 0.25 * (ey[j + 1] - ey[j]), ey[j + 1] - 0.25 * (ey[j + 1] - ey[j]));
-                chart.draw_series(LineSeries::new(vec![(a, c), (b, d)], red.stroke_width(2)))?;
-                chart.draw_series(LineSeries::new(vec![(a, d), (b, c)], red.stroke_width(2)))?;
+            if status(i, j) == Status::Refused {
+                cross(i, j, RGBColor(90, 90, 90))?;
+            } else if h.exhausted.get(i * ny + j).copied().unwrap_or(false) {
+                cross(i, j, RGBColor(230, 30, 30))?;
             }
         }
     }
-    // Mode boundaries: a thick white-on-black line on every edge between cells of different mode.
+    // Mode boundaries: a white-on-black line on every edge between cells of different mode.
     if h.modes.len() == nx * ny && h.modes.iter().any(Option::is_some) {
         let m = |i: usize, j: usize| h.modes[i * ny + j];
         let mut segs: Vec<[(f64, f64); 2]> = Vec::new();
@@ -266,34 +235,85 @@ where
         for s in &segs {
             chart.draw_series(LineSeries::new(s.to_vec(), BLACK.stroke_width(2)))?;
         }
-        // Label each mode region at the centre of its cells.
+        // Label each mode region at the cell nearest its centroid, so the label sits inside it.
         for mode in 1..=3u8 {
             let cells: Vec<(usize, usize)> = (0..nx).flat_map(|i| (0..ny).map(move |j| (i, j))).filter(|&(i, j)| m(i, j) == Some(mode)).collect();
             if cells.is_empty() {
                 continue;
             }
-            // The cell nearest the centroid, so the label sits inside the region.
             let (ci, cj) = cells.iter().fold((0.0, 0.0), |a, &(i, j)| (a.0 + i as f64, a.1 + j as f64));
             let (ci, cj) = (ci / cells.len() as f64, cj / cells.len() as f64);
-            let &(i, j) = cells.iter().min_by(|a, b| {
+            let Some(&(i, j)) = cells.iter().min_by(|a, b| {
                 let da = (a.0 as f64 - ci).powi(2) + (a.1 as f64 - cj).powi(2);
                 let db = (b.0 as f64 - ci).powi(2) + (b.1 as f64 - cj).powi(2);
                 da.total_cmp(&db)
-            }).expect("non-empty");
-            let at = (0.5 * (ex[i] + ex[i + 1]), 0.5 * (ey[j] + ey[j + 1]));
-            chart.draw_series(std::iter::once(EmptyElement::at(at) + Rectangle::new([(-34, -12), (34, 12)], WHITE.mix(0.85).filled()) + Text::new(format!("mode {mode}"), (-28, -8), ("sans-serif", 16).into_font().color(&BLACK))))?;
+            }) else {
+                continue;
+            };
+            let centre = |e: &[f64], k: usize, log: bool| if log { (e[k] * e[k + 1]).sqrt() } else { 0.5 * (e[k] + e[k + 1]) };
+            let at = chart.backend_coord(&(centre(ex, i, h.x.log), centre(ey, j, h.y.log)));
+            let (l, t) = (area.get_base_pixel().0, area.get_base_pixel().1);
+            let at = (at.0 - l, at.1 - t);
+            area.draw(&Rectangle::new([(at.0 - 36, at.1 - 12), (at.0 + 36, at.1 + 12)], WHITE.mix(0.85).filled()))?;
+            area.draw(&Text::new(format!("mode {mode}"), at, ("sans-serif", 16).into_font().color(&BLACK).pos(Pos::new(HPos::Center, VPos::Center))))?;
         }
     }
-    // Colour bar.
-    let mut cb = ChartBuilder::on(&bar).margin_top(15).margin_bottom(60).margin_right(55).y_label_area_size(0).right_y_label_area_size(50).x_label_area_size(0).build_cartesian_2d(0.0..1.0, zlo..zhi)?;
-    cb.configure_mesh().disable_mesh().disable_x_axis().y_label_formatter(&|v| fmt_num(*v)).y_desc(&h.z_label).draw()?;
-    let steps = 100;
-    cb.draw_series((0..steps).map(|k| {
-        let a = zlo + (zhi - zlo) * k as f64 / steps as f64;
-        let b = zlo + (zhi - zlo) * (k + 1) as f64 / steps as f64;
-        Rectangle::new([(0.0, a), (1.0, b)], viridis((k as f64 + 0.5) / steps as f64).filled())
-    }))?;
-    root.present()?;
+    Ok(())
+}
+
+/// The colour bar, drawn by hand: a gradient, ticks at round values with labels, the metric's
+/// name and unit, and the key to the symbols.
+fn colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, h: &HeatMap, zlo: f64, zhi: f64) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let (_, height) = area.dim_in_pixel();
+    let (bx0, bx1) = (30, 62);
+    let (top, bottom) = (30, (height as i32 - 280).max(200));
+    let frac = |z: f64| if h.z_log { (z.ln() - zlo.ln()) / (zhi.ln() - zlo.ln()) } else { (z - zlo) / (zhi - zlo) };
+    let ypix = |f: f64| bottom - ((bottom - top) as f64 * f).round() as i32;
+    let steps = 200;
+    for k in 0..steps {
+        let f0 = k as f64 / steps as f64;
+        let f1 = (k + 1) as f64 / steps as f64;
+        area.draw(&Rectangle::new([(bx0, ypix(f1)), (bx1, ypix(f0))], viridis(0.5 * (f0 + f1)).filled()))?;
+    }
+    area.draw(&Rectangle::new([(bx0, top), (bx1, bottom)], BLACK.stroke_width(1)))?;
+    let label_font = ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+    for t in ticks(zlo, zhi, h.z_log) {
+        let y = ypix(frac(t));
+        area.draw(&PathElement::new(vec![(bx1, y), (bx1 + 6, y)], BLACK.stroke_width(1)))?;
+        area.draw(&Text::new(fmt_num(t), (bx1 + 10, y), label_font.clone()))?;
+    }
+    // The metric's name and unit, rotated beside the bar.
+    let desc = ("sans-serif", 15).into_font().color(&BLACK).transform(FontTransform::Rotate270).pos(Pos::new(HPos::Center, VPos::Center));
+    area.draw(&Text::new(format!("{}{}", h.z_label, if h.z_log { " (log scale)" } else { "" }), (12, (top + bottom) / 2), desc))?;
+    // Key.
+    let mut y = bottom + 30;
+    let key = ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+    let mut entry = |draw: &dyn Fn(&DrawingArea<DB, Shift>, (i32, i32)) -> DrawResult, text: &str| -> DrawResult {
+        draw(area, (18, y))?;
+        area.draw(&Text::new(text.to_string(), (44, y), key.clone()))?;
+        y += 24;
+        Ok(())
+    };
+    let x_mark = |c: RGBColor| move |a: &DrawingArea<DB, Shift>, (x, y): (i32, i32)| -> DrawResult {
+        a.draw(&PathElement::new(vec![(x, y - 7), (x + 14, y + 7)], c.stroke_width(2)))?;
+        a.draw(&PathElement::new(vec![(x, y + 7), (x + 14, y - 7)], c.stroke_width(2)))?;
+        Ok(())
+    };
+    if h.modes.iter().any(Option::is_some) {
+        entry(&|a, (x, y)| { a.draw(&PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(3)))?; Ok(()) }, "working-mode boundary")?;
+    }
+    if h.exhausted.iter().any(|&e| e) {
+        entry(&x_mark(RGBColor(230, 30, 30)), "stroke exhausted")?;
+    }
+    if h.status.iter().any(|&s| s == Status::Refused) {
+        entry(&|a, (x, y)| { a.draw(&Rectangle::new([(x, y - 8), (x + 16, y + 8)], RGBColor(215, 215, 215).filled()))?; x_mark(RGBColor(90, 90, 90))(a, (x + 1, y)) }, "refused by the validator")?;
+    }
+    if h.status.iter().any(|&s| s == Status::Failed) {
+        entry(&|a, (x, y)| { a.draw(&Rectangle::new([(x, y - 8), (x + 16, y + 8)], RGBColor(120, 120, 120).filled()))?; Ok(()) }, "solver failed")?;
+    }
     Ok(())
 }
 
@@ -318,60 +338,93 @@ pub fn key_label(key: &str) -> String {
     if unit.is_empty() { key.to_string() } else { format!("{key} [{unit}]") }
 }
 
-/// A label for a summary metric, with its unit.
+/// A label for a summary metric, with its unit (from the JSON Schema's unit table).
 pub fn metric_label(m: &str) -> String {
-    let unit = match m {
-        "peak_contact_force" | "peak_robot_force" => "N",
-        "t_contact" | "t_detect" | "t_brake" | "detection_delay" | "reaction_time" | "t_stop" => "s",
-        "object_final_velocity" | "approach_velocity" | "object_peak_velocity" => "m/s",
-        "max_travel" => "m",
-        "decoupler_impulse" => "N s",
-        "peak_gas_pressure" => "Pa",
-        _ => "",
-    };
-    if unit.is_empty() { m.to_string() } else { format!("{m} [{unit}]") }
+    match crate::report::schema::unit_of(m) {
+        Some("1") | None => m.to_string(),
+        Some(u) => format!("{m} [{u}]"),
+    }
 }
 
-/// The default picture of a sweep: for one axis, peak contact and robot force and the working
-/// mode against the value; for two, a heat map of `metric` with the mode regions outlined.
+/// The default picture of a sweep (see [`draw_with`]), linear colours.
 pub fn draw(path: &Path, r: &SweepResult, metric: &str) -> Result<(), String> {
+    draw_with(path, r, metric, false)
+}
+
+/// The picture of a sweep: for one axis, the peak forces, `metric` and the working mode (as steps)
+/// against the value, points that did not run marked; for two, a heat map of `metric`.
+pub fn draw_with(path: &Path, r: &SweepResult, metric: &str, log_color: bool) -> Result<(), String> {
     let axis = |k: usize| XAxis { label: key_label(&r.axes[k].key), log: r.axes[k].spacing == Spacing::Log };
     let title = format!("{}: sweep", r.scene_name);
     match r.axes.len() {
         1 => {
             let xs = &r.values[0];
-            let series = |name: &str, m: &str, c: RGBColor| Series { name: name.into(), points: xs.iter().copied().zip(r.metric(m)).collect(), color: c, style: Style::Line };
-            let mut force = vec![series("peak contact force", "peak_contact_force", PALETTE[1]), series("peak force on the robot", "peak_robot_force", PALETTE[0])];
+            let series = |name: &str, m: &str, c: RGBColor| Series { name: name.into(), points: xs.iter().copied().zip(r.metric(m)).collect(), color: c, style: Style::LineMarked };
+            let mut force = vec![series("peak contact force", "peak_contact_force", PALETTE[3]), series("peak force on the robot", "peak_robot_force", PALETTE[0])];
             let exhausted: Vec<(f64, f64)> = xs.iter().copied().zip(r.metric("stroke_exhausted")).zip(r.metric("peak_robot_force")).filter(|((_, e), _)| *e == 1.0).map(|((x, _), f)| (x, f)).collect();
             if !exhausted.is_empty() {
                 force.push(Series { name: "stroke exhausted (flange reached the target)".into(), points: exhausted, color: RGBColor(230, 30, 30), style: Style::Points });
             }
-            let mut panels = vec![Panel { caption: "peak forces".into(), y_label: "force [N]".into(), series: force, marks: vec![], y_log: false }];
+            // Points without a value sit on the axis, as crosses.
+            let floor = r.metric("peak_contact_force").into_iter().chain(r.metric("peak_robot_force")).filter(|v| v.is_finite()).fold(f64::INFINITY, f64::min);
+            let floor = if floor.is_finite() { floor } else { 0.0 };
+            for (status, name, c) in [(Status::Refused, "refused by the validator (no value)", RGBColor(90, 90, 90)), (Status::Failed, "solver failed (no value)", RGBColor(200, 0, 0))] {
+                let pts: Vec<(f64, f64)> = r.points.iter().filter(|p| p.status == status).map(|p| (p.values[0], floor)).collect();
+                if !pts.is_empty() {
+                    force.push(Series { name: name.into(), points: pts, color: c, style: Style::Crosses });
+                }
+            }
+            let mut panels = vec![figure::Panel { caption: "peak forces".into(), y_label: "force [N]".into(), series: force, ..Default::default() }];
             if metric != "peak_robot_force" && metric != "peak_contact_force" {
-                panels.push(Panel { caption: metric.into(), y_label: metric_label(metric), series: vec![series(metric, metric, PALETTE[2])], marks: vec![], y_log: false });
+                panels.push(figure::Panel { caption: metric.into(), y_label: metric_label(metric), series: vec![series(metric, metric, PALETTE[2])], ..Default::default() });
             }
             let modes = r.metric("mode");
             if modes.iter().any(|m| m.is_finite()) {
-                panels.push(Panel { caption: "working mode (Fig. 46: 1 no back-stop impact, 2 after the robot stopped, 3 before)".into(), y_label: "mode".into(), series: vec![Series { name: "mode".into(), points: xs.iter().copied().zip(modes).collect(), color: PALETTE[5], style: Style::Line }], marks: vec![], y_log: false });
+                // A mode holds over the interval up to the next point: a step, not a slope.
+                panels.push(figure::Panel {
+                    caption: "working mode (Fig. 46: 1 no back-stop impact, 2 after the robot stopped, 3 before)".into(),
+                    y_label: "working mode".into(),
+                    series: vec![Series { name: "working mode".into(), points: xs.iter().copied().zip(modes).collect(), color: PALETTE[6], style: Style::Steps }],
+                    y_range: Some((0.5, 3.5)),
+                    y_ticks: vec![(1.0, "1".into()), (2.0, "2".into()), (3.0, "3".into())],
+                    weight: 0.6,
+                    ..Default::default()
+                });
             }
-            lines(path, &title, &axis(0), &panels)
+            figure::draw(path, &title, &axis(0), &panels)
         }
         2 => {
             let modes: Vec<Option<u8>> = r.points.iter().map(|p| p.outcome.as_ref().ok().and_then(|s| s.mode)).collect();
             let exhausted: Vec<bool> = r.points.iter().map(|p| p.outcome.as_ref().is_ok_and(|s| s.stroke_exhausted)).collect();
             let h = HeatMap {
-                title: format!("{title}: {metric}{}", if exhausted.iter().any(|&e| e) { " (x: stroke exhausted)" } else { "" }),
+                title: format!("{title}: {metric}"),
                 x: axis(0),
                 xs: r.values[0].clone(),
                 y: axis(1),
                 ys: r.values[1].clone(),
                 z: r.metric(metric),
                 z_label: metric_label(metric),
+                z_log: log_color,
                 modes,
                 exhausted,
+                status: r.points.iter().map(|p| p.status).collect(),
             };
             heat_map(path, &h)
         }
         n => Err(format!("cannot draw a sweep of {n} axes")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round() {
+        let shown = |v: Vec<f64>| v.into_iter().map(fmt_num).collect::<Vec<_>>().join(" ");
+        assert_eq!(shown(ticks(0.0, 1.0, false)), "0 0.2 0.4 0.6 0.8 1");
+        assert_eq!(shown(ticks(2.96, 43.9, false)), "10 20 30 40");
+        assert_eq!(shown(ticks(3.0, 40.0, true)), "5 10 20");
+        assert_eq!(ticks(1e6, 1e8, true), vec![1e6, 2e6, 5e6, 1e7, 2e7, 5e7, 1e8]);
     }
 }

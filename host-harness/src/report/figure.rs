@@ -1,0 +1,380 @@
+//! One renderer for every line chart Flinch draws (run histories, sweeps, validation figures):
+//! stacked panels over a shared x axis, each with its legend in a column beside the data (never
+//! over it), linear or logarithmic axes (plotters' `log_scale`, ticks at round values), step lines
+//! for discrete quantities, vertical event marks, horizontal reference lines and annotated points.
+//! SVG or PNG by the file's extension; the same picture either way.
+
+use super::font;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+pub(crate) type DrawResult = Result<(), Box<dyn std::error::Error>>;
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// Solid line.
+    Line,
+    /// Solid line with a marker at every point (few points: sweeps).
+    LineMarked,
+    /// Dashed line (a formula beside simulated points).
+    Dashed,
+    /// Markers only.
+    Points,
+    /// Crosses only (a failed or refused point).
+    Crosses,
+    /// A step function: each value holds until the next point (modes, switch levels).
+    Steps,
+    /// Thin line (measured data under the simulated).
+    Thin,
+}
+
+/// A named series; points whose x or y is not finite break the line.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Legend text (empty: not in the legend).
+    pub name: String,
+    /// (x, y) in the axes' own units.
+    pub points: Vec<(f64, f64)>,
+    /// Colour.
+    pub color: RGBColor,
+    /// Style.
+    pub style: Style,
+}
+
+/// A vertical line across the panel at x, with a legend entry.
+#[derive(Debug, Clone)]
+pub struct Mark {
+    /// x.
+    pub x: f64,
+    /// Legend text.
+    pub label: String,
+    /// Colour.
+    pub color: RGBColor,
+}
+
+/// A horizontal reference line, labelled at its right end inside the plot.
+#[derive(Debug, Clone)]
+pub struct Level {
+    /// y.
+    pub y: f64,
+    /// Text.
+    pub label: String,
+    /// Colour.
+    pub color: RGBColor,
+}
+
+/// A marked point with a text beside it (a reported peak).
+#[derive(Debug, Clone)]
+pub struct Note {
+    /// Where.
+    pub at: (f64, f64),
+    /// Text.
+    pub text: String,
+    /// Colour.
+    pub color: RGBColor,
+}
+
+/// One panel.
+#[derive(Debug, Clone, Default)]
+pub struct Panel {
+    /// Caption above the panel.
+    pub caption: String,
+    /// Y label, with unit.
+    pub y_label: String,
+    /// Series.
+    pub series: Vec<Series>,
+    /// Vertical marks.
+    pub marks: Vec<Mark>,
+    /// Horizontal levels.
+    pub levels: Vec<Level>,
+    /// Annotated points.
+    pub notes: Vec<Note>,
+    /// Logarithmic y (non-positive values are left out).
+    pub y_log: bool,
+    /// y range to use instead of the data's (e.g. 0..1 for levels).
+    pub y_range: Option<(f64, f64)>,
+    /// Tick labels for y instead of numbers (value, text), e.g. the working modes.
+    pub y_ticks: Vec<(f64, String)>,
+    /// Relative height (1.0 = a normal panel).
+    pub weight: f64,
+}
+
+/// The shared x axis.
+#[derive(Debug, Clone)]
+pub struct XAxis {
+    /// Label, with unit.
+    pub label: String,
+    /// Logarithmic.
+    pub log: bool,
+}
+
+/// A palette distinguishable in print and by colour-blind readers (Okabe-Ito, with black).
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(0, 0, 0),
+    RGBColor(240, 228, 66),
+];
+
+/// Width of the legend column, px.
+const LEGEND_W: u32 = 270;
+
+/// A number for tick labels: short, exponent when large or small.
+pub fn fmt_num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e5).contains(&a) {
+        let s = format!("{x:.1e}");
+        s.replace(".0e", "e")
+    } else if a >= 100.0 {
+        format!("{x:.0}")
+    } else {
+        let s = if a >= 1.0 { format!("{x:.2}") } else { format!("{x:.4}") };
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// The range of the finite values, padded by 5 % (a constant series gets a band around it).
+pub fn finite_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 * lo.abs().max(1.0) {
+        let pad = lo.abs().max(1.0) * 0.05;
+        return (lo - pad, hi + pad);
+    }
+    let pad = (hi - lo) * 0.05;
+    (lo - pad, hi + pad)
+}
+
+/// A positive range for a log axis: the finite positive values, padded by a few percent in ratio.
+fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for v in values.filter(|v| v.is_finite() && *v > 0.0) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (1.0, 10.0);
+    }
+    if hi / lo < 1.0 + 1e-9 {
+        return (lo / 1.5, hi * 1.5);
+    }
+    let pad = (hi / lo).powf(0.04);
+    (lo / pad, hi * pad)
+}
+
+/// Calls `f` with the drawing area of `path` (.svg or .png).
+pub fn with_backend(path: &Path, size: (u32, u32), svg: &dyn Fn(&DrawingArea<SVGBackend, Shift>) -> DrawResult, png: &dyn Fn(&DrawingArea<BitMapBackend, Shift>) -> DrawResult) -> Result<(), String> {
+    font::ensure();
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let res = match ext.as_str() {
+        "svg" => svg(&SVGBackend::new(path, size).into_drawing_area()),
+        "png" => png(&BitMapBackend::new(path, size).into_drawing_area()),
+        _ => return Err(format!("{}: the plot file must end in .svg or .png", path.display())),
+    };
+    res.map_err(|e| format!("{}: could not draw the plot: {e}", path.display()))
+}
+
+/// Checks a plot file name before any work is done.
+pub fn check_extension(path: &Path) -> Result<(), String> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if ext == "svg" || ext == "png" { Ok(()) } else { Err(format!("{}: the plot file must end in .svg or .png", path.display())) }
+}
+
+/// Draws stacked panels sharing an x axis into `path`.
+pub fn draw(path: &Path, title: &str, x: &XAxis, panels: &[Panel]) -> Result<(), String> {
+    let weights: f64 = panels.iter().map(|p| if p.weight > 0.0 { p.weight } else { 1.0 }).sum();
+    let h = 50 + (300.0 * weights) as u32;
+    with_backend(path, (1150, h), &|r| draw_on(r, title, x, panels), &|r| draw_on(r, title, x, panels))
+}
+
+/// Draws the panels onto `root`.
+pub fn draw_on<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, x: &XAxis, panels: &[Panel]) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let root = root.titled(title, ("sans-serif", 20))?;
+    let xs = panels.iter().flat_map(|p| p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)).chain(p.marks.iter().map(|m| m.x)));
+    let (x0, x1) = if x.log { log_range(xs) } else { let (a, b) = finite_range(xs); tight(a, b, panels) };
+    let total: f64 = panels.iter().map(|p| if p.weight > 0.0 { p.weight } else { 1.0 }).sum();
+    let (_, height) = root.dim_in_pixel();
+    let mut rest = root;
+    for (k, p) in panels.iter().enumerate() {
+        let w = if p.weight > 0.0 { p.weight } else { 1.0 };
+        let area = if k + 1 == panels.len() {
+            rest.clone()
+        } else {
+            let (a, b) = rest.split_vertically((height as f64 * w / total) as u32);
+            rest = b;
+            a
+        };
+        let (plot_area, legend_area) = area.split_horizontally(area.dim_in_pixel().0 - LEGEND_W);
+        let ys = p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)).chain(p.levels.iter().map(|l| l.y)).chain(p.notes.iter().map(|n| n.at.1));
+        let (y0, y1) = p.y_range.unwrap_or_else(|| if p.y_log { log_range(ys) } else { finite_range(ys) });
+        match (x.log, p.y_log) {
+            (false, false) => panel(&plot_area, x, p, x0..x1, y0..y1)?,
+            (true, false) => panel(&plot_area, x, p, (x0..x1).log_scale(), y0..y1)?,
+            (false, true) => panel(&plot_area, x, p, x0..x1, (y0..y1).log_scale())?,
+            (true, true) => panel(&plot_area, x, p, (x0..x1).log_scale(), (y0..y1).log_scale())?,
+        }
+        legend(&legend_area, p)?;
+    }
+    Ok(())
+}
+
+/// A time axis starts at its data (no padding before t = 0).
+fn tight(a: f64, b: f64, panels: &[Panel]) -> (f64, f64) {
+    let lo = panels.iter().flat_map(|p| p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0))).filter(|v| v.is_finite()).fold(f64::INFINITY, f64::min);
+    let hi = panels.iter().flat_map(|p| p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0))).filter(|v| v.is_finite()).fold(f64::NEG_INFINITY, f64::max);
+    if lo.is_finite() && hi > lo { (lo, hi) } else { (a, b) }
+}
+
+fn runs(points: &[(f64, f64)], xlog: bool, ylog: bool) -> Vec<Vec<(f64, f64)>> {
+    let ok = |q: &(f64, f64)| q.0.is_finite() && q.1.is_finite() && (!xlog || q.0 > 0.0) && (!ylog || q.1 > 0.0);
+    let mut out: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    for q in points {
+        if ok(q) {
+            if let Some(last) = out.last_mut() {
+                last.push(*q);
+            }
+        } else if out.last().is_some_and(|r| !r.is_empty()) {
+            out.push(Vec::new());
+        }
+    }
+    out.retain(|r| !r.is_empty());
+    out
+}
+
+fn panel<DB: DrawingBackend, X, Y>(area: &DrawingArea<DB, Shift>, x: &XAxis, p: &Panel, xr: X, yr: Y) -> DrawResult
+where
+    DB::ErrorType: 'static,
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
+    let mut chart = ChartBuilder::on(area).caption(&p.caption, ("sans-serif", 16)).margin(8).margin_right(16).x_label_area_size(42).y_label_area_size(78).build_cartesian_2d(xr, yr)?;
+    let (xa, xb) = (chart.x_range().start, chart.x_range().end);
+    let (ya, yb) = (chart.y_range().start, chart.y_range().end);
+    let yticks = p.y_ticks.clone();
+    let ylab = move |v: &f64| yticks.iter().find(|(t, _)| (t - v).abs() < 1e-9).map_or_else(|| if yticks.is_empty() { fmt_num(*v) } else { String::new() }, |(_, s)| s.clone());
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(&x.label).y_desc(&p.y_label).x_label_formatter(&|v| fmt_num(*v)).y_label_formatter(&ylab).label_style(("sans-serif", 13)).axis_desc_style(("sans-serif", 14)).light_line_style(RGBColor(247, 247, 247)).bold_line_style(RGBColor(220, 220, 220));
+    if !p.y_ticks.is_empty() {
+        mesh.y_labels(p.y_ticks.len().max(2) * 4);
+    }
+    mesh.draw()?;
+    // Backend coordinates are the root's; text goes into this area, whose origin is elsewhere.
+    let base = area.get_base_pixel();
+    let local = |p: (i32, i32)| (p.0 - base.0, p.1 - base.1);
+    for lv in &p.levels {
+        let c = lv.color;
+        chart.draw_series(DashedLineSeries::new(vec![(xa, lv.y), (xb, lv.y)], 8, 5, c.stroke_width(1)))?;
+        let pos = local(chart.backend_coord(&(xb, lv.y)));
+        area.draw(&Text::new(lv.label.clone(), (pos.0 - 8, pos.1 - 16), ("sans-serif", 12).into_font().color(&c).pos(plotters::style::text_anchor::Pos::new(plotters::style::text_anchor::HPos::Right, plotters::style::text_anchor::VPos::Top))))?;
+    }
+    for m in &p.marks {
+        chart.draw_series(LineSeries::new(vec![(m.x, ya), (m.x, yb)], m.color.stroke_width(1)))?;
+    }
+    for s in &p.series {
+        let c = s.color;
+        for run in runs(&s.points, x.log, p.y_log) {
+            match s.style {
+                Style::Line => { chart.draw_series(LineSeries::new(run, c.stroke_width(2)))?; }
+                Style::Thin => { chart.draw_series(LineSeries::new(run, c.mix(0.8).stroke_width(1)))?; }
+                Style::LineMarked => { chart.draw_series(LineSeries::new(run, c.stroke_width(2)).point_size(3))?; }
+                Style::Dashed => { chart.draw_series(DashedLineSeries::new(run, 7, 5, c.stroke_width(2)))?; }
+                Style::Points => { chart.draw_series(run.iter().map(|&q| Circle::new(q, 4, c.filled())))?; }
+                Style::Crosses => { chart.draw_series(run.iter().map(|&q| Cross::new(q, 6, c.stroke_width(2))))?; }
+                Style::Steps => {
+                    let mut st = Vec::with_capacity(run.len() * 2);
+                    for (i, &(a, b)) in run.iter().enumerate() {
+                        if i > 0 {
+                            st.push((a, run[i - 1].1));
+                        }
+                        st.push((a, b));
+                    }
+                    chart.draw_series(LineSeries::new(st, c.stroke_width(2)))?;
+                }
+            }
+        }
+    }
+    let mut placed: Vec<(i32, i32)> = Vec::new();
+    for n in &p.notes {
+        let c = n.color;
+        chart.draw_series(std::iter::once(TriangleMarker::new(n.at, 7, c.filled())))?;
+        let mut pos = local(chart.backend_coord(&n.at));
+        // Two notes at one place: the later one goes below.
+        while placed.iter().any(|q| (q.1 - pos.1).abs() < 17 && (q.0 - pos.0).abs() < 220) {
+            pos.1 += 17;
+        }
+        placed.push(pos);
+        let (w, _) = area.dim_in_pixel();
+        let right = pos.0 > (w as i32) * 2 / 3;
+        let anchor = plotters::style::text_anchor::Pos::new(if right { plotters::style::text_anchor::HPos::Right } else { plotters::style::text_anchor::HPos::Left }, plotters::style::text_anchor::VPos::Center);
+        area.draw(&Text::new(n.text.clone(), (pos.0 + if right { -10 } else { 10 }, pos.1), ("sans-serif", 13).into_font().color(&c).pos(anchor)))?;
+    }
+    Ok(())
+}
+
+fn legend<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let mut y = 40;
+    let mut entry = |label: &str, c: RGBColor, style: Style| -> DrawResult {
+        if label.is_empty() {
+            return Ok(());
+        }
+        let (x0, x1, ym) = (4, 32, y + 7);
+        match style {
+            Style::Dashed => area.draw(&PathElement::new(vec![(x0, ym), (x0 + 10, ym)], c.stroke_width(2))).and_then(|_| area.draw(&PathElement::new(vec![(x0 + 17, ym), (x1, ym)], c.stroke_width(2))))?,
+            Style::Points => area.draw(&Circle::new(((x0 + x1) / 2, ym), 4, c.filled()))?,
+            Style::Crosses => area.draw(&Cross::new(((x0 + x1) / 2, ym), 6, c.stroke_width(2)))?,
+            Style::Thin => area.draw(&PathElement::new(vec![(x0, ym), (x1, ym)], c.stroke_width(1)))?,
+            _ => area.draw(&PathElement::new(vec![(x0, ym), (x1, ym)], c.stroke_width(2)))?,
+        }
+        // Long labels wrap onto a second line.
+        let words: Vec<&str> = label.split(' ').collect();
+        let mut lines = vec![String::new()];
+        for w in words {
+            let cur = lines.last_mut().expect("never empty");
+            if !cur.is_empty() && cur.len() + w.len() > 30 {
+                lines.push(w.to_string());
+            } else {
+                if !cur.is_empty() {
+                    cur.push(' ');
+                }
+                cur.push_str(w);
+            }
+        }
+        for line in lines {
+            area.draw(&Text::new(line, (x1 + 8, y), ("sans-serif", 13).into_font().color(&BLACK)))?;
+            y += 17;
+        }
+        y += 4;
+        Ok(())
+    };
+    for s in &p.series {
+        entry(&s.name, s.color, s.style)?;
+    }
+    for m in &p.marks {
+        entry(&m.label, m.color, Style::Thin)?;
+    }
+    Ok(())
+}

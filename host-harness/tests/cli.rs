@@ -1,0 +1,236 @@
+//! The `flinch` command line as a user meets it: exit codes, `-` for standard output, no panic
+//! when standard output cannot be written, a FIFO or directory refused as a scene, shipped scenes
+//! from any directory, bounded memory on long runs, a clean Ctrl-C, and `--measured`.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn flinch() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_flinch"));
+    c.current_dir(repo());
+    c
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("flinch-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn text(o: &[u8]) -> String {
+    String::from_utf8_lossy(o).into_owned()
+}
+
+fn no_panic(o: &Output) {
+    let e = text(&o.stderr);
+    assert!(!e.contains("panicked"), "{e}");
+}
+
+/// A shipped scene with `duration` and `output_interval` replaced, written to `dir`.
+fn long_scene(dir: &Path, duration: f64, interval: f64) -> PathBuf {
+    let t = std::fs::read_to_string(repo().join("scenes/tables5-7_bistable.toml")).unwrap();
+    let t = t.replace("duration = 0.6 ", &format!("duration = {duration} "));
+    let t = format!("{t}\n[solver]\noutput_interval = {interval}\n");
+    let p = dir.join("long.toml");
+    std::fs::write(&p, t).unwrap();
+    p
+}
+
+#[test]
+fn a_full_stdout_is_exit_3_not_a_panic() {
+    for args in [&["run", "tables5-7_bistable", "--json"][..], &["check", "tables5-7_bistable"], &["scenes", "list"], &["run", "tables5-7_bistable", "--csv", "-"]] {
+        let o = flinch().args(args).stdout(std::fs::File::create("/dev/full").unwrap()).output().unwrap();
+        no_panic(&o);
+        assert_eq!(o.status.code(), Some(3), "{args:?}: {}", text(&o.stderr));
+        assert!(text(&o.stderr).contains("could not write"), "{}", text(&o.stderr));
+    }
+}
+
+#[test]
+fn a_closed_pipe_ends_quietly_with_141() {
+    // `design` prints with the standard macros (the print guard), `run` through the output module.
+    for args in [&["run", "tables5-7_bistable", "--csv", "-"][..], &["design", "tables5-7_bistable", "--json"], &["scenes", "list"]] {
+        let mut child = flinch().args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        drop(child.stdout.take());
+        let mut err = String::new();
+        child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+        let status = child.wait().unwrap();
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(status.code(), Some(141), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn a_fifo_or_a_directory_as_the_scene_is_refused_at_once() {
+    let d = tmp("fifo");
+    let fifo = d.join("scene.toml");
+    let _ = std::fs::remove_file(&fifo);
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let mut child = flinch().args(["run"]).arg(&fifo).stderr(Stdio::piped()).spawn().unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(20) {
+            let _ = child.kill();
+            panic!("flinch run FIFO blocked");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut err = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    assert_eq!(status.code(), Some(2), "{err}");
+    assert!(err.contains("not a regular file"), "{err}");
+    let o = flinch().args(["run"]).arg(&d).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("is a directory"), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn exit_codes_say_what_happened() {
+    // 2: bad input (unknown scene, with suggestions; an unknown option).
+    let o = flinch().args(["run", "tables5-7_bistabel"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("tables5-7_bistable"), "{}", text(&o.stderr));
+    assert_eq!(flinch().args(["run", "--no-such-option"]).output().unwrap().status.code(), Some(2));
+    // 2: two results on standard output.
+    let o = flinch().args(["run", "tables5-7_bistable", "--json", "--csv", "-"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    // 1: an unfavourable verdict (the hydraulic's 23 mm stroke cannot absorb 33 mm).
+    let o = flinch().args(["check", "table14_hydraulic_surface"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stdout));
+    // 0.
+    assert_eq!(flinch().args(["check", "tables5-7_bistable"]).output().unwrap().status.code(), Some(0));
+}
+
+#[test]
+fn dash_is_stdout_and_messages_go_to_stderr() {
+    let o = flinch().args(["run", "tables5-7_bistable", "--csv", "-"]).output().unwrap();
+    assert!(o.status.success());
+    let out = text(&o.stdout);
+    assert!(out.starts_with("t_s,v_c_mps,v_r_mps,v_t_mps,v_p_mps,s_m,travel_m,f_contact_n,f_robot_n,"), "{}", &out[..200]);
+    assert_eq!(out.lines().count(), 6002, "header and 6001 rows");
+    assert!(!std::path::Path::new(&repo().join("-")).exists(), "no file named -");
+    // The human summary went to standard error, not into the CSV.
+    assert!(text(&o.stderr).contains("peak contact force 43.86 N"), "{}", text(&o.stderr));
+    let o = flinch().args(["run", "tables5-7_bistable", "--json"]).output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["schema_version"], 1);
+    assert!(v["peak_contact_force"].as_f64().unwrap() > 40.0);
+    assert!(o.stderr.is_empty(), "{}", text(&o.stderr));
+}
+
+#[test]
+fn shipped_scenes_run_from_any_directory() {
+    let d = tmp("anywhere");
+    let o = flinch().current_dir(&d).args(["run", "tables5-7_bistable"]).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stdout).contains("peak contact force 43.86 N"));
+    let list = text(&flinch().current_dir(&d).args(["scenes", "list"]).output().unwrap().stdout);
+    assert!(list.lines().any(|l| l.starts_with("tables5-7_bistable ")), "{list}");
+    assert!(list.lines().any(|l| l.starts_with("figures/fig2_free_tool ")), "{list}");
+    let shown = flinch().current_dir(&d).args(["scenes", "show", "tables5-7_bistable"]).output().unwrap().stdout;
+    assert_eq!(text(&shown), std::fs::read_to_string(repo().join("scenes/tables5-7_bistable.toml")).unwrap());
+    // A shown scene read back from standard input.
+    let mut child = flinch().current_dir(&d).args(["run", "-", "--json"]).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap();
+    std::io::Write::write_all(&mut child.stdin.take().unwrap(), &shown).unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Largest resident set of a child while it runs, kB (polled from /proc).
+fn peak_rss_kb(mut cmd: Command) -> (u64, Output) {
+    let child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let pid = child.id();
+    let mut peak = 0;
+    let start = Instant::now();
+    let child = std::sync::Arc::new(std::sync::Mutex::new(Some(child)));
+    loop {
+        if let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
+            if let Some(kb) = s.lines().find_map(|l| l.strip_prefix("VmHWM:")).and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok()) {
+                peak = peak.max(kb);
+            }
+        }
+        let mut g = child.lock().unwrap();
+        if let Some(c) = g.as_mut() {
+            if c.try_wait().unwrap().is_some() {
+                let o = g.take().unwrap().wait_with_output().unwrap();
+                return (peak, o);
+            }
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "too slow");
+        drop(g);
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn a_long_run_streams_its_csv_and_decimates_its_plot_in_bounded_memory() {
+    let d = tmp("long");
+    // 20 s at 10 us: two million rows (the old code held them all: 176 MB of samples).
+    let scene = long_scene(&d, 20.0, 1e-5);
+    let mut c = flinch();
+    c.args(["run"]).arg(&scene).args(["--csv"]).arg(d.join("h.csv")).args(["--plot"]).arg(d.join("h.png"));
+    let (kb, o) = peak_rss_kb(c);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let rows = std::io::BufRead::lines(std::io::BufReader::new(std::fs::File::open(d.join("h.csv")).unwrap())).count();
+    assert_eq!(rows, 2_000_002, "header and every row");
+    assert!(kb < 80_000, "peak resident set {kb} kB");
+    assert!(std::fs::metadata(d.join("h.png")).unwrap().len() > 20_000);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn ctrl_c_stops_a_long_run_with_complete_rows() {
+    let d = tmp("sigint");
+    let scene = long_scene(&d, 2000.0, 1e-4);
+    let csv = d.join("h.csv");
+    let mut child = flinch().args(["run"]).arg(&scene).args(["--csv"]).arg(&csv).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    // Wait for rows to appear, then interrupt.
+    let start = Instant::now();
+    while std::fs::metadata(&csv).map_or(0, |m| m.len()) < 200_000 && start.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let mut err = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted at t ="), "{err}");
+    let body = std::fs::read_to_string(&csv).unwrap();
+    assert!(body.ends_with('\n'), "the last row is complete");
+    let cols = body.lines().next().unwrap().split(',').count();
+    assert!(body.lines().all(|l| l.split(',').count() == cols));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn measured_traces_give_errors_and_the_time_shift() {
+    let o = flinch().args(["run", "tables5-7_bistable", "--json", "--measured", "docs/measured/tables5-7_bistable_synthetic.csv"]).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let m = v["measured"].as_array().unwrap();
+    let vt = m.iter().find(|c| c["column"] == "v_t_mps").unwrap();
+    // The file is the run shifted by +3 ms with 2 mm/s of noise: both come back.
+    let shift = vt["time_shift_s"].as_f64().unwrap();
+    assert!((shift - 0.003).abs() < 0.0006, "{shift}");
+    let after = vt["rms_error_shifted"].as_f64().unwrap();
+    assert!(after < 0.0025 && after > 0.0015, "{after}");
+    assert!(vt["rms_error"].as_f64().unwrap() > 2.0 * after, "unshifted, the error is larger");
+    // A bad file is bad input naming the line.
+    let d = tmp("measured");
+    std::fs::write(d.join("m.csv"), "t_s,v_t_mps\n0,0\n0.1,oops\n").unwrap();
+    let o = flinch().args(["run", "tables5-7_bistable", "--measured"]).arg(d.join("m.csv")).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("m.csv:3: v_t_mps"), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&d);
+}
