@@ -113,6 +113,23 @@ pub struct Summary {
     /// The parts of the model this run left out (`solver.simplify`): "rigid-robot",
     /// "no-friction". Empty for the full model.
     pub simplified: Vec<String>,
+    /// When the whole run's peak force on the robot (`peak_robot_force`) occurs, s (0 when the
+    /// robot never feels a force).
+    pub peak_robot_force_t_s: f64,
+    /// What pushes when `peak_robot_force` occurs: "first_impact" (the first tool-target contact
+    /// is on), "later_contact" (a second or later tool-target contact is on), "front_stop" (the
+    /// tool landing on or pressing the front end-stop), "back_stop" (the tool on the flange),
+    /// "decoupler" (spring, gas or friction alone), "none" (no force at all). The whole run's peak
+    /// is often not the first impact's (issue 15: Fig. 76's 34.8 N is the tool's return onto the
+    /// front end-stop, 80 ms after a first impact of 30 N).
+    pub peak_robot_force_event: String,
+    /// Largest magnitude of the force on the robot from the first tool-target contact's onset to
+    /// its end (or the end of the run), N; null without a contact.
+    pub first_impact_peak_robot_force_n: Option<f64>,
+    /// When `first_impact_peak_robot_force_n` occurs, s; null without a contact.
+    pub first_impact_peak_robot_force_t_s: Option<f64>,
+    /// Why `first_impact_peak_robot_force_n` and `first_impact_peak_robot_force_t_s` are null.
+    pub first_impact_peak_robot_force_null_reason: Option<String>,
 }
 
 /// The scene as the simulator models it: `scene` without the parts its `[solver]` lets it drop,
@@ -184,6 +201,10 @@ pub struct Simulation {
     object_velocity_at_separation: Option<f64>,
     peak_contact: f64,
     peak_robot: f64,
+    /// When `peak_robot` occurred and what was pushing then.
+    peak_robot_at: (f64, &'static str),
+    /// Peak robot-force magnitude and its instant during the first tool-target contact.
+    first_impact_robot: (f64, f64),
     peak_object_v: f64,
     peak_gas: f64,
     max_travel: f64,
@@ -334,19 +355,26 @@ impl Hybrid<N, E> for Simulation {
         // Peaks fall between step ends: while a contact is active, search the step's interpolant too.
         // On the front stop only while the tool moves against it (an impact), not at rest there.
         let front_impact = self.on_front && (k.s_dot.abs() > 1e-4 || self.last_end_s_dot.abs() > 1e-4);
+        // Events end steps, so the flags hold through the whole step [t0, t1].
+        let first_impact = self.in_contact && self.contacts == 1;
         if t1 > t0 && (self.in_contact || self.on_back || front_impact) {
             let at0 = if self.last_end.0 == t0 { self.last_end.1 } else {
                 let f0 = self.observe(t0, &dense(t0)).1;
                 (f0.contact, f0.robot.abs())
             };
-            let (c, r) = self.peaks_inside(t0, t1, at0, at1, dense);
+            let (c, (tr, r)) = self.peaks_inside(t0, t1, at0, at1, dense, first_impact);
             self.peak_contact = self.peak_contact.max(c);
-            self.peak_robot = self.peak_robot.max(r);
+            let fr = if r > self.peak_robot { Some(self.observe(tr, &dense(tr)).1) } else { None };
+            if let Some(fr) = fr {
+                self.note_robot_peak(tr, r, first_impact, &fr);
+            } else if first_impact {
+                self.note_first_impact(tr, r);
+            }
         }
         self.last_end = (t1, at1);
         self.last_end_s_dot = k.s_dot;
         self.peak_contact = self.peak_contact.max(f.contact);
-        self.peak_robot = self.peak_robot.max(f.robot.abs());
+        self.note_robot_peak(t1, f.robot.abs(), first_impact, &f);
         self.peak_object_v = self.peak_object_v.max(k.vp);
         self.max_travel = self.max_travel.max(self.plant.travel(&k));
         if let Some(p) = f.decoupler.gas_pressure {
@@ -369,8 +397,8 @@ fn sample(t: f64, k: &Kinematics, f: &Forces) -> Sample {
 
 /// The maximum of a smooth `f` given at five increasing instants `ts` with values `fs`: the
 /// largest sample, refined by successive parabolic interpolation inside its bracket when it is
-/// interior, until the gain is below `rtol` of the peak.
-fn refine_max(f: impl Fn(f64) -> f64, ts: [f64; 5], fs: [f64; 5], rtol: f64) -> f64 {
+/// interior, until the gain is below `rtol` of the peak. Returns (instant, maximum).
+fn refine_max(f: impl Fn(f64) -> f64, ts: [f64; 5], fs: [f64; 5], rtol: f64) -> (f64, f64) {
     let (mut i, mut best) = (0, fs[0]);
     for k in 1..5 {
         if fs[k] > best {
@@ -392,11 +420,11 @@ fn refine_max(f: impl Fn(f64) -> f64, ts: [f64; 5], fs: [f64; 5], rtol: f64) -> 
         let x = vertex(ts[j - 1], fs[j - 1], ts[j], fs[j], ts[j + 1], fs[j + 1]);
         let (lo, hi) = if i == 0 { (ts[0], ts[1]) } else { (ts[3], ts[4]) };
         if !(x > lo && x < hi) {
-            return best;
+            return (ts[i], best);
         }
         let fx = f(x);
         if fx <= best {
-            return best;
+            return (ts[i], best);
         }
         (a, fa, b, fb, c, fcc) = (lo, if i == 0 { fs[0] } else { fs[3] }, x, fx, hi, if i == 0 { fs[1] } else { fs[4] });
     } else {
@@ -421,7 +449,7 @@ fn refine_max(f: impl Fn(f64) -> f64, ts: [f64; 5], fs: [f64; 5], rtol: f64) -> 
             break;
         }
     }
-    best.max(fb)
+    if fb > best { (b, fb) } else { (ts[i], best) }
 }
 
 /// A scene's run in progress: the simulation, its stepper and its driver.
@@ -473,6 +501,8 @@ impl Simulation {
             object_velocity_at_separation: None,
             peak_contact: 0.0,
             peak_robot: 0.0,
+            peak_robot_at: (0.0, "none"),
+            first_impact_robot: (0.0, f64::NAN),
             peak_object_v: 0.0,
             peak_gas: 0.0,
             max_travel: 0.0,
@@ -502,7 +532,10 @@ impl Simulation {
     /// bracket kept) refine it. A peak in the middle of a step is smooth, so the parabola converges
     /// in two or three evaluations; the old golden-section search spent 48 evaluations a step and
     /// was most of the run's cost (docs/accuracy.md).
-    fn peaks_inside(&self, t0: f64, t1: f64, at0: (f64, f64), at1: (f64, f64), dense: &dyn Fn(f64) -> State) -> (f64, f64) {
+    /// With `first_impact` the robot force is refined against the first impact's peak so far (the
+    /// run's may be larger already, from the acceleration); returns (contact peak, (instant, robot
+    /// peak)).
+    fn peaks_inside(&self, t0: f64, t1: f64, at0: (f64, f64), at1: (f64, f64), dense: &dyn Fn(f64) -> State, first_impact: bool) -> (f64, (f64, f64)) {
         let forces = |t: f64| {
             let f = self.observe(t, &dense(t)).1;
             (f.contact, f.robot.abs())
@@ -517,9 +550,39 @@ impl Simulation {
         // Refining a local maximum that cannot become the run's peak is wasted work: a step
         // resolves the motion to rtol, so its maximum exceeds its best sample by far less than 5 %.
         let worth = |samples: &[f64; 5], peak: f64| samples.iter().fold(0.0f64, |m, &v| m.max(v)) >= 0.95 * peak;
-        let c = if worth(&fc, self.peak_contact) { refine_max(|t| forces(t).0, ts, fc, self.peak_rtol) } else { 0.0 };
-        let r = if worth(&fr, self.peak_robot) { refine_max(|t| forces(t).1, ts, fr, self.peak_rtol) } else { 0.0 };
+        let c = if worth(&fc, self.peak_contact) { refine_max(|t| forces(t).0, ts, fc, self.peak_rtol).1 } else { 0.0 };
+        let robot_ref = if first_impact { self.first_impact_robot.0 } else { self.peak_robot };
+        let r = if worth(&fr, robot_ref) { refine_max(|t| forces(t).1, ts, fr, self.peak_rtol) } else { (t0, 0.0) };
         (c, r)
+    }
+
+    fn note_first_impact(&mut self, t: f64, f: f64) {
+        if f > self.first_impact_robot.0 || self.first_impact_robot.1.is_nan() {
+            self.first_impact_robot = (f, t);
+        }
+    }
+
+    /// Records a robot-force magnitude `f` at `t`: the whole run's peak with what was pushing
+    /// then (from the `forces` at `t`, not from the event flags: a step ending on an event is
+    /// evaluated just past it, before its flag flips), and the first impact's.
+    fn note_robot_peak(&mut self, t: f64, f: f64, first_impact: bool, fs: &Forces) {
+        if first_impact {
+            self.note_first_impact(t, f);
+        }
+        if f > self.peak_robot {
+            self.peak_robot = f;
+            let what = if fs.contact > 0.0 {
+                // Contact number 1, or the first one's onset instant (not yet counted).
+                if self.contacts == 0 || (self.contacts == 1 && self.in_contact) { "first_impact" } else { "later_contact" }
+            } else if fs.decoupler.front_stop != 0.0 {
+                "front_stop"
+            } else if fs.decoupler.back_stop != 0.0 {
+                "back_stop"
+            } else {
+                "decoupler"
+            };
+            self.peak_robot_at = (t, what);
+        }
     }
 
     /// Kinematics and forces at (t, y).
@@ -655,6 +718,11 @@ impl Run {
             warnings: s.warnings.clone(),
             fidelity: format!("{:?}", s.fidelity).to_lowercase(),
             simplified: s.simplified.clone(),
+            peak_robot_force_t_s: s.peak_robot_at.0,
+            peak_robot_force_event: s.peak_robot_at.1.to_string(),
+            first_impact_peak_robot_force_n: s.t_contact.map(|_| s.first_impact_robot.0),
+            first_impact_peak_robot_force_t_s: s.t_contact.map(|_| s.first_impact_robot.1),
+            first_impact_peak_robot_force_null_reason: s.t_contact.is_none().then(|| "no tool-target contact in the run".to_string()),
         }
     }
 }

@@ -34,6 +34,17 @@ pub fn human(s: &Summary) -> String {
     let _ = writeln!(o, "  contact {}   detect {}   brake {}   flange stops {}", ms(s.t_contact), ms(s.t_detect), ms(s.t_brake), ms(s.t_stop));
     let _ = writeln!(o, "  detection delay {}   reaction time {}", ms(s.detection_delay), ms(s.reaction_time));
     let _ = writeln!(o, "  peak contact force {:.2} N   peak force on robot {:.2} N   contacts {}", s.peak_contact_force, s.peak_robot_force, s.contacts);
+    if let (Some(f), Some(t), Some(tc)) = (s.first_impact_peak_robot_force_n, s.first_impact_peak_robot_force_t_s, s.t_contact) {
+        let what = match s.peak_robot_force_event.as_str() {
+            "first_impact" => "the first impact",
+            "later_contact" => "a later contact",
+            "front_stop" => "the front end-stop",
+            "back_stop" => "the back end-stop",
+            "decoupler" => "the decoupler's spring or friction",
+            _ => "nothing",
+        };
+        let _ = writeln!(o, "  force on robot: first impact {f:.2} N at contact {:+.1} ms; whole run {:.2} N at contact {:+.1} ms, from {what}", (t - tc) * 1e3, s.peak_robot_force, (s.peak_robot_force_t_s - tc) * 1e3);
+    }
     if let Some(v) = s.object_final_velocity {
         let _ = writeln!(o, "  object final velocity {:.3} m/s (peak {:.3} m/s)", v, s.object_peak_velocity.unwrap_or(v));
     }

@@ -594,7 +594,7 @@ pub const METRICS: &[&str] = &[
     "t_contact", "t_detect", "t_brake", "detection_delay", "reaction_time", "peak_contact_force", "peak_robot_force",
     "object_final_velocity", "mode", "stroke_exhausted", "achieved_restitution", "steps", "rhs_evals", "t_stop",
     "approach_velocity", "contacts", "object_peak_velocity", "max_travel", "decoupler_impulse", "peak_gas_pressure",
-    "rejected_steps", "events",
+    "rejected_steps", "events", "peak_robot_force_t_s", "first_impact_peak_robot_force_n", "first_impact_peak_robot_force_t_s",
 ];
 
 /// Checks a metric name before anything runs.
