@@ -324,7 +324,7 @@ fn main() -> ExitCode {
         Command::Scenes { what } => scenes_cmd(what),
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
         Command::Bench(a) => flinch_harness::bench::run(&flinch_harness::bench::Options { scenes: a.scenes.clone(), scenes_dir: a.scenes_dir.clone(), out: a.out.clone(), repeats: a.repeats, quick: a.quick }).map(|_| true).map_err(Failure::runtime),
-        Command::Avoid(a) => classify(flinch_harness::avoid::scene::Avoid::load(&a.scene).map(|_| ()), flinch_harness::avoid::run(a).map(|_| true)),
+        Command::Avoid(a) => classify(flinch_harness::avoid::scene::Avoid::load(&a.scene).map(|_| ()), flinch_harness::avoid::run(a)),
         Command::Design(a) => classify(shipped::load(&a.scene).map(|_| ()), flinch_harness::design::run(a)),
         Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),
     };

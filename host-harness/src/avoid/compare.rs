@@ -80,7 +80,7 @@ fn row<R: Real, G: Gauss<R> + Clone>(
         cmd_max_err_mps: cmd_max,
         cmd_rms_err_mps: cmd_rms,
         path_max_dev_m: deviation(reference, &res),
-        min_clearance_m: res.min_clearance_m,
+        min_clearance_m: res.min_signed_distance_m,
         time_to_goal_s: res.time_to_goal_s,
     })
 }

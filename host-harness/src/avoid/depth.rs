@@ -228,11 +228,19 @@ impl OperatorShape {
         palm.max(arm)
     }
 
-    /// Planar distance from `p` to the operator's footprint (0 inside), m: the clearance metric.
+    /// Planar distance from `p` to the operator's footprint (0 inside), m.
     pub fn clearance(&self, hand: [f64; 2], p: [f64; 2]) -> f64 {
+        self.signed_distance(hand, p).max(0.0)
+    }
+
+    /// Signed planar distance from `p` to the operator's footprint (hand disc and forearm strip), m:
+    /// positive outside, negative inside (the depth of penetration), from the true geometry, never
+    /// from the sensed image. Minimum over the two parts, so inside it is at least as deep as the
+    /// deeper part says.
+    pub fn signed_distance(&self, hand: [f64; 2], p: [f64; 2]) -> f64 {
         let d_hand = ((p[0] - hand[0]).powi(2) + (p[1] - hand[1]).powi(2)).sqrt() - self.hand_radius_m;
         let d_arm = dist_to_segment(p, self.entry_m, hand) - 0.5 * self.forearm_width_m;
-        d_hand.min(d_arm).max(0.0)
+        d_hand.min(d_arm)
     }
 }
 

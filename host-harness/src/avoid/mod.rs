@@ -42,6 +42,10 @@ pub struct AvoidArgs {
     /// grid and on the other of 15 x 15 / 30 x 30 (slow: about a minute).
     #[arg(long)]
     pub compare: bool,
+    /// Write the path, one row per control step (`t_s,x_m,y_m,vx_mps,vy_mps,separation_m,
+    /// speed_limit_mps,state`); `-` is standard output.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
     /// Write the first synthetic depth frame (16-bit, `.png` or `.pgm`) to this file.
     #[arg(long, value_name = "FILE")]
     pub save_depth: Option<PathBuf>,
@@ -49,11 +53,22 @@ pub struct AvoidArgs {
 
 /// Metrics of one run, as printed.
 pub fn metrics_json(res: &PathResult, engine: Engine) -> serde_json::Value {
+    let reason = res.status.reason().map(|r| r.name());
     serde_json::json!({
         "engine": match engine { Engine::Reference => "reference-f64", Engine::Mcu => "mcu-i16f16" },
-        "reached_goal": res.time_to_goal_s.is_some(),
+        "status": res.status.name(),
+        "reason": reason,
+        "reason_null_reason": if reason.is_none() { Some("reached the goal") } else { None },
+        "collided": res.min_signed_distance_m < 0.0,
+        "reached_goal": res.status.ok(),
         "time_to_goal_s": res.time_to_goal_s,
-        "min_clearance_m": res.min_clearance_m,
+        "time_to_goal_null_reason": if res.time_to_goal_s.is_none() { Some("the goal was not reached") } else { None },
+        "min_signed_distance_m": res.min_signed_distance_m,
+        "time_inside_s": res.time_inside_s,
+        "max_speed_mps": res.max_speed_mps,
+        "max_speed_near_operator_mps": res.max_speed_near_operator_mps,
+        "near_operator_m": path::NEAR_OPERATOR_M,
+        "heading_reversals": res.heading_reversals,
         "path_length_m": res.path_length_m,
         "stalls": res.stalls,
         "steps": res.points.len() - 1,
@@ -65,8 +80,26 @@ pub fn metrics_json(res: &PathResult, engine: Engine) -> serde_json::Value {
     })
 }
 
-/// Entry point of `flinch avoid`.
-pub fn run(args: &AvoidArgs) -> Result<(), String> {
+/// Writes the path, one row per control step: `t_s,x_m,y_m,vx_mps,vy_mps,separation_m,
+/// speed_limit_mps,state` (`separation_m`: signed distance to the operator's true footprint).
+pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> {
+    use crate::report::output;
+    let mut w = output::create(out).map_err(|f| f.message)?;
+    let mut body = String::from("t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state\n");
+    for r in &res.rows {
+        body.push_str(&format!(
+            "{},{},{},{},{},{},{},{}\n",
+            r.t_s, r.p_m[0], r.p_m[1], r.v_mps[0], r.v_mps[1], r.separation_m, r.speed_limit_mps, r.state
+        ));
+    }
+    std::io::Write::write_all(&mut w, body.as_bytes())
+        .and_then(|_| std::io::Write::flush(&mut w))
+        .map_err(|e| output::write_error(out, &e).message)
+}
+
+/// Entry point of `flinch avoid`: `Ok(true)` when the tool reached the goal without ever entering
+/// the operator, `Ok(false)` otherwise (exit 1: a collision, or a stop before the goal).
+pub fn run(args: &AvoidArgs) -> Result<bool, String> {
     let scene = scene::Avoid::load(&args.scene)?;
     let cal = match &args.calibration {
         Some(p) => Some(calib::Calibration::load(p)?),
@@ -87,12 +120,15 @@ pub fn run(args: &AvoidArgs) -> Result<(), String> {
         img.save(p)?;
     }
     if args.compare {
-        return run_compare(&scene, &setup, &args.scene);
+        return run_compare(&scene, &setup, &args.scene).map(|_| true);
     }
     let engine = if args.mcu { Engine::Mcu } else { Engine::Reference };
     let res = path::simulate(&scene, &setup, engine).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     if let Some(p) = &args.plot {
         plot::plot(&scene, &res, p)?;
+    }
+    if let Some(p) = &args.csv {
+        write_csv(&res, p)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&metrics_json(&res, engine)).map_err(|e| e.to_string())?);
@@ -109,11 +145,30 @@ pub fn run(args: &AvoidArgs) -> Result<(), String> {
             res.points.len() - 1,
             res.dt_s
         );
+        let verdict = match res.status {
+            path::Status::Reached => "reached the goal, never inside the operator".to_string(),
+            path::Status::Stopped(r) => format!("stopped before the goal: {}", r.name()),
+            path::Status::Collision(None) => "COLLISION: the tool entered the operator (then reached the goal)".to_string(),
+            path::Status::Collision(Some(r)) => format!("COLLISION: the tool entered the operator (then stopped: {})", r.name()),
+        };
+        println!("  status            {} ({verdict})", res.status.name());
         match res.time_to_goal_s {
             Some(t) => println!("  time to goal      {t:.3} s"),
-            None => println!("  time to goal      not reached in {} s (final {:?})", scene.max_time_s, res.points.last()),
+            None => println!("  time to goal      not reached (final {:?})", res.points.last()),
         }
-        println!("  min clearance     {:.1} mm (at t = {:.2} s)", res.min_clearance_m * 1e3, res.snapshot.t_s);
+        println!(
+            "  min signed dist.  {:.1} mm (at t = {:.2} s; negative = inside the operator, {:.2} s inside)",
+            res.min_signed_distance_m * 1e3,
+            res.snapshot.t_s,
+            res.time_inside_s
+        );
+        println!(
+            "  max speed         {:.3} m/s, {:.3} m/s within {:.0} mm of the operator; {} heading reversals",
+            res.max_speed_mps,
+            res.max_speed_near_operator_mps,
+            path::NEAR_OPERATOR_M * 1e3,
+            res.heading_reversals
+        );
         println!("  path length       {:.3} m (straight line {:.3} m)", res.path_length_m, {
             let (a, b) = (scene.start_m, scene.goal_m);
             ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
@@ -129,7 +184,7 @@ pub fn run(args: &AvoidArgs) -> Result<(), String> {
             println!("  plot              {}", p.display());
         }
     }
-    Ok(())
+    Ok(res.status.ok())
 }
 
 fn run_compare(scene: &scene::Avoid, setup: &Setup, file: &std::path::Path) -> Result<(), String> {
@@ -150,7 +205,7 @@ fn run_compare(scene: &scene::Avoid, setup: &Setup, file: &std::path::Path) -> R
         println!(
             "grid {n} x {n}: f64 reference: time to goal {}, min clearance {:.1} mm, path {:.3} m",
             reference.time_to_goal_s.map_or("not reached".to_string(), |t| format!("{t:.2} s")),
-            reference.min_clearance_m * 1e3,
+            reference.min_signed_distance_m * 1e3,
             reference.path_length_m
         );
         println!("  {:<30} {:>14} {:>14} {:>14} {:>12} {:>10}", "variant", "cmd max mm/s", "cmd rms mm/s", "path dev mm", "min clr mm", "goal s");

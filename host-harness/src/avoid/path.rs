@@ -170,15 +170,115 @@ pub struct Snapshot {
     pub field: Field,
 }
 
+/// Why a run stopped before the goal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reason {
+    /// The progress monitor tripped and the tool had barely moved: a local minimum.
+    Stalled,
+    /// The progress monitor tripped while the tool kept moving without getting closer: orbiting or
+    /// climbing over an obstacle, no way through found.
+    NoPath,
+    /// Held in a protective stop (separation below the protective separation) when time ran out.
+    Blocked,
+    /// The weights were too old (the stale-weights stop) when time ran out.
+    StaleWeights,
+    /// `max_time_s` passed while moving and making progress.
+    Timeout,
+    /// The tool left the camera's view (the sensed workspace): stopped there.
+    LeftView,
+}
+
+impl Reason {
+    /// The name used in the JSON and the text output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reason::Stalled => "stalled",
+            Reason::NoPath => "no_path",
+            Reason::Blocked => "blocked",
+            Reason::StaleWeights => "stale_weights",
+            Reason::Timeout => "timeout",
+            Reason::LeftView => "left_view",
+        }
+    }
+}
+
+/// How a run ended. A run that ever put the tool inside the operator is a [`Status::Collision`]
+/// whatever happened afterwards: it is never reported as reached.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// At the goal, never inside the operator.
+    Reached,
+    /// Stopped before the goal, never inside the operator.
+    Stopped(Reason),
+    /// The tool entered the operator (signed distance < 0) at least once; `None`: it then reached
+    /// the goal, `Some(reason)`: it then stopped for that reason.
+    Collision(Option<Reason>),
+}
+
+impl Status {
+    /// `reached`, `stopped` or `collision`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Reached => "reached",
+            Status::Stopped(_) => "stopped",
+            Status::Collision(_) => "collision",
+        }
+    }
+    /// Why it stopped (also after a collision), if it did not reach the goal.
+    pub fn reason(self) -> Option<Reason> {
+        match self {
+            Status::Reached | Status::Collision(None) => None,
+            Status::Stopped(r) | Status::Collision(Some(r)) => Some(r),
+        }
+    }
+    /// The verdict: reached the goal and never touched the operator.
+    pub fn ok(self) -> bool {
+        self == Status::Reached
+    }
+}
+
+/// One control step as the CSV writes it.
+#[derive(Clone, Copy, Debug)]
+pub struct StepRow {
+    /// Time at the end of the step, s.
+    pub t_s: f64,
+    /// Tool at the end of the step, m.
+    pub p_m: [f64; 2],
+    /// Commanded velocity during the step, m/s.
+    pub v_mps: [f64; 2],
+    /// Signed distance from the tool to the operator's true footprint at the end of the step, m.
+    pub separation_m: f64,
+    /// Speed limit that applied during the step, m/s.
+    pub speed_limit_mps: f64,
+    /// What the controller did: `run`, `slow`, `protective_stop`, `stopped`.
+    pub state: &'static str,
+}
+
+/// Near the operator, for `max_speed_near_operator_mps`: signed distance below this, m.
+pub const NEAR_OPERATOR_M: f64 = 0.1;
+
 /// A simulated path and its metrics.
 #[derive(Clone, Debug)]
 pub struct PathResult {
     /// Tool positions, one per control step (the first is the start), m.
     pub points: Vec<[f64; 2]>,
-    /// Clearance to the operator's footprint at each point, m.
-    pub clearance_m: Vec<f64>,
-    /// Smallest clearance, m.
-    pub min_clearance_m: f64,
+    /// Signed distance to the operator's true footprint at each point, m (negative inside).
+    pub signed_distance_m: Vec<f64>,
+    /// Smallest signed distance, m: negative is the depth the tool went into the operator.
+    pub min_signed_distance_m: f64,
+    /// Every control step.
+    pub rows: Vec<StepRow>,
+    /// How the run ended.
+    pub status: Status,
+    /// Time spent with the tool inside the operator, s.
+    pub time_inside_s: f64,
+    /// Largest commanded speed, m/s.
+    pub max_speed_mps: f64,
+    /// Largest commanded speed while within [`NEAR_OPERATOR_M`] of the operator, m/s (0 if never).
+    pub max_speed_near_operator_mps: f64,
+    /// Steps at which the commanded direction turned by more than 90 degrees from the previous
+    /// command (both above 1 mm/s).
+    pub heading_reversals: usize,
     /// Length of the path, m.
     pub path_length_m: f64,
     /// Time at which the goal was reached, s.
@@ -245,24 +345,39 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResu
 }
 
 /// Simulate the scene with any command source.
+///
+/// Every step the tool's signed distance to the operator is measured on the true geometry. The run
+/// ends at the goal, when the tool leaves the camera's view, when the progress monitor trips
+/// (`progress_window_s`, `progress_m`) or at `max_time_s`; in each case the tool is stopped there.
 pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) -> Result<PathResult, String> {
     let op = scene.operator_shape();
     let mut rng = Rng::new(scene.camera.seed);
     let dt = scene.dt_s;
     let steps = (scene.max_time_s / dt).ceil() as usize;
     let goal = scene.goal_m;
+    let (w, h) = scene.extent_m();
+    let dist_goal = |p: [f64; 2]| ((p[0] - goal[0]).powi(2) + (p[1] - goal[1]).powi(2)).sqrt();
 
     let mut p = scene.start_m;
     let mut points = vec![p];
-    let mut clearance = vec![op.clearance(scene.hand_at(0.0), p)];
+    let mut signed = vec![op.signed_distance(scene.hand_at(0.0), p)];
+    let mut rows = Vec::with_capacity(steps.min(1 << 20));
     let mut field = fit_frame(scene, setup, p, scene.hand_at(0.0), &mut rng);
     let mut frames = 1;
     let mut seq: u32 = 0;
     engine.new_field(&field, seq, 0)?;
     let mut next_frame = scene.frame_period_s;
     let mut best = Snapshot { t_s: 0.0, tool_m: p, hand_m: scene.hand_at(0.0), field: field.clone() };
-    let mut min_c = clearance[0];
+    let mut min_s = signed[0];
     let mut time_to_goal = None;
+    let mut ended: Option<Reason> = None;
+    let (mut time_inside, mut vmax, mut vmax_near, mut reversals) = (0.0, 0.0f64, 0.0f64, 0usize);
+    let mut last_v: Option<[f64; 2]> = None;
+    // Progress monitor: best distance to the goal, and the time and path length when it last
+    // improved by `progress_m`.
+    let (mut best_goal, mut t_best, mut p_best) = (dist_goal(p), 0.0, p);
+    let mut spread: f64 = 0.0;
+    let mut path_len = 0.0;
 
     for k in 1..=steps {
         let t = k as f64 * dt;
@@ -276,30 +391,82 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
             engine.new_field(&field, seq, now)?;
         }
         let [vx, vy] = engine.command(p, goal, now);
+        let speed = (vx * vx + vy * vy).sqrt();
         // Eq 79.
-        p = [p[0] + vx * dt, p[1] + vy * dt];
+        let q = [p[0] + vx * dt, p[1] + vy * dt];
+        path_len += speed * dt;
+        p = q;
         let hand = scene.hand_at(t);
-        let c = op.clearance(hand, p);
+        let sd = op.signed_distance(hand, p);
+        vmax = vmax.max(speed);
+        if sd.min(*signed.last().unwrap_or(&sd)) < NEAR_OPERATOR_M {
+            vmax_near = vmax_near.max(speed);
+        }
+        if sd < 0.0 {
+            time_inside += dt;
+        }
+        if speed > 1e-3 {
+            if let Some(l) = last_v {
+                if l[0] * vx + l[1] * vy < 0.0 {
+                    reversals += 1;
+                }
+            }
+            last_v = Some([vx, vy]);
+        }
         points.push(p);
-        clearance.push(c);
-        if c < min_c {
-            min_c = c;
+        signed.push(sd);
+        rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: scene.speed_mps, state: "run" });
+        if sd < min_s {
+            min_s = sd;
             best = Snapshot { t_s: t, tool_m: p, hand_m: hand, field: field.clone() };
         }
-        let dist = ((p[0] - goal[0]).powi(2) + (p[1] - goal[1]).powi(2)).sqrt();
-        if dist <= scene.goal_tolerance_m {
+        if dist_goal(p) <= scene.goal_tolerance_m {
             time_to_goal = Some(t);
             break;
         }
+        if !(0.0..=w).contains(&p[0]) || !(0.0..=h).contains(&p[1]) {
+            ended = Some(Reason::LeftView);
+            break;
+        }
+        if dist_goal(p) <= best_goal - scene.progress_m {
+            (best_goal, t_best, p_best, spread) = (dist_goal(p), t, p, 0.0);
+        } else {
+            spread = spread.max(((p[0] - p_best[0]).powi(2) + (p[1] - p_best[1]).powi(2)).sqrt());
+            if t - t_best >= scene.progress_window_s {
+                // Stayed within twice the progress distance of where it last made progress (still,
+                // or chattering in place): stalled; went farther without getting closer: no path.
+                ended = Some(if spread < 2.0 * scene.progress_m { Reason::Stalled } else { Reason::NoPath });
+                break;
+            }
+        }
     }
-    let path_length_m = points.windows(2).map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt()).sum();
+    if time_to_goal.is_none() && ended.is_none() {
+        ended = Some(Reason::Timeout);
+    }
+    if let Some(r) = rows.last_mut() {
+        if ended.is_some() {
+            r.state = "stopped";
+        }
+    }
+    let collided = min_s < 0.0;
+    let status = match (collided, ended) {
+        (false, None) => Status::Reached,
+        (false, Some(r)) => Status::Stopped(r),
+        (true, e) => Status::Collision(e),
+    };
     let window = (scene.stall_window_s / dt).round().max(1.0) as usize;
     let stalls = count_stalls(&points, goal, window, scene.stall_move_m, scene.goal_tolerance_m);
     Ok(PathResult {
         points,
-        clearance_m: clearance,
-        min_clearance_m: min_c,
-        path_length_m,
+        signed_distance_m: signed,
+        min_signed_distance_m: min_s,
+        rows,
+        status,
+        time_inside_s: time_inside,
+        max_speed_mps: vmax,
+        max_speed_near_operator_mps: vmax_near,
+        heading_reversals: reversals,
+        path_length_m: path_len,
         time_to_goal_s: time_to_goal,
         stalls,
         frames,
@@ -335,7 +502,8 @@ mod tests {
         let res = simulate(&scene, &setup, Engine::Reference).unwrap();
         let t = res.time_to_goal_s.expect("reaches the goal");
         assert!(t < 6.0, "{t}");
-        assert!(res.min_clearance_m > 0.02, "never enters the operator: {}", res.min_clearance_m);
+        assert!(res.min_signed_distance_m > 0.02, "never enters the operator: {}", res.min_signed_distance_m);
+        assert_eq!(res.status, Status::Reached);
         assert_eq!(res.stalls, 0);
         // It went around: somewhere off the straight line by more than the hand's radius.
         let off = res.points.iter().map(|p| (p[1] - 0.5).abs()).fold(0.0, f64::max);
@@ -346,7 +514,11 @@ mod tests {
         blind.stop_height_m = 10.0;
         blind.slow_height_m = 9.0;
         let straight = simulate(&blind, &setup, Engine::Reference).unwrap();
-        assert_eq!(straight.min_clearance_m, 0.0);
+        // It goes through the hand: the signed distance says how deep, and it is never "reached".
+        assert!(straight.min_signed_distance_m < -0.015, "{}", straight.min_signed_distance_m);
+        assert!(straight.time_inside_s > 0.1);
+        assert_eq!(straight.status, Status::Collision(None));
+        assert!(!straight.status.ok());
 
         // The firmware step (I16F16, table, frames) follows the same path closely.
         let mcu = simulate(&scene, &setup, Engine::Mcu).unwrap();
@@ -367,7 +539,8 @@ mod tests {
         let res = simulate(&scene, &setup, Engine::Reference).unwrap();
         assert!(res.time_to_goal_s.is_none());
         assert!(res.stalls >= 1, "local minimum in front of the hand");
-        assert!(res.min_clearance_m > 0.0);
+        assert!(res.min_signed_distance_m > 0.0);
+        assert_eq!(res.status, Status::Stopped(Reason::Stalled), "the progress monitor stops it and says why");
         // The stall counter itself: moving, stopped, moving, stopped at the goal.
         let mut pts: Vec<[f64; 2]> = (0..10).map(|k| [k as f64 * 0.01, 0.0]).collect();
         pts.extend(std::iter::repeat([0.1, 0.0]).take(10));

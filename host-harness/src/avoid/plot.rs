@@ -51,7 +51,7 @@ where
         "f* (sigma' = {:.2} sigma) at t = {:.2} s, min clearance {:.0} mm",
         scene.fit.eval_sigma_factor,
         snap.t_s,
-        res.min_clearance_m * 1e3
+        res.min_signed_distance_m * 1e3
     );
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))

@@ -43,6 +43,14 @@ pub struct Avoid {
     /// See `stall_window_s`, m.
     #[serde(default = "default_stall_move")]
     pub stall_move_m: f64,
+    /// Progress monitor: the tool must get `progress_m` closer to the goal than it has ever been
+    /// within every `progress_window_s` (time in a protective stop not counted), or the run stops with
+    /// `stalled` (it barely moved) or `no_path` (it moved without approaching: orbiting, climbing), s.
+    #[serde(default = "default_progress_window")]
+    pub progress_window_s: f64,
+    /// See `progress_window_s`, m.
+    #[serde(default = "default_progress")]
+    pub progress_m: f64,
     /// The camera.
     pub camera: CameraCfg,
     /// The fit.
@@ -64,6 +72,12 @@ fn default_stall_window() -> f64 {
 }
 fn default_stall_move() -> f64 {
     0.005
+}
+fn default_progress_window() -> f64 {
+    2.0
+}
+fn default_progress() -> f64 {
+    0.02
 }
 
 /// `[avoid.camera]`.
@@ -151,6 +165,20 @@ pub struct Keyframe {
     pub hand_m: [f64; 2],
 }
 
+/// Prefix `err` (which starts with `avoid.[table.]key`) with `line N: ` where that key is written.
+fn locate(text: &str, err: String) -> String {
+    let Some(path) = err.strip_prefix("avoid.").and_then(|r| r.split([' ', ':', '/']).next()) else { return err };
+    let key = path.rsplit('.').next().unwrap_or(path);
+    let found = text.lines().position(|l| {
+        let t = l.trim_start();
+        t.strip_prefix(key).is_some_and(|r| r.trim_start().starts_with('='))
+    });
+    match found {
+        Some(n) => format!("line {}: {err}", n + 1),
+        None => err,
+    }
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct File {
@@ -158,16 +186,21 @@ struct File {
 }
 
 impl Avoid {
-    /// Read and validate a scene file; errors name the file and the key.
+    /// Read and validate a scene file; errors name the file, the line (when the key is written in
+    /// the file) and the key: `file:line: avoid.key = value: what is allowed`.
     pub fn load(path: &Path) -> Result<Self, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Self::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+        Self::parse(&text).map_err(|e| match e.strip_prefix("line ") {
+            Some(rest) => format!("{}:{rest}", path.display()),
+            None => format!("{}: {e}", path.display()),
+        })
     }
 
-    /// Parse and validate scene text.
+    /// Parse and validate scene text. A validation error starts with `line N: ` when the key it
+    /// names is written in the text.
     pub fn parse(text: &str) -> Result<Self, String> {
         let f: File = toml::from_str(text).map_err(|e| e.to_string().trim_end().to_string())?;
-        f.avoid.validate()?;
+        f.avoid.validate().map_err(|e| locate(text, e))?;
         Ok(f.avoid)
     }
 
@@ -180,6 +213,11 @@ impl Avoid {
         pos("goal_tolerance_m", self.goal_tolerance_m)?;
         pos("capture_radius_m", self.capture_radius_m)?;
         pos("stall_window_s", self.stall_window_s)?;
+        pos("progress_window_s", self.progress_window_s)?;
+        pos("progress_m", self.progress_m)?;
+        if self.progress_window_s > self.max_time_s.max(1.0) * 100.0 {
+            return Err(format!("avoid.progress_window_s = {}: must be at most 100 x max_time_s", self.progress_window_s));
+        }
         pos("camera.m_per_px", self.camera.m_per_px)?;
         pos("camera.camera_height_m", self.camera.camera_height_m)?;
         pos("fit.sigma_factor", self.fit.sigma_factor)?;
@@ -317,6 +355,10 @@ mod tests {
         assert!(bad("repulsion = \"vortex\"", "repulsion = \"swirl\"").contains("avoid.repulsion"));
         assert!(bad("stop_height_m = 0.30", "stop_height_m = 0.01").contains("avoid.stop_height_m"));
         assert!(bad("goal_m = [0.93, 0.50]", "goal_m = [3.0, 0.50]").contains("avoid.goal_m"));
+        let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_m = -1");
+        assert!(e.starts_with("line 21: avoid.progress_m = -1: must be > 0"), "{e}");
+        assert!(bad("grid = 15", "grid = 40").starts_with("line "), "the line of a nested key");
+        assert!(bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_window_s = nan").contains("progress_window_s"));
         let unknown = bad("dt_s = 0.01", "dt_s = 0.01\nspeeed = 1");
         assert!(unknown.contains("speeed") && unknown.contains("line"), "{unknown}");
     }
