@@ -189,7 +189,7 @@ case!(
     "duration = -0.6 ",
     "duration",
     "duration",
-    "must be > 0 s, got -0.6"
+    "allowed range (0, 60] s (a collision and the stop that follows last under a second (the thesis runs 0.06-0.8 s); 60 s bounds run time and output), got -0.6"
 );
 case!(
     duration_nan,
@@ -198,7 +198,7 @@ case!(
     "duration = nan ",
     "duration",
     "duration",
-    "must be a finite number > 0 s, got NaN"
+    "must be a finite number; allowed range (0, 60] s (a collision and the stop that follows last under a second (the thesis runs 0.06-0.8 s); 60 s bounds run time and output), got NaN"
 );
 case!(
     speed_wrong_type,
@@ -207,7 +207,7 @@ case!(
     "speed = \"slow\" ",
     "motion.speed",
     "speed",
-    "must be a number > 0 m/s, got string"
+    "must be a number in [1e-4, 5] m/s, got string"
 );
 case!(
     accel_zero,
@@ -216,7 +216,7 @@ case!(
     "accel = 0 ",
     "motion.accel",
     "accel",
-    "must be > 0 m/s^2, got 0"
+    "allowed range [0.001, 500] m/s^2 (up to about 50 g, beyond what the drives of arms in the Table 7 class reach (a few 10 m/s^2)), got 0"
 );
 case!(
     decel_missing,
@@ -225,7 +225,7 @@ case!(
     "",
     "motion.decel",
     "[motion]",
-    "missing required key: a number > 0 m/s^2"
+    "missing required key: a number in [0.001, 500] m/s^2"
 );
 case!(
     negative_dead_time,
@@ -234,7 +234,7 @@ case!(
     "dead_time = -0.016 ",
     "motion.dead_time",
     "dead_time",
-    "must be >= 0 s, got -0.016"
+    "allowed range [0, 1] s (controller reaction times: 10-70 ms in the thesis, well under 1 s for any stop category 0/1 robot (ISO 13855 stopping performance)), got -0.016"
 );
 case!(
     start_at_speed_not_bool,
@@ -252,7 +252,7 @@ case!(
     "mass = -8.4 ",
     "robot.mass",
     "mass = -8.4",
-    "must be > 0 kg, got -8.4"
+    "allowed range [0.1, 500] kg (effective mass at the flange: 8.4 kg for the Viper s650 (Table 7), a few hundred kg for the largest arms), got -8.4"
 );
 case!(
     robot_unknown_key,
@@ -270,7 +270,7 @@ case!(
     "mass = 0 ",
     "tool.mass",
     "mass = 0 ",
-    "must be > 0 kg, got 0"
+    "allowed range [0.001, 50] kg (1 g to 50 kg: the largest payload of arms in the Table 7 class and beyond (the thesis: 0.048-0.75 kg)), got 0"
 );
 case!(
     decoupler_kind_unknown,
@@ -288,7 +288,7 @@ case!(
     "springs = 2.0 ",
     "decoupler.springs",
     "springs = 2.0",
-    "must be an integer >= 1 (write it without a decimal point), got 2.0"
+    "must be an integer in [1, 16] (write it without a decimal point), got 2.0"
 );
 case!(
     zero_front_stroke,
@@ -297,7 +297,7 @@ case!(
     "front_stroke = 0 ",
     "decoupler.front_stroke",
     "front_stroke",
-    "must be > 0 m, got 0"
+    "allowed range [1e-4, 0.2] m (a hand-sized module: 0.015-0.024 m in Tables 2-15), got 0"
 );
 case!(
     height_not_positive,
@@ -306,7 +306,7 @@ case!(
     "height = -0.03 ",
     "decoupler.height",
     "height",
-    "must be > 0 m, got -0.03"
+    "allowed range [1e-6, 0.5] m (a hand-sized module: 0.028-0.053 m in Tables 2-15; must also be < free_length), got -0.03"
 );
 case!(
     front_stop_negative_damping,
@@ -315,7 +315,7 @@ case!(
     "damping = -1 }",
     "decoupler.front_stop.damping",
     "front_stop",
-    "must be >= 0 N s/m, got -1"
+    "allowed range [0, 100000] N s/m (235-278 N s/m in Tables 2-15; 1e5 N s/m is beyond critical for the stiffest stop and heaviest tool in range), got -1"
 );
 case!(
     front_stop_damping_and_restitution,
@@ -333,7 +333,7 @@ case!(
     "restitution = 1.6 }",
     "decoupler.back_stop.restitution",
     "back_stop",
-    "must be in [0, 1], got 1.6"
+    "allowed range [0, 1] (a restitution is a ratio of speeds: 0 (plastic) to 1 (elastic)), got 1.6"
 );
 case!(back_stop_unknown_law, BI, "restitution = 0.6 }", "restitution = 0.6, damping_law = \"hunt\" }", "decoupler.back_stop.damping_law", "back_stop", "must be one of \"hunt-crossley\" | \"lankarani-nikravesh\" | \"flores\" | \"gonthier\" | \"exact\", got \"hunt\"");
 case!(
@@ -343,13 +343,13 @@ case!(
     "friction = { mu = -0.1, v0 = 0.001 }",
     "decoupler.friction.mu",
     "friction",
-    "must be >= 0, got -0.1"
+    "allowed range [0, 1] (dry sliding friction: 0.04 (PTFE) to about 1 (rubber on steel); 0.12-0.23 in Tables 5-15), got -0.1"
 );
 case!(
     springs_cannot_hold_the_tool,
     BI,
     "free_length = 0.05 ",
-    "free_length = 0.02 ",
+    "free_length = 0.032 ",
     "decoupler.free_length",
     "free_length",
     "the tool would not rest on the front stop at t = 0"
@@ -397,7 +397,7 @@ case!(
     "adiabatic_exponent = 0.9 ",
     "decoupler.adiabatic_exponent",
     "adiabatic_exponent",
-    "must be in [1, 1.6666666666666667], got 0.9"
+    "allowed range [1, 1.6666666666666667] (1 is isothermal, 5/3 a monatomic gas: nothing outside is a gas), got 0.9"
 );
 case!(
     hydraulic_zero_stroke,
@@ -406,7 +406,7 @@ case!(
     "stroke = 0 ",
     "decoupler.stroke",
     "stroke = 0 ",
-    "must be > 0 m, got 0"
+    "allowed range [0.001, 0.2] m (a hand-sized module: 0.023 m in Tables 12 and 14), got 0"
 );
 case!(
     sensor_beyond_piston_stroke,
@@ -460,7 +460,7 @@ case!(
     "restitution = -0.65 ",
     "target.restitution",
     "restitution = -0.65",
-    "must be in [0, 1], got -0.65"
+    "allowed range [0, 1] (a restitution is a ratio of speeds: 0 (plastic) to 1 (elastic)), got -0.65"
 );
 case!(
     target_missing_law,
@@ -487,7 +487,7 @@ case!(
     "# mass removed ",
     "target.mass",
     "[target]",
-    "missing required key: a number > 0 kg"
+    "missing required key: a number in [0.001, 1000] kg"
 );
 case!(
     obstacle_with_floor_friction,
@@ -514,7 +514,7 @@ case!(
     "[solver]\nrtol = 1.0\n\n[sensor]",
     "solver.rtol",
     "rtol",
-    "must be in [1e-13, 0.1], got 1"
+    "allowed range [1e-12, 1e-5] (tighter than 1e-12 is below what f64 resolves over a run; looser than 1e-5 (fidelity = \"fast\") loses contacts and modes (docs/accuracy.md)), got 1"
 );
 case!(
     solver_atol_out_of_range,
@@ -523,7 +523,7 @@ case!(
     "[solver]\natol = 0\n\n[sensor]",
     "solver.atol",
     "atol",
-    "must be in [1e-15, 0.01], got 0"
+    "allowed range [1e-15, 1e-8] (tighter than 1e-15 is below f64 resolution; looser than 1e-8 (fidelity = \"fast\") loses contacts and modes (docs/accuracy.md)), got 0"
 );
 case!(
     solver_max_step_beyond_duration,
@@ -532,7 +532,7 @@ case!(
     "[solver]\nmax_step = 0.7\n\n[sensor]",
     "solver.max_step",
     "max_step",
-    "must be <= duration = 0.6 s, got 0.7"
+    "allowed range [1e-7, 0.1] s (10 ms by default; below 0.1 us a fixed-step run grinds, above 0.1 s a step can jump a whole contact; also <= duration), got 0.7"
 );
 case!(
     controller_phase_out_of_range,
@@ -541,7 +541,7 @@ case!(
     "[controller]\nscan_cycle = 0.016\nphase = 1\nfirmware_tick = 1e-4\n\n[sensor]",
     "controller.phase",
     "phase",
-    "must be in [0, 1) of a scan cycle, got 1"
+    "allowed range [0, 1) of a scan cycle (a phase is a fraction of one cycle), got 1"
 );
 case!(
     controller_missing_scan_cycle,
@@ -550,7 +550,7 @@ case!(
     "[controller]\nphase = 0\nfirmware_tick = 1e-4\n\n[sensor]",
     "controller.scan_cycle",
     "[controller]",
-    "missing required key: a number > 0 s"
+    "missing required key: a number in [1e-5, 0.1] s"
 );
 
 #[test]
@@ -596,4 +596,67 @@ fn missing_file_names_the_file() {
             .starts_with(&format!("{}: cannot read the scene file", path.display())),
         "{err}"
     );
+}
+
+/// Issue 18: every value the first fuzzing runs found accepted and then failing late (1e308 speeds,
+/// masses and strokes reported as results, a gravity of 9.2e18, a 1e4 s run that exhausted memory,
+/// a 1 ns output interval, a stiffness the solver cannot step through) is refused by the loader,
+/// at its line and key, with the allowed range or the cross-key reason.
+#[test]
+fn issue18_extremes_are_refused_by_name() {
+    type Case = (&'static str, &'static [(&'static str, &'static str)], &'static str, &'static str);
+    const CASES: &[Case] = &[
+        (BI, &[("speed = 0.05 ", "speed = 1e308 ")], "motion.speed", "allowed range [1e-4, 5] m/s ("),
+        (BI, &[("accel = 1.0 ", "accel = 1e308 ")], "motion.accel", "allowed range [0.001, 500] m/s^2 ("),
+        (BI, &[("decel = 2.0 ", "decel = 1e308 ")], "motion.decel", "allowed range [0.001, 500] m/s^2 ("),
+        (BI, &[("dead_time = 0.016 ", "dead_time = 1e308 ")], "motion.dead_time", "allowed range [0, 1] s ("),
+        (BI, &[("gravity = 0.0 ", "gravity = 9223372036854775807 ")], "motion.gravity", "allowed range [-9.81, 9.81] m/s^2 ("),
+        (BI, &[("mass = 0.75 ", "mass = 1e308 ")], "tool.mass", "allowed range [0.001, 50] kg ("),
+        (BI, &[("mass = 8.4 ", "mass = 1e308 ")], "robot.mass", "allowed range [0.1, 500] kg ("),
+        (BI, &[("stiffness = 2.3e5 ", "stiffness = 1e308 ")], "robot.stiffness", "allowed range [1000, 1e8] N/m ("),
+        (BI, &[("free_length = 0.05 ", "free_length = 1e9 ")], "decoupler.free_length", "allowed range [0.001, 0.5] m ("),
+        (BI, &[("front_stroke = 0.015 ", "front_stroke = 1e308 ")], "decoupler.front_stroke", "allowed range [1e-4, 0.2] m ("),
+        (BI, &[("stiffness = 1e8 ", "stiffness = 1e308 ")], "target.stiffness", "allowed range [1000, 1e10] N/m^1.5 ("),
+        (BI, &[("duration = 0.6 ", "duration = 1e4 ")], "duration", "allowed range (0, 60] s ("),
+        (BI, &[("duration = 0.6 ", "duration = 1e308 ")], "duration", "allowed range (0, 60] s ("),
+        (BI, &[("[sensor]", "[solver]\nrtol = 0.1\n\n[sensor]")], "solver.rtol", "allowed range [1e-12, 1e-5] ("),
+        (BI, &[("[sensor]", "[solver]\natol = 0.01\n\n[sensor]")], "solver.atol", "allowed range [1e-15, 1e-8] ("),
+        // H >= L0: one stable position, no bi-stable mechanism.
+        (BI, &[("free_length = 0.05 ", "free_length = 0.02 ")], "decoupler.height", "must be < decoupler.free_length = 0.02 m (H < L0"),
+        // A nanosecond output interval over a minute is 6e10 samples.
+        (BI, &[("duration = 0.6 ", "duration = 60 "), ("[sensor]", "[solver]\noutput_interval = 1e-9\n\n[sensor]")], "solver.output_interval", "above the budget of 1e7"),
+        // A 0.1 us fixed step over a minute: 6e8 steps.
+        (BI, &[("duration = 0.6 ", "duration = 60 "), ("[sensor]", "[solver]\nmethod = \"rk4\"\nmax_step = 1e-7\noutput_interval = 0.01\n\n[sensor]")], "solver.max_step", "above the budget of 1e7"),
+        // The stiffest front stop under the lightest tool for a minute: sqrt(1e9 / 1e-3) / 2 x 60 = 3e7 steps.
+        (BI, &[("duration = 0.6 ", "duration = 60 "), ("mass = 0.75 ", "mass = 0.001 "), ("stiffness = 1e6, damping = 278.0", "stiffness = 1e9, damping = 0.0")], "duration", "sqrt(decoupler.front_stop.stiffness / tool.mass)"),
+        // Moving up (gravity -9.81) with a 0.14 kg tool: the weight, 1.37 N, beats the gas preload
+        // of 1.26 N and the tool hangs past the 1.5 mm switch at t = 0 (the issue: from 0.1327 kg).
+        (HYD, &[("gravity = 0.0 ", "gravity = -9.81 "), ("mass = 0.048 ", "mass = 0.14 ")], "sensor.threshold", "at or past the switch, which would fire at t = 0"),
+    ];
+    for (i, (base, edits, key, allowed)) in CASES.iter().enumerate() {
+        let mut text = std::fs::read_to_string(scene_path(base)).expect("shipped scene");
+        for (from, to) in edits.iter() {
+            assert_eq!(text.matches(from).count(), 1, "{from:?} must occur once in {base}");
+            text = text.replacen(from, to, 1);
+        }
+        let (file, err) = load_text(&format!("issue18-{i}"), &text);
+        let shown = err.to_string();
+        let issue = err.issues.iter().find(|x| x.key == *key).unwrap_or_else(|| panic!("case {i}: no issue on {key}:\n{shown}"));
+        assert!(issue.message.contains(allowed), "case {i}: {:?} lacks {allowed:?}", issue.message);
+        let line = issue.line.unwrap_or_else(|| panic!("case {i}: no line:\n{shown}"));
+        assert!(shown.contains(&format!("{file}:{line}: {key}: ")), "{shown}");
+    }
+}
+
+/// The hydraulic rest check refuses only a tool that really hangs past the switch: 0.13 kg moving
+/// up (the gas holds it 1.4 mm back, short of the 1.5 mm switch) still loads.
+#[test]
+fn hydraulic_tool_just_short_of_the_switch_loads() {
+    let text = std::fs::read_to_string(scene_path(HYD)).expect("shipped scene")
+        .replacen("gravity = 0.0 ", "gravity = -9.81 ", 1)
+        .replacen("mass = 0.048 ", "mass = 0.132 ", 1);
+    let s = scene::parse(&text, "up.toml").unwrap_or_else(|e| panic!("{e}"));
+    let scene::Decoupler::Hydraulic(h) = &s.decoupler else { panic!("hydraulic") };
+    let u = scene::hydraulic_rest_travel(h, s.tool.mass, s.motion.gravity);
+    assert!(u > 0.0 && u < 0.0015, "{u}");
 }

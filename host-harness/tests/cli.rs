@@ -192,7 +192,7 @@ fn a_long_run_streams_its_csv_and_decimates_its_plot_in_bounded_memory() {
 #[test]
 fn ctrl_c_stops_a_long_run_with_complete_rows() {
     let d = tmp("sigint");
-    let scene = long_scene(&d, 2000.0, 1e-4);
+    let scene = long_scene(&d, 60.0, 1e-5);
     let csv = d.join("h.csv");
     let mut child = flinch().args(["run"]).arg(&scene).args(["--csv"]).arg(&csv).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
     // Wait for rows to appear, then interrupt.

@@ -128,6 +128,22 @@ impl Span {
         lo && hi
     }
 
+    /// The refusal of `x`: `allowed range (0, 10] m/s (source), got x`.
+    pub fn refuse(&self, x: f64) -> String {
+        let shown = if x.is_finite() { num(x) } else { format!("{x}") };
+        if self.source.is_empty() {
+            format!("allowed range {}, got {shown}", self.range())
+        } else {
+            format!("allowed range {} ({}), got {shown}", self.range(), self.source)
+        }
+    }
+
+    /// The range in interval notation with its unit: `(0, 10] m/s`, `[0, 1]`, `> 0 s` if open.
+    pub fn range(&self) -> String {
+        let d = self.describe();
+        d.strip_prefix("in ").map(str::to_string).unwrap_or(d)
+    }
+
     /// The range as a message says it: `> 0 m/s`, `in [0, 1]`, `in (0, 10] m/s`.
     pub fn describe(&self) -> String {
         let unit = if self.unit.is_empty() {
@@ -454,16 +470,12 @@ impl Ctx<'_> {
             self.bad(
                 tab,
                 key.name,
-                format!("must be a finite number {}, got {x}", span.describe()),
+                format!("must be a finite number; {}", span.refuse(x)),
             );
             return None;
         }
         if !span.contains(x) {
-            self.bad(
-                tab,
-                key.name,
-                format!("must be {}, got {}", span.describe(), num(x)),
-            );
+            self.bad(tab, key.name, span.refuse(x));
             return None;
         }
         Some(Some(x))

@@ -22,7 +22,7 @@ pub const RESTITUTION: Key = Key::number("restitution", "", Incl(0.0), Incl(1.0)
 pub const DAMPING_LAW: Key = Key::of("damping_law", Ty::Choice(LAW_NAMES), "the law mapping e to chi = alpha(e) k / v_in (eq 7 and others)")
     .optional("required with restitution");
 /// A fixed chi.
-pub const CHI: Key = Key::number("chi", "N s/m^2.5", Incl(0.0), Open, "", "a fixed damping chi (Table 12) instead of restitution and damping_law")
+pub const CHI: Key = Key::number("chi", "N s/m^2.5", Incl(0.0), Incl(1e8), "4.5e4-1.35e6 N s/m^2.5 in Table 12; 1e8 is overdamped for every stiffness in range", "a fixed damping chi (Table 12) instead of restitution and damping_law")
     .optional("restitution and damping_law set chi");
 
 /// `restitution` + `damping_law` or `chi`; `default_law` is used when `damping_law` is absent

@@ -12,11 +12,11 @@ pub const TABLE: Key = Key::of(
 .optional("a plain run; `flinch hil` takes --scan-cycle and --tick instead");
 
 /// Scan cycle.
-pub const SCAN_CYCLE: Key = Key::number("scan_cycle", "s", Excl(0.0), Open, "", "the robot controller's scan cycle: inputs are sampled once per cycle");
+pub const SCAN_CYCLE: Key = Key::number("scan_cycle", "s", Incl(1e-5), Incl(0.1), "robot controller cycles: 10 us to 100 ms (safety PLCs scan in 1-20 ms)", "the robot controller's scan cycle: inputs are sampled once per cycle");
 /// Phase of the first sample.
 pub const PHASE: Key = Key::number("phase", "of a scan cycle", Incl(0.0), Excl(1.0), "a phase is a fraction of one cycle", "phase of the first sample within a scan cycle");
 /// Firmware tick.
-pub const FIRMWARE_TICK: Key = Key::number("firmware_tick", "s", Excl(0.0), Open, "", "the firmware's tick period");
+pub const FIRMWARE_TICK: Key = Key::number("firmware_tick", "s", Incl(1e-6), Incl(0.01), "the firmware ticks at 1 us to 10 ms", "the firmware's tick period");
 
 /// The keys of `[controller]`.
 pub const KEYS: &[Key] = &[SCAN_CYCLE, PHASE, FIRMWARE_TICK];

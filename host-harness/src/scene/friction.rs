@@ -12,9 +12,9 @@ pub const TABLE: Key = Key::of(
 .optional("a frictionless slide");
 
 /// mu.
-pub const MU: Key = Key::number("mu", "", Incl(0.0), Open, "", "mu, the friction coefficient of the slide");
+pub const MU: Key = Key::number("mu", "", Incl(0.0), Incl(1.0), "dry sliding friction: 0.04 (PTFE) to about 1 (rubber on steel); 0.12-0.23 in Tables 5-15", "mu, the friction coefficient of the slide");
 /// v0.
-pub const V0: Key = Key::number("v0", "m/s", Incl(0.0), Open, "", "v0, the velocity regularising sgn(); values below 1e-3 m/s are raised to it and the run says so");
+pub const V0: Key = Key::number("v0", "m/s", Incl(0.0), Incl(0.1), "0 is the Coulomb limit (regularised); 1e-3 m/s in the thesis (eq 41); beyond 0.1 m/s friction is no longer dry", "v0, the velocity regularising sgn(); values below 1e-3 m/s are raised to it and the run says so");
 
 /// The keys of `decoupler.friction`.
 pub const KEYS: &[Key] = &[MU, V0];

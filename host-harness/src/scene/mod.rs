@@ -69,6 +69,7 @@
 //!   model explicitly (`sim::simplified`; their measured cost is in docs/accuracy.md).
 //! - `[controller]` (firmware in the loop): `scan_cycle` (s > 0), `phase` in [0, 1),
 //!   `firmware_tick` (s > 0), all required when the table is present.
+mod budget;
 mod check;
 mod contact;
 mod controller;
@@ -84,6 +85,7 @@ mod target;
 mod tests;
 mod tool;
 
+pub use budget::{estimated_steps, fastest_rate, hydraulic_rest_travel, MAX_SAMPLES, MAX_STEPS};
 pub use check::{Bound, Key, KeyTable, Need, SceneError, SceneIssue, Span, Ty};
 pub use decoupler::end_stop::DEFAULT_BACK_STOP_LAW;
 pub use decoupler::hydraulic::{DEFAULT_ADIABATIC_EXPONENT, DEFAULT_HYDRAULIC_FRICTION_V0};
@@ -104,8 +106,8 @@ const DURATION: Key = Key::number(
     "duration",
     "s",
     Excl(0.0),
-    Open,
-    "",
+    Incl(60.0),
+    "a collision and the stop that follows last under a second (the thesis runs 0.06-0.8 s); 60 s bounds run time and output",
     "simulated time from the start of the motion (t = 0)",
 );
 
@@ -267,7 +269,7 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
         }
     }
 
-    Some(Scene {
+    let scene = Scene {
         name: name?,
         duration_s: duration_s?,
         motion: motion?,
@@ -278,5 +280,9 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
         sensor: sensor?,
         solver: solver?,
         controller: controller?,
-    })
+    };
+    if cx.issues.is_empty() {
+        budget::check(cx, &root, &scene);
+    }
+    Some(scene)
 }

@@ -7,15 +7,15 @@ use super::model::Motion;
 pub const TABLE: Key = Key::of("motion", Ty::Table("the commanded flange motion"), "the commanded flange motion");
 
 /// V_c.
-pub const SPEED: Key = Key::number("speed", "m/s", Excl(0.0), Open, "", "V_c, the commanded cruise speed of the flange");
+pub const SPEED: Key = Key::number("speed", "m/s", Incl(1e-4), Incl(5.0), "0.1 mm/s (a creep, not a collision) to 5 m/s, beyond the 0.05-1 m/s of the thesis and the fastest flange speeds of arms of the Viper s650 class (Table 7)", "V_c, the commanded cruise speed of the flange");
 /// a_c.
-pub const ACCEL: Key = Key::number("accel", "m/s^2", Excl(0.0), Open, "", "a_c, the commanded acceleration up to V_c");
+pub const ACCEL: Key = Key::number("accel", "m/s^2", Incl(1e-3), Incl(500.0), "up to about 50 g, beyond what the drives of arms in the Table 7 class reach (a few 10 m/s^2)", "a_c, the commanded acceleration up to V_c");
 /// d_c.
-pub const DECEL: Key = Key::number("decel", "m/s^2", Excl(0.0), Open, "", "d_c, the braking deceleration once the robot reacts");
+pub const DECEL: Key = Key::number("decel", "m/s^2", Incl(1e-3), Incl(500.0), "up to about 50 g, beyond any robot stop (the thesis brakes at 2-9 m/s^2)", "d_c, the braking deceleration once the robot reacts");
 /// DT.
-pub const DEAD_TIME: Key = Key::number("dead_time", "s", Incl(0.0), Open, "", "DT, from detection to the start of braking");
+pub const DEAD_TIME: Key = Key::number("dead_time", "s", Incl(0.0), Incl(1.0), "controller reaction times: 10-70 ms in the thesis, well under 1 s for any stop category 0/1 robot (ISO 13855 stopping performance)", "DT, from detection to the start of braking");
 /// Gravity along the approach.
-pub const GRAVITY: Key = Key::number("gravity", "m/s^2", Open, Open, "", "gravity along the approach direction (9.81 for a tool moving down, -9.81 up)");
+pub const GRAVITY: Key = Key::number("gravity", "m/s^2", Incl(-9.81), Incl(9.81), "the component of Earth gravity (9.81 m/s^2, as the thesis) along the approach", "gravity along the approach direction (9.81 for a tool moving down, -9.81 up)");
 /// Start already cruising.
 pub const START_AT_SPEED: Key = Key::of("start_at_speed", Ty::Bool, "flange, robot and tool already cruise at V_c at t = 0 (the Ch. 2 set-ups); accel is then unused")
     .optional("false: the motion starts from rest");

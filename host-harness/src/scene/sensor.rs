@@ -14,9 +14,9 @@ pub const TABLE: Key = Key::of(
 /// Travel or force.
 pub const KIND: Key = Key::of("kind", Ty::Choice(&["travel", "force"]), "\"travel\" (inductive or magnetic switch on the stroke) or \"force\" (on the contact force)");
 /// d_sw of a travel switch.
-pub const TRAVEL_THRESHOLD: Key = Key::number("threshold", "m", Excl(0.0), Open, "", "d_sw, travel back from the front stop at which the switch fires (kind = \"travel\")");
+pub const TRAVEL_THRESHOLD: Key = Key::number("threshold", "m", Incl(1e-5), Incl(0.2), "10 um (the repeatability of an inductive switch) to the longest stroke in range; 0.5-5 mm in the thesis", "d_sw, travel back from the front stop at which the switch fires (kind = \"travel\")");
 /// Force threshold.
-pub const FORCE_THRESHOLD: Key = Key::number("threshold", "N", Excl(0.0), Open, "", "contact force at which the detector fires (kind = \"force\")");
+pub const FORCE_THRESHOLD: Key = Key::number("threshold", "N", Incl(0.1), Incl(1e4), "0.1 N to 10 kN; 1-25 N in the thesis, ISO/TS 15066 Table A.2 limits are 65-280 N", "contact force at which the detector fires (kind = \"force\")");
 
 /// The keys of a travel switch.
 pub const TRAVEL_KEYS: &[Key] = &[KIND, TRAVEL_THRESHOLD];
@@ -46,15 +46,16 @@ pub(super) fn sensor(cx: &mut Ctx, t: &Tab, decoupler: Option<&Decoupler>) -> Op
             cx.number(t, &key)
         }
     };
+    if let (Some(K::Travel), Some(Decoupler::Rigid)) = (kind, decoupler) {
+        cx.bad(t, KIND.name, "must be \"force\" for decoupler.kind = \"rigid\" (a rigid tool has no travel), got \"travel\"".into());
+        return None;
+    }
     let (kind, threshold) = (kind?, threshold?);
     match kind {
         K::Force => Some(Sensor::Force { threshold }),
         K::Travel => {
             let stroke = match decoupler {
-                Some(Decoupler::Rigid) => {
-                    cx.bad(t, KIND.name, "must be \"force\" for decoupler.kind = \"rigid\" (a rigid tool has no travel), got \"travel\"".into());
-                    return None;
-                }
+                Some(Decoupler::Rigid) => None,
                 Some(Decoupler::Bistable(b)) => Some((
                     b.front_stroke + b.back_stroke,
                     "total stroke front_stroke + back_stroke",

@@ -40,16 +40,16 @@ pub const TABLE: Key = Key::of("solver", Ty::Table("integration settings"), "int
 pub const METHOD: Key = Key::of("method", Ty::Choice(&["dopri5", "rk4", "semi-implicit-euler"]), "integration method: adaptive Dormand-Prince 5(4), or fixed-step RK4 or semi-implicit Euler at max_step")
     .optional("dopri5");
 /// rtol.
-pub const RTOL: Key = Key::number("rtol", "", Incl(1e-13), Incl(1e-1), "tighter than 1e-13 is below f64 resolution; looser than 0.1 is no error control", "relative tolerance of the adaptive method")
+pub const RTOL: Key = Key::number("rtol", "", Incl(1e-12), Incl(1e-5), "tighter than 1e-12 is below what f64 resolves over a run; looser than 1e-5 (fidelity = \"fast\") loses contacts and modes (docs/accuracy.md)", "relative tolerance of the adaptive method")
     .optional("by fidelity: 1e-6 (default), 1e-5 (fast), 1e-10 (reference)");
 /// atol.
-pub const ATOL: Key = Key::number("atol", "", Incl(1e-15), Incl(1e-2), "tighter than 1e-15 is below f64 resolution; looser than 1e-2 is no error control", "absolute tolerance on positions (m) and velocities (m/s)")
+pub const ATOL: Key = Key::number("atol", "", Incl(1e-15), Incl(1e-8), "tighter than 1e-15 is below f64 resolution; looser than 1e-8 (fidelity = \"fast\") loses contacts and modes (docs/accuracy.md)", "absolute tolerance on positions (m) and velocities (m/s)")
     .optional("by fidelity: 1e-9 (default), 1e-8 (fast), 1e-13 (reference)");
 /// The largest (or fixed) step.
-pub const MAX_STEP: Key = Key::number("max_step", "s", Excl(0.0), Open, "", "largest step of the adaptive method, the step of a fixed-step one; <= duration")
+pub const MAX_STEP: Key = Key::number("max_step", "s", Incl(1e-7), Incl(0.1), "10 ms by default; below 0.1 us a fixed-step run grinds, above 0.1 s a step can jump a whole contact; also <= duration", "largest step of the adaptive method, the step of a fixed-step one; <= duration")
     .default(DEFAULT_MAX_STEP);
 /// Output interval.
-pub const OUTPUT_INTERVAL: Key = Key::number("output_interval", "s", Incl(0.0), Open, "", "interval between recorded samples of the time history (0: every step); <= duration")
+pub const OUTPUT_INTERVAL: Key = Key::number("output_interval", "s", Incl(0.0), Incl(1.0), "0 records every step; 0.1 ms by default; also <= duration and at most 1e7 samples", "interval between recorded samples of the time history (0: every step); <= duration")
     .default(DEFAULT_OUTPUT_INTERVAL);
 /// Fidelity.
 pub const FIDELITY: Key = Key::of("fidelity", Ty::Choice(&["fast", "default", "reference"]), "the accuracy asked for; sets the tolerance defaults (docs/accuracy.md)")

@@ -10,13 +10,13 @@ pub const TABLE: Key = Key::of("target", Ty::Table("what the tool runs into"), "
 /// Obstacle or object.
 pub const KIND: Key = Key::of("kind", Ty::Choice(&["obstacle", "object"]), "\"obstacle\" (fixed) or \"object\" (free, needs mass)");
 /// Gap at t = 0.
-pub const GAP: Key = Key::number("gap", "m", Excl(0.0), Open, "", "gap between the tool and the target at t = 0; the motion must close it within duration");
+pub const GAP: Key = Key::number("gap", "m", Incl(1e-6), Incl(2.0), "1 um to 2 m, within the reach of an arm; 0.005-0.15 m in the thesis", "gap between the tool and the target at t = 0; the motion must close it within duration");
 /// k_c.
-pub const STIFFNESS: Key = Key::number("stiffness", "N/m^1.5", Excl(0.0), Open, "", "k_c, the Hertz contact stiffness of tool and target (eq 5)");
+pub const STIFFNESS: Key = Key::number("stiffness", "N/m^1.5", Incl(1e3), Incl(1e10), "Hertz contact from foam (1e3 N/m^1.5) to metal on metal; 1e3-1e8 in the thesis", "k_c, the Hertz contact stiffness of tool and target (eq 5)");
 /// m_p.
-pub const MASS: Key = Key::number("mass", "kg", Excl(0.0), Open, "", "m_p, the free object's mass (kind = \"object\" only)");
+pub const MASS: Key = Key::number("mass", "kg", Incl(1e-3), Incl(1000.0), "1 g to 1 t; 0.136-0.25 kg in Tables 4-15", "m_p, the free object's mass (kind = \"object\" only)");
 /// Floor friction under a free object.
-pub const FLOOR_FRICTION: Key = Key::number("floor_friction", "", Incl(0.0), Open, "", "Coulomb friction coefficient between a free object and the floor (kind = \"object\" only)")
+pub const FLOOR_FRICTION: Key = Key::number("floor_friction", "", Incl(0.0), Incl(1.0), "dry friction coefficients: 0 (ice) to about 1 (rubber on concrete)", "Coulomb friction coefficient between a free object and the floor (kind = \"object\" only)")
     .optional("no floor friction");
 
 /// The keys of an obstacle.

@@ -8,17 +8,17 @@ use super::end_stop::{self, end_stops};
 use super::KIND;
 
 /// N.
-pub const SPRINGS: Key = Key::integer("springs", 1, u32::MAX, "", "N, the number of springs");
+pub const SPRINGS: Key = Key::integer("springs", 1, 16, "1-2 springs in Tables 2-15; 16 fill the circumference of a hand-sized module", "N, the number of springs");
 /// k_b.
-pub const SPRING_RATE: Key = Key::number("spring_rate", "N/m", Excl(0.0), Open, "", "k_b, the rate of one spring");
+pub const SPRING_RATE: Key = Key::number("spring_rate", "N/m", Incl(1.0), Incl(1e5), "compression springs of a hand-sized module: 50-490 N/m in Tables 2-15", "k_b, the rate of one spring");
 /// L0.
-pub const FREE_LENGTH: Key = Key::number("free_length", "m", Excl(0.0), Open, "", "L0, the free length of one spring");
+pub const FREE_LENGTH: Key = Key::number("free_length", "m", Incl(1e-3), Incl(0.5), "a hand-sized module: 0.05-0.07 m in Tables 2-15", "L0, the free length of one spring");
 /// H.
-pub const HEIGHT: Key = Key::number("height", "m", Excl(0.0), Open, "", "H, the height of the spring's anchor above the slide");
+pub const HEIGHT: Key = Key::number("height", "m", Incl(1e-6), Incl(0.5), "a hand-sized module: 0.028-0.053 m in Tables 2-15; must also be < free_length", "H, the height of the spring's anchor above the slide");
 /// C1.
-pub const FRONT_STROKE: Key = Key::number("front_stroke", "m", Excl(0.0), Open, "", "C1, the front end-stop at s = +C1");
+pub const FRONT_STROKE: Key = Key::number("front_stroke", "m", Incl(1e-4), Incl(0.2), "a hand-sized module: 0.015-0.024 m in Tables 2-15", "C1, the front end-stop at s = +C1");
 /// C2.
-pub const BACK_STROKE: Key = Key::number("back_stroke", "m", Excl(0.0), Open, "", "C2, the back end-stop (flange) at s = -C2");
+pub const BACK_STROKE: Key = Key::number("back_stroke", "m", Incl(1e-4), Incl(0.2), "a hand-sized module: 0.015-0.025 m in Tables 2-15", "C2, the back end-stop (flange) at s = -C2");
 
 /// The keys of a bi-stable decoupler.
 pub const KEYS: &[Key] = &[
@@ -50,6 +50,22 @@ pub(in super::super) fn bistable(
     let (front_stop, back_stop) = end_stops(cx, t, tool_mass);
     let friction = friction::friction(cx, t);
 
+    // H < L0: the springs are compressed as the tool passes s = 0, which is what makes the
+    // mechanism bi-stable (eq 24-25); with H >= L0 there is one stable position and no switching.
+    if let (Some(l0), Some(h)) = (free_length, height) {
+        if h >= l0 {
+            cx.bad(
+                t,
+                HEIGHT.name,
+                format!(
+                    "must be < decoupler.free_length = {} m (H < L0: else the springs are never compressed and the mechanism is not bi-stable, eq 24-25), got {}",
+                    num(l0),
+                    num(h)
+                ),
+            );
+            return None;
+        }
+    }
     // At t = 0 the tool rests on the front stop: spring force at s = C1 plus its weight must push it there.
     if let (Some(n), Some(kb), Some(l0), Some(h), Some(c1), Some(mt), Some(gravity)) = (
         springs,

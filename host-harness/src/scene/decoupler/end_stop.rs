@@ -22,15 +22,15 @@ pub const BACK: Key = Key::of(
 );
 
 /// k_fe.
-pub const FRONT_STIFFNESS: Key = Key::number("stiffness", "N/m", Excl(0.0), Open, "", "k_fe, the front stop's stiffness");
+pub const FRONT_STIFFNESS: Key = Key::number("stiffness", "N/m", Incl(1e3), Incl(1e9), "soft elastomer to a hard pad: 1e6-2.25e6 N/m in Tables 2-15; stiffer gives wrong forces at the default tolerances", "k_fe, the front stop's stiffness");
 /// c_fe.
-pub const FRONT_DAMPING: Key = Key::number("damping", "N s/m", Incl(0.0), Open, "", "c_fe, the front stop's damping")
+pub const FRONT_DAMPING: Key = Key::number("damping", "N s/m", Incl(0.0), Incl(1e5), "235-278 N s/m in Tables 2-15; 1e5 N s/m is beyond critical for the stiffest stop and heaviest tool in range", "c_fe, the front stop's damping")
     .optional("give restitution instead");
 /// e_fe.
 pub const FRONT_RESTITUTION: Key = Key::number("restitution", "", Incl(0.0), Incl(1.0), "a restitution is a ratio of speeds: 0 (plastic) to 1 (elastic)", "e_fe, converted to c_fe = 2 zeta sqrt(k_fe m_t), zeta = -ln e / sqrt(pi^2 + ln^2 e) (Table 11)")
     .optional("give damping instead");
 /// k_be.
-pub const BACK_STIFFNESS: Key = Key::number("stiffness", "N/m^1.5", Excl(0.0), Open, "", "k_be, the back stop's Hertz stiffness");
+pub const BACK_STIFFNESS: Key = Key::number("stiffness", "N/m^1.5", Incl(1e3), Incl(1e10), "foam to metal on metal: 1e6-2.25e6 N/m^1.5 in Tables 2-15", "k_be, the back stop's Hertz stiffness");
 /// The back stop's damping law (defaults to the thesis's).
 pub const BACK_DAMPING_LAW: Key = contact::DAMPING_LAW.optional("hunt-crossley, as the thesis (eq 29/37)");
 

@@ -11,28 +11,28 @@ pub const DEFAULT_ADIABATIC_EXPONENT: f64 = 1.4;
 pub const DEFAULT_HYDRAULIC_FRICTION_V0: f64 = 1e-3;
 
 /// L.
-pub const STROKE: Key = Key::number("stroke", "m", Excl(0.0), Open, "", "L, the piston stroke");
+pub const STROKE: Key = Key::number("stroke", "m", Incl(1e-3), Incl(0.2), "a hand-sized module: 0.023 m in Tables 12 and 14", "L, the piston stroke");
 /// R_p.
-pub const PISTON_RADIUS: Key = Key::number("piston_radius", "m", Excl(0.0), Open, "", "R_p, the main cylinder's radius");
+pub const PISTON_RADIUS: Key = Key::number("piston_radius", "m", Incl(1e-3), Incl(0.1), "a hand-sized module: 0.02 m in Tables 12 and 14", "R_p, the main cylinder's radius");
 /// R_o.
-pub const ORIFICE_RADIUS: Key = Key::number("orifice_radius", "m", Excl(0.0), Open, "", "R_o, the orifice's radius (< R_p)");
+pub const ORIFICE_RADIUS: Key = Key::number("orifice_radius", "m", Incl(1e-5), Incl(0.1), "0.008 m in Tables 12 and 14; must also be < piston_radius", "R_o, the orifice's radius (< R_p)");
 /// p10.
-pub const GAS_PRESSURE: Key = Key::number("gas_pressure", "Pa", Excl(0.0), Open, "", "p10, the gas preload pressure at the front stop");
+pub const GAS_PRESSURE: Key = Key::number("gas_pressure", "Pa", Incl(100.0), Incl(1e7), "1000 Pa in Tables 12 and 14; 100 bar is the top of small gas springs", "p10, the gas preload pressure at the front stop");
 /// V_g0.
-pub const GAS_VOLUME: Key = Key::number("gas_volume", "m^3", Excl(0.0), Open, "", "V_g0, the gas volume at the front stop (> pi R_p^2 L)");
+pub const GAS_VOLUME: Key = Key::number("gas_volume", "m^3", Incl(1e-9), Incl(1e-2), "7.63e-5 m^3 in Tables 12 and 14; 10 litres is far beyond a hand-sized module", "V_g0, the gas volume at the front stop (> pi R_p^2 L)");
 /// c0.
-pub const DISCHARGE_COEFFICIENT: Key = Key::number("discharge_coefficient", "", Excl(0.0), Open, "", "c0, the orifice's discharge coefficient (eq 50)");
+pub const DISCHARGE_COEFFICIENT: Key = Key::number("discharge_coefficient", "", Incl(0.1), Incl(10.0), "3.0 in Tables 12 and 14 (eq 50)", "c0, the orifice's discharge coefficient (eq 50)");
 /// rho_L.
-pub const LIQUID_DENSITY: Key = Key::number("liquid_density", "kg/m^3", Excl(0.0), Open, "", "rho_L, the liquid's density");
+pub const LIQUID_DENSITY: Key = Key::number("liquid_density", "kg/m^3", Incl(500.0), Incl(2000.0), "hydraulic oils 850-900 kg/m^3, water 1000, glycerol 1260; 900 in Tables 12 and 14", "rho_L, the liquid's density");
 /// d.
-pub const DRY_FRICTION: Key = Key::number("dry_friction", "N", Incl(0.0), Open, "", "d, the seals' dry friction (eq 48)");
+pub const DRY_FRICTION: Key = Key::number("dry_friction", "N", Incl(0.0), Incl(1000.0), "seal friction: 0-0.2 N in Tables 12 and 14; the solver gives up near 4000 N", "d, the seals' dry friction (eq 48)");
 /// b.
-pub const VISCOUS_FRICTION: Key = Key::number("viscous_friction", "N s/m", Incl(0.0), Open, "", "b, the viscous friction (eq 48)");
+pub const VISCOUS_FRICTION: Key = Key::number("viscous_friction", "N s/m", Incl(0.0), Incl(1e4), "0.5 N s/m in Tables 12 and 14", "b, the viscous friction (eq 48)");
 /// kappa: 1 is isothermal, 5/3 a monatomic gas: nothing outside is a gas.
 pub const ADIABATIC_EXPONENT: Key = Key::number("adiabatic_exponent", "", Incl(1.0), Incl(5.0 / 3.0), "1 is isothermal, 5/3 a monatomic gas: nothing outside is a gas", "kappa, the gas's adiabatic exponent (eq 47)")
     .default(DEFAULT_ADIABATIC_EXPONENT);
 /// v0 of the dry friction.
-pub const FRICTION_V0: Key = Key::number("friction_v0", "m/s", Excl(0.0), Open, "", "the velocity regularising sgn() in the dry friction (eq 48)")
+pub const FRICTION_V0: Key = Key::number("friction_v0", "m/s", Incl(1e-5), Incl(0.1), "regularisation of sgn() (eq 48), 1e-3 m/s by default; below 1e-5 m/s the solver grinds", "the velocity regularising sgn() in the dry friction (eq 48)")
     .default(DEFAULT_HYDRAULIC_FRICTION_V0);
 
 /// The keys of a hydraulic decoupler.

@@ -5,9 +5,9 @@ use super::super::model::LinearDecoupler;
 use super::KIND;
 
 /// k_t.
-pub const STIFFNESS: Key = Key::number("stiffness", "N/m", Incl(0.0), Open, "", "k_t, the spring between flange and tool (0: a free tool)");
+pub const STIFFNESS: Key = Key::number("stiffness", "N/m", Incl(0.0), Incl(1e7), "0 (a free tool, Fig. 1b) to 1e7 N/m, as stiff as the stiffest robot flange in range", "k_t, the spring between flange and tool (0: a free tool)");
 /// zeta.
-pub const DAMPING_RATIO: Key = Key::number("damping_ratio", "", Incl(0.0), Open, "", "zeta = c_t / (2 sqrt(k_t m_t)) (eq 23)");
+pub const DAMPING_RATIO: Key = Key::number("damping_ratio", "", Incl(0.0), Incl(10.0), "undamped to 10 times critical; the thesis uses 0-1 (Table 2)", "zeta = c_t / (2 sqrt(k_t m_t)) (eq 23)");
 
 /// The keys of a linear decoupler.
 pub const KEYS: &[Key] = &[KIND, STIFFNESS, DAMPING_RATIO];
