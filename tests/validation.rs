@@ -36,3 +36,43 @@ fn every_difference_is_explained() {
         }
     }
 }
+
+/// A shipped scene recorded every `dt` seconds.
+fn recorded(name: &str, dt: f64) -> (flinch_harness::sim::Summary, Vec<flinch_harness::sim::Sample>) {
+    let mut s = flinch_harness::scene::load(&root().join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"));
+    s.solver.output_interval = dt;
+    flinch_harness::sim::run(&s, true).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+#[test]
+fn fig76_evidence_the_hydraulic_peak_is_eq28_jumping_at_the_front_stop_return() {
+    use flinch_harness::validate::front_stop_return;
+    let (s, h) = recorded("table12_hydraulic_object_dt10.toml", 1e-5);
+    let tc = s.t_contact.unwrap();
+    let (on, before) = front_stop_return(&h, tc).expect("the tool returns onto the front stop");
+    // Issue 15: at +80 ms, s' about 0.147 m/s, c_fe s' = 235 x 0.147 = 34.5 N.
+    assert!(((on.t - tc) - 0.080).abs() < 0.002, "return at +{} s", on.t - tc);
+    let sd = before.v_t - before.v_r;
+    assert!((sd - 0.147).abs() < 0.003, "s' {sd}");
+    assert!(before.f_robot.abs() < 1.0 && (on.f_robot - 235.0 * sd).abs() < 0.02 * 235.0 * sd, "jump {} -> {} N, c_fe s' = {}", before.f_robot, on.f_robot, 235.0 * sd);
+    assert!((on.f_robot - s.peak_robot_force).abs() < 0.02 * s.peak_robot_force, "the jump is the run's peak");
+}
+
+#[test]
+fn table4_evidence_two_hits_and_braking_between_or_inside_them() {
+    use flinch_harness::validate::hits;
+    for (name, second_on, braking_before_second) in [("table4_bistable_136g.toml", 0.0968, true), ("table4_bistable_246g.toml", 0.0620, false)] {
+        let (s, h) = recorded(name, 1e-5);
+        let tc = s.t_contact.unwrap();
+        let hs = hits(&h);
+        assert_eq!(hs.len(), 2, "{name}: {hs:?}");
+        assert!(((hs[1].on_s - tc) - second_on).abs() < 0.001, "{name}: second hit at +{}", hs[1].on_s - tc);
+        assert!(hs[0].object_mps < 0.6 && hs[1].object_mps > hs[0].object_mps, "{name}: the second hit does most of the work {hs:?}");
+        assert_eq!(s.t_brake.unwrap() < hs[1].on_s, braking_before_second, "{name}");
+    }
+    // And the document must not claim the thesis's account holds.
+    let sections = tables(&root().join("scenes")).unwrap();
+    let t4 = sections.iter().find(|s| s.title.starts_with("Table 4")).unwrap();
+    let row = t4.rows.iter().find(|r| r.quantity.contains("detached")).unwrap();
+    assert_eq!(row.verdict, Verdict::Differs);
+}
