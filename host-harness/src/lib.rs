@@ -8,6 +8,7 @@ pub mod bench;
 pub mod check;
 pub mod design;
 pub mod hil;
+pub mod kinematics;
 pub mod plant;
 pub mod report;
 pub mod scene;

@@ -1,0 +1,50 @@
+//! The compliant robot reduced from joint space to one degree of freedom along the approach
+//! (thesis eq 10-16), from the robot's URDF.
+//!
+//! The thesis writes the robot in joint space (eq 11: `M_q(q) ϑ'' + D_q (ϑ' - q') + K_q (ϑ - q) = 0`,
+//! `K_q`, `D_q` diagonal and configuration-independent), maps it to the operational space
+//! (eq 12-14: `M_X = J^-T M_q J^-1`, the same for `D_X`, `K_X`) and keeps one direction (eq 16) to
+//! get the lumped `m_r`, `c_r`, `k_r` of eq 8 (Table 7).
+//!
+//! Layout: [`chain`] reads the URDF (`urdf-rs`) and builds the serial chain from `base_link` to
+//! `tip_link` with every link that moves with it; [`dynamics`] computes the joint-space mass
+//! matrix by the composite-rigid-body algorithm and the tip Jacobian; [`reduce`] projects the
+//! mass, stiffness and damping on the approach direction.
+//!
+//! Which one-dimensional value: see [`reduce`]'s module doc (the contact pushes along `u` only,
+//! the flange is free in the other directions, so the mass is the operational-space one,
+//! `1 / (u^T J M_q^-1 J^T u)`, and the stiffness the one of the Cartesian compliance
+//! `J K_q^-1 J^T`, eq 14 inverted).
+pub mod chain;
+pub mod dynamics;
+pub mod reduce;
+
+pub use chain::{Chain, JointKind};
+pub use reduce::{reduce, Reduced};
+
+use std::fmt;
+
+/// A URDF, chain or configuration that cannot be used, with where and what.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KinError {
+    /// The URDF file (or the label given for a string).
+    pub file: String,
+    /// The element at fault: `link "x"`, `joint "y"`, `joints`, `direction`, ...
+    pub element: String,
+    /// What is wrong and what is allowed.
+    pub what: String,
+}
+
+impl KinError {
+    pub(crate) fn new(file: &str, element: impl Into<String>, what: impl Into<String>) -> Self {
+        KinError { file: file.to_string(), element: element.into(), what: what.into() }
+    }
+}
+
+impl fmt::Display for KinError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}: {}", self.file, self.element, self.what)
+    }
+}
+
+impl std::error::Error for KinError {}

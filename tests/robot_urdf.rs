@@ -1,0 +1,336 @@
+//! The robot reduced from joint space (thesis eq 10-16, `host-harness/src/kinematics`) against
+//! closed forms, and the URDFs and configurations it must refuse.
+use flinch_harness::kinematics::{reduce, Chain, KinError};
+use flinch_tests::scene_path;
+use std::f64::consts::PI;
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * b.abs().max(1e-12)
+}
+
+macro_rules! assert_close {
+    ($a:expr, $b:expr, $rel:expr) => {{
+        let (a, b) = ($a, $b);
+        assert!(close(a, b, $rel), "{} = {a} but the closed form {} = {b}", stringify!($a), stringify!($b));
+    }};
+}
+
+/// A link with an inertial at `x` along the link's x axis.
+fn link(name: &str, m: f64, x: f64, ixx: f64, iyy: f64, izz: f64) -> String {
+    format!(
+        r#"<link name="{name}"><inertial><origin xyz="{x} 0 0" rpy="0 0 0"/><mass value="{m}"/>
+        <inertia ixx="{ixx}" ixy="0" ixz="0" iyy="{iyy}" iyz="0" izz="{izz}"/></inertial></link>"#
+    )
+}
+
+fn joint(name: &str, ty: &str, parent: &str, child: &str, xyz: &str, rpy: &str, axis: &str) -> String {
+    format!(
+        r#"<joint name="{name}" type="{ty}"><parent link="{parent}"/><child link="{child}"/>
+        <origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/><limit lower="-10" upper="10" effort="1" velocity="1"/></joint>"#
+    )
+}
+
+fn robot(parts: &[String]) -> String {
+    format!("<robot name=\"t\">{}</robot>", parts.join("\n"))
+}
+
+// ---- closed forms ---------------------------------------------------------------------------
+
+/// One-link pendulum: a rod of mass m, centre of mass at lc, inertia I about it, turning about z;
+/// the flange at L. M = m lc^2 + I; along the tangent m_r = M / L^2, k_r = K / L^2, c_r = D / L^2;
+/// at an angle φ off the tangent (in the plane of motion) each is divided by cos^2 φ.
+#[test]
+fn one_link_pendulum_matches_closed_form() {
+    let (m, lc, i, l) = (4.0, 0.3, 0.05, 0.7);
+    let urdf = robot(&[
+        "<link name=\"base\"/>".into(),
+        link("arm", m, lc, 1e-4, i, i),
+        "<link name=\"tip\"/>".into(),
+        joint("j", "revolute", "base", "arm", "0 0 0", "0 0 0", "0 0 1"),
+        joint("f", "fixed", "arm", "tip", &format!("{l} 0 0"), "0 0 0", "1 0 0"),
+    ]);
+    let chain = Chain::from_urdf_str(&urdf, "pendulum.urdf", "base", "tip").unwrap();
+    let (k, d) = (2.0e4, 15.0);
+    let inertia = m * lc * lc + i;
+    for q in [0.0, 0.4, -2.0, 3.0] {
+        // tangent at the tip: (-sin q, cos q, 0)
+        let r = reduce(&chain, &[q], [-(q as f64).sin(), q.cos(), 0.0], &[k], &[d]).unwrap();
+        assert_close!(r.mass_kg, inertia / (l * l), 1e-9);
+        assert_close!(r.stiffness_npm, k / (l * l), 1e-9);
+        assert_close!(r.damping_nspm, d / (l * l), 1e-9);
+        assert_close!(r.tip_m[0], l * q.cos(), 1e-9);
+        for phi in [0.3_f64, 1.0, 1.4] {
+            let (t, n) = ([-q.sin(), q.cos()], [q.cos(), q.sin()]);
+            let u = [phi.cos() * t[0] + phi.sin() * n[0], phi.cos() * t[1] + phi.sin() * n[1], 0.0];
+            let r = reduce(&chain, &[q], u, &[k], &[d]).unwrap();
+            let c2 = phi.cos().powi(2);
+            assert_close!(r.mass_kg, inertia / (l * l) / c2, 1e-9);
+            assert_close!(r.stiffness_npm, k / (l * l) / c2, 1e-9);
+        }
+    }
+}
+
+/// The textbook planar two-link arm (Spong, Hutchinson & Vidyasagar, *Robot Modeling and
+/// Control*, 2006, eq 7.87), read from the shipped scenes/robots/two_link.urdf.
+fn two_link_closed_form(q: [f64; 2]) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
+    let (l1, l2, lc1, lc2, m1, m2) = (0.5, 0.4, 0.25, 0.2, 3.0, 2.0);
+    let (i1, i2) = (0.0625, 0.0266666667);
+    let c2 = q[1].cos();
+    let m11 = m1 * lc1 * lc1 + m2 * (l1 * l1 + lc2 * lc2 + 2.0 * l1 * lc2 * c2) + i1 + i2;
+    let m12 = m2 * (lc2 * lc2 + l1 * lc2 * c2) + i2;
+    let m22 = m2 * lc2 * lc2 + i2;
+    let (s1, c1, s12, c12) = (q[0].sin(), q[0].cos(), (q[0] + q[1]).sin(), (q[0] + q[1]).cos());
+    let j = [[-l1 * s1 - l2 * s12, -l2 * s12], [l1 * c1 + l2 * c12, l2 * c12]];
+    ([[m11, m12], [m12, m22]], j)
+}
+
+fn two_link() -> Chain {
+    Chain::load(&scene_path("robots/two_link.urdf"), "base", "tip").unwrap()
+}
+
+#[test]
+fn two_link_mass_matrix_and_reflected_values_match_textbook() {
+    let chain = two_link();
+    assert_eq!(chain.joint_names, ["shoulder", "elbow"]);
+    let (k, d) = ([3.0e4, 1.0e4], [20.0, 4.0]);
+    for q in [[0.3, 1.2], [-1.0, 2.5], [2.0, -0.7], [0.0, PI / 2.0]] {
+        let at = chain.place(&q);
+        let mq = flinch_harness::kinematics::dynamics::mass_matrix(&chain, &at);
+        let (mc, j) = two_link_closed_form(q);
+        for a in 0..2 {
+            for b in 0..2 {
+                assert_close!(mq[(a, b)], mc[a][b], 1e-8);
+            }
+        }
+        for u in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.6, -0.8, 0.0], [0.5, 0.5, 0.7071067811865476]] {
+            // w = J^T u (planar: z does not move)
+            let w = [j[0][0] * u[0] + j[1][0] * u[1], j[0][1] * u[0] + j[1][1] * u[1]];
+            let det = mc[0][0] * mc[1][1] - mc[0][1] * mc[1][0];
+            let minv = [[mc[1][1] / det, -mc[0][1] / det], [-mc[1][0] / det, mc[0][0] / det]];
+            let quad = w[0] * (minv[0][0] * w[0] + minv[0][1] * w[1]) + w[1] * (minv[1][0] * w[0] + minv[1][1] * w[1]);
+            let compliance = w[0] * w[0] / k[0] + w[1] * w[1] / k[1];
+            let damping = (d[0] * (w[0] / k[0]).powi(2) + d[1] * (w[1] / k[1]).powi(2)) / compliance.powi(2);
+            let r = reduce(&chain, &q, u, &k, &d).unwrap();
+            let unorm = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+            assert_close!(r.mass_kg, unorm * unorm / quad, 1e-8);
+            assert_close!(r.stiffness_npm, unorm * unorm / compliance, 1e-8);
+            assert_close!(r.damping_nspm, unorm * unorm * damping, 1e-8);
+            let shares: f64 = r.joints.iter().map(|s| s.compliance_share).sum();
+            assert_close!(shares, 1.0, 1e-9);
+        }
+    }
+}
+
+/// Joint damping proportional to joint stiffness (D = β K) reduces to c_r = β k_r, whatever the
+/// configuration (eq 13 with eq 14).
+#[test]
+fn proportional_joint_damping_gives_proportional_flange_damping() {
+    let chain = two_link();
+    let beta = 2.5e-3;
+    let k = [3.0e4, 1.0e4];
+    let r = reduce(&chain, &[0.7, 1.1], [0.3, 0.9, 0.0], &k, &[beta * k[0], beta * k[1]]).unwrap();
+    assert_close!(r.damping_nspm, beta * r.stiffness_npm, 1e-12);
+}
+
+/// A prismatic joint: a cart of mass mc on x carrying a pendulum bob mp at l (the cart-pole):
+/// M = [[mc + mp, mp l cos q2], [mp l cos q2, mp l^2]].
+#[test]
+fn prismatic_cart_pole_matches_closed_form() {
+    let (mc, mp, l) = (5.0, 1.5, 0.6);
+    let urdf = robot(&[
+        "<link name=\"rail\"/>".into(),
+        link("cart", mc, 0.0, 0.0, 0.0, 0.0),
+        link("pole", mp, l, 0.0, 0.0, 0.0),
+        "<link name=\"tip\"/>".into(),
+        joint("slide", "prismatic", "rail", "cart", "0 0 0", "0 0 0", "1 0 0"),
+        // the pole turns about z; at q2 = 0 it points along +x
+        joint("hinge", "continuous", "cart", "pole", "0 0 0", "0 0 0", "0 0 1"),
+        joint("f", "fixed", "pole", "tip", &format!("{l} 0 0"), "0 0 0", "1 0 0"),
+    ]);
+    let chain = Chain::from_urdf_str(&urdf, "cartpole.urdf", "rail", "tip").unwrap();
+    assert_eq!(chain.joint_kinds, [flinch_harness::kinematics::JointKind::Prismatic, flinch_harness::kinematics::JointKind::Revolute]);
+    for q in [[0.2, 0.5], [-0.4, 2.0]] {
+        let at = chain.place(&q);
+        let m = flinch_harness::kinematics::dynamics::mass_matrix(&chain, &at);
+        // bob at (x + l cos q2, l sin q2): d/dq2 = (-l sin q2, l cos q2) so M12 = mp * (-l sin q2)
+        let m12 = -mp * l * q[1].sin();
+        assert_close!(m[(0, 0)], mc + mp, 1e-12);
+        assert_close!(m[(0, 1)], m12, 1e-9);
+        assert_close!(m[(1, 1)], mp * l * l, 1e-12);
+        assert_close!(at.tip.x, q[0] + l * q[1].cos(), 1e-12);
+    }
+    // A cart alone: along the rail m_r = mc, k_r = K, c_r = D; at 60° off the rail, / cos^2.
+    let cart = robot(&[
+        "<link name=\"rail\"/>".into(),
+        link("cart", mc, 0.1, 0.01, 0.01, 0.01),
+        joint("slide", "prismatic", "rail", "cart", "0 0 0", "0 0 0", "1 0 0"),
+    ]);
+    let chain = Chain::from_urdf_str(&cart, "cart.urdf", "rail", "cart").unwrap();
+    let r = reduce(&chain, &[0.3], [1.0, 0.0, 0.0], &[8.0e4], &[30.0]).unwrap();
+    assert_close!(r.mass_kg, mc, 1e-12);
+    assert_close!(r.stiffness_npm, 8.0e4, 1e-12);
+    assert_close!(r.damping_nspm, 30.0, 1e-12);
+    let r = reduce(&chain, &[0.3], [0.5, 0.75_f64.sqrt(), 0.0], &[8.0e4], &[30.0]).unwrap();
+    assert_close!(r.mass_kg, mc / 0.25, 1e-9);
+}
+
+/// The same arm mounted on a base turned and moved by a fixed joint, with the approach turned the
+/// same way, gives the same m_r, k_r, c_r.
+#[test]
+fn invariant_under_a_rotation_of_the_base() {
+    let text = std::fs::read_to_string(scene_path("robots/two_link.urdf")).unwrap();
+    let (r, p, y) = (0.3_f64, -0.7_f64, 1.1_f64);
+    let mounted = text.replace(
+        "<link name=\"base\"/>",
+        &format!(
+            "<link name=\"world\"/><link name=\"base\"/><joint name=\"mount\" type=\"fixed\"><parent link=\"world\"/>\
+             <child link=\"base\"/><origin xyz=\"0.1 -0.2 0.3\" rpy=\"{r} {p} {y}\"/></joint>"
+        ),
+    );
+    let on_world = Chain::from_urdf_str(&mounted, "mounted.urdf", "world", "tip").unwrap();
+    let plain = two_link();
+    let rot = nalgebra::UnitQuaternion::from_euler_angles(r, p, y);
+    let (k, d) = ([3.0e4, 1.0e4], [20.0, 4.0]);
+    for (q, u) in [([0.3, 1.2], [0.6, -0.8, 0.0]), ([-1.0, 2.5], [0.2, 0.3, 0.9])] {
+        let a = reduce(&plain, &q, u, &k, &d).unwrap();
+        let uw = rot * nalgebra::Vector3::from(u);
+        let b = reduce(&on_world, &q, [uw.x, uw.y, uw.z], &k, &d).unwrap();
+        assert_close!(b.mass_kg, a.mass_kg, 1e-9);
+        assert_close!(b.stiffness_npm, a.stiffness_npm, 1e-9);
+        assert_close!(b.damping_nspm, a.damping_nspm, 1e-9);
+    }
+}
+
+/// The reflected mass is the least kinetic energy over the joint motions that move the tip at
+/// unit speed along u: it is never above `q'ᵀ M q' / (uᵀ J q')^2` for any q'. Along the direction
+/// the last joint moves the tip, that bounds it by the mass past the last joint (its centre of
+/// mass lies inside the tip radius), hence by the total mass past the base.
+#[test]
+fn reflected_mass_is_bounded_by_any_motion_and_by_the_moving_mass() {
+    let chain = two_link();
+    let (k, d) = ([3.0e4, 1.0e4], [20.0, 4.0]);
+    for q in [[0.3, 1.2], [-1.0, 2.5], [2.0, -0.7]] {
+        let (m, j) = two_link_closed_form(q);
+        for u in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.6, -0.8, 0.0]] {
+            let r = reduce(&chain, &q, u, &k, &d).unwrap();
+            for qd in [[1.0, 0.0], [0.0, 1.0], [1.0, -1.0], [0.3, 2.0], [-2.0, 0.5]] {
+                let energy2 = qd[0] * (m[0][0] * qd[0] + m[0][1] * qd[1]) + qd[1] * (m[1][0] * qd[0] + m[1][1] * qd[1]);
+                let v = u[0] * (j[0][0] * qd[0] + j[0][1] * qd[1]) + u[1] * (j[1][0] * qd[0] + j[1][1] * qd[1]);
+                if v.abs() > 1e-6 {
+                    assert!(r.mass_kg <= energy2 / (v * v) * (1.0 + 1e-9), "m_r {} above {}", r.mass_kg, energy2 / (v * v));
+                }
+            }
+        }
+        // along the elbow's tip motion
+        let u = [j[0][1], j[1][1], 0.0];
+        let r = reduce(&chain, &q, u, &k, &d).unwrap();
+        assert!(r.mass_kg <= 2.0 + 1e-9, "m_r {} above the forearm's 2 kg", r.mass_kg);
+        assert!(r.mass_kg <= r.moving_mass_kg, "m_r {} above the moving mass {}", r.mass_kg, r.moving_mass_kg);
+        assert_close!(r.moving_mass_kg, 5.0, 1e-12);
+    }
+}
+
+/// Adversarial: near a singularity the reflected mass is NOT bounded by the moving mass (a
+/// stretched arm pushed along its length is a wall); Flinch must give the large value, not clip
+/// it, and refuse the singular configuration itself.
+#[test]
+fn near_singular_mass_grows_and_the_singular_configuration_is_refused() {
+    let chain = two_link();
+    let (k, d) = ([3.0e4, 1.0e4], [20.0, 4.0]);
+    // Nearly stretched (elbow 0.05 rad) pushed along the arm.
+    let r = reduce(&chain, &[0.0, 0.05], [1.0, 0.0, 0.0], &k, &d).unwrap();
+    assert!(r.mass_kg > 10.0 * r.moving_mass_kg, "m_r {} should exceed 10 x the moving mass", r.mass_kg);
+    assert!(r.stiffness_npm > 1.0e5);
+    // Stretched: refused.
+    let e = reduce(&chain, &[0.0, 0.0], [1.0, 0.0, 0.0], &k, &d).unwrap_err();
+    assert!(e.what.contains("singular configuration"), "{e}");
+    assert!(e.to_string().contains("two_link.urdf: joints:"), "{e}");
+    // Perpendicular to the plane of motion: the tip cannot move along z at all.
+    let e = reduce(&chain, &[0.3, 1.0], [0.0, 0.0, 1.0], &k, &d).unwrap_err();
+    assert!(e.what.contains("singular configuration"), "{e}");
+}
+
+// ---- bad input ------------------------------------------------------------------------------
+
+fn err(text: &str, base: &str, tip: &str) -> KinError {
+    Chain::from_urdf_str(text, "bad.urdf", base, tip).unwrap_err()
+}
+
+fn two_link_text() -> String {
+    std::fs::read_to_string(scene_path("robots/two_link.urdf")).unwrap()
+}
+
+#[test]
+fn missing_links_and_joints_are_named() {
+    let t = two_link_text();
+    let e = err(&t, "base", "flange_link");
+    assert_eq!((e.file.as_str(), e.element.as_str()), ("bad.urdf", "tip_link"));
+    assert!(e.what.contains("\"flange_link\" is not in the URDF") && e.what.contains("link1"), "{e}");
+    let e = err(&t, "world", "tip");
+    assert_eq!(e.element, "base_link");
+    // tip above base
+    let e = err(&t, "link2", "link1");
+    assert!(e.what.contains("is not below base_link"), "{e}");
+    // a joint whose child link is not declared
+    let e = err(&t.replace("<child link=\"link2\"/>", "<child link=\"link_2\"/>"), "base", "tip");
+    assert_eq!(e.element, "joint \"elbow\"");
+    assert!(e.what.contains("child link \"link_2\" is not a <link>"), "{e}");
+    // a floating joint on the chain
+    let e = err(&t.replace("type=\"revolute\">\n    <parent link=\"link1\"/>", "type=\"floating\">\n    <parent link=\"link1\"/>"), "base", "tip");
+    assert_eq!(e.element, "joint \"elbow\"");
+    assert!(e.what.contains("Floating"), "{e}");
+    // no moving joint
+    let e = err(&t, "link2", "tip");
+    assert!(e.what.contains("nothing moves"), "{e}");
+}
+
+#[test]
+fn joint_count_mismatch_is_refused() {
+    let chain = two_link();
+    let e = reduce(&chain, &[0.1, 0.2, 0.3], [1.0, 0.0, 0.0], &[1.0, 1.0], &[0.0, 0.0]).unwrap_err();
+    assert_eq!(e.element, "joints");
+    assert!(e.what.contains("has 3 values") && e.what.contains("2 moving joints (shoulder, elbow)"), "{e}");
+    let e = reduce(&chain, &[0.1, 0.2], [1.0, 0.0, 0.0], &[1.0], &[0.0, 0.0]).unwrap_err();
+    assert_eq!(e.element, "joint_stiffness");
+    let e = reduce(&chain, &[0.1, 0.2], [1.0, 0.0, 0.0], &[1.0, 1.0], &[0.0]).unwrap_err();
+    assert_eq!(e.element, "joint_damping");
+    let e = reduce(&chain, &[0.1, 0.2], [1.0, 0.0, 0.0], &[1.0, 0.0], &[0.0, 0.0]).unwrap_err();
+    assert!(e.element == "joint_stiffness" && e.what.contains("\"elbow\""), "{e}");
+    let e = reduce(&chain, &[0.1, 0.2], [1.0, 0.0, 0.0], &[1.0, 1.0], &[0.0, -1.0]).unwrap_err();
+    assert_eq!(e.element, "joint_damping");
+    let e = reduce(&chain, &[0.1, 0.2], [0.0, 0.0, 0.0], &[1.0, 1.0], &[0.0, 0.0]).unwrap_err();
+    assert_eq!(e.element, "direction");
+    let e = reduce(&chain, &[0.1, f64::NAN], [1.0, 0.0, 0.0], &[1.0, 1.0], &[0.0, 0.0]).unwrap_err();
+    assert_eq!(e.element, "joints");
+}
+
+#[test]
+fn non_physical_inertia_is_refused() {
+    let t = two_link_text();
+    let e = err(&t.replace("<mass value=\"2\"/>", "<mass value=\"-2\"/>"), "base", "tip");
+    assert_eq!(e.element, "link \"link2\"");
+    assert!(e.what.contains("mass value> is -2 kg"), "{e}");
+    let e = err(&t.replace("iyy=\"0.0625\"", "iyy=\"-0.0625\""), "base", "tip");
+    assert_eq!(e.element, "link \"link1\"");
+    assert!(e.what.contains("negative principal moment"), "{e}");
+    // izz larger than ixx + iyy: no body has it
+    let e = err(&t.replace("izz=\"0.0625\"", "izz=\"0.5\""), "base", "tip");
+    assert!(e.what.contains("triangle inequality"), "{e}");
+    // every link massless: the mass matrix is singular
+    let massless = t.replace("<mass value=\"3\"/>", "<mass value=\"0\"/>").replace("<mass value=\"2\"/>", "<mass value=\"0\"/>");
+    let massless = massless.replace("ixx=\"0.0001\"", "ixx=\"0\"").replace("0.0625", "0").replace("0.0266666667", "0");
+    let chain = Chain::from_urdf_str(&massless, "bad.urdf", "base", "tip").unwrap();
+    let e = reduce(&chain, &[0.3, 1.0], [1.0, 0.0, 0.0], &[1.0, 1.0], &[0.0, 0.0]).unwrap_err();
+    assert!(e.what.contains("not positive definite"), "{e}");
+}
+
+#[test]
+fn unparseable_urdf_is_refused_with_the_file() {
+    let e = err("<robot name=\"x\"><link name=\"a\"></robot>", "a", "a");
+    assert_eq!((e.file.as_str(), e.element.as_str()), ("bad.urdf", "<robot>"));
+    assert!(e.what.contains("is not a URDF that parses"), "{e}");
+    let e = err(&two_link_text().replace("<mass value=\"3\"/>", "<mass value=\"three\"/>"), "base", "tip");
+    assert!(e.what.contains("parses"), "{e}");
+    let e = Chain::load(std::path::Path::new("/nonexistent/robot.urdf"), "a", "b").unwrap_err();
+    assert!(e.to_string().starts_with("/nonexistent/robot.urdf: urdf: cannot be read"), "{e}");
+}
