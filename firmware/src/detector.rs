@@ -16,6 +16,7 @@
 
 use crate::clock::Micros;
 use crate::event_log::Cause;
+use crate::reset::{ResetButton, ResetPress};
 use crate::selftest::Phase;
 
 /// The detector's state.
@@ -34,8 +35,8 @@ pub enum State {
 /// How a trip is cleared.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum ResetPolicy {
-    /// A rising edge on the reset input (operator button or the robot controller), taken while the
-    /// tool is back on the front stop.
+    /// A deliberate press and release of the reset input (operator button or the robot controller),
+    /// acting on the release (ISO 13849-1 5.2.2), taken while the tool is back on the front stop.
     Input,
     /// Automatically, once the tool has been back on the front stop (sensor not tripped) continuously
     /// for `hold_us` microseconds.
@@ -45,47 +46,55 @@ pub enum ResetPolicy {
     },
 }
 
-/// Reset bookkeeping while tripped.
+/// Reset bookkeeping while tripped or faulted.
 #[derive(Copy, Clone, Debug, Default)]
 pub struct ResetTracker {
-    reset_prev: bool,
+    button: ResetButton,
     at_rest_since: Option<Micros>,
 }
 
 impl ResetTracker {
     /// Feed one tick while tripped; returns `true` when the trip may be cleared. `trip` is the sensor
-    /// reading, `reset_level` the reset input's level.
-    pub fn tripped_tick(&mut self, policy: ResetPolicy, now: Micros, trip: bool, reset_level: bool) -> bool {
-        let rising = reset_level && !self.reset_prev;
-        self.reset_prev = reset_level;
+    /// reading, `reset_level` the reset input's level. With [`ResetPolicy::Input`] the trip clears on
+    /// the release of a press that began after the trip ([`ResetButton`]), with the tool back on the
+    /// front stop at that instant.
+    pub fn tripped_tick(
+        &mut self,
+        policy: ResetPolicy,
+        press: ResetPress,
+        now: Micros,
+        trip: bool,
+        reset_level: bool,
+    ) -> bool {
+        let released = self.button.released(press, now, reset_level);
         if trip {
             self.at_rest_since = None;
             return false;
         }
         let since = *self.at_rest_since.get_or_insert(now);
         match policy {
-            ResetPolicy::Input => rising,
+            ResetPolicy::Input => released,
             ResetPolicy::Auto { hold_us } => now.since(since) >= hold_us,
         }
     }
 
-    /// A trip just happened: restart the rest timer, keep the reset input's last level (a button held
-    /// down before the trip is not a new press).
-    pub fn begin_trip(&mut self) {
+    /// A trip or a fault just latched: restart the rest timer and forget a press in progress (a
+    /// button pressed or held before the latch is not a reset).
+    pub fn begin_latch(&mut self) {
         self.at_rest_since = None;
+        self.button.cancel();
     }
 
-    /// Feed one tick while faulted; returns `true` on a rising edge of the reset input.
-    pub fn fault_tick(&mut self, reset_level: bool) -> bool {
-        let rising = reset_level && !self.reset_prev;
-        self.reset_prev = reset_level;
-        rising
+    /// Feed one tick while faulted (or latched after a reset); returns `true` on the release of a
+    /// deliberate press ([`ResetButton`]).
+    pub fn fault_tick(&mut self, press: ResetPress, now: Micros, reset_level: bool) -> bool {
+        self.button.released(press, now, reset_level)
     }
 
     /// Track the reset input outside of tripped/fault states (so a button held while arming is not
     /// taken as a new press later), and forget the rest timer.
     pub fn idle_tick(&mut self, reset_level: bool) {
-        self.reset_prev = reset_level;
+        self.button.track(reset_level);
         self.at_rest_since = None;
     }
 }
@@ -95,13 +104,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn input_policy_needs_a_rising_edge_with_the_tool_at_rest() {
+    fn input_policy_acts_on_release_with_the_tool_at_rest() {
         let mut r = ResetTracker::default();
         let p = ResetPolicy::Input;
-        assert!(!r.tripped_tick(p, Micros(0), true, true)); // pressed while still tripped: ignored
-        assert!(!r.tripped_tick(p, Micros(1), false, true)); // still held: no new edge
-        assert!(!r.tripped_tick(p, Micros(2), false, false));
-        assert!(r.tripped_tick(p, Micros(3), false, true));
+        let k = ResetPress { min_us: 10, max_us: 1_000 };
+        r.idle_tick(true); // held when the trip came
+        r.begin_latch();
+        assert!(!r.tripped_tick(p, k, Micros(0), true, true));
+        assert!(!r.tripped_tick(p, k, Micros(20), false, false), "release of a press older than the trip");
+        assert!(!r.tripped_tick(p, k, Micros(30), true, true)); // pressed while still tripped
+        assert!(!r.tripped_tick(p, k, Micros(50), true, false), "released while still tripped: ignored");
+        assert!(!r.tripped_tick(p, k, Micros(60), false, true), "pressing does not reset");
+        assert!(!r.tripped_tick(p, k, Micros(65), false, true));
+        assert!(r.tripped_tick(p, k, Micros(70), false, false), "the release does");
     }
 
     #[test]
@@ -109,10 +124,11 @@ mod tests {
         let mut r = ResetTracker::default();
         let p = ResetPolicy::Auto { hold_us: 1000 };
         let t0 = Micros(u32::MAX - 400);
-        assert!(!r.tripped_tick(p, t0, false, false));
-        assert!(!r.tripped_tick(p, t0.plus(600), true, false)); // bounced back: restart the hold
-        assert!(!r.tripped_tick(p, t0.plus(700), false, false));
-        assert!(!r.tripped_tick(p, t0.plus(1699), false, false));
-        assert!(r.tripped_tick(p, t0.plus(1700), false, false));
+        let k = ResetPress::DEFAULT;
+        assert!(!r.tripped_tick(p, k, t0, false, false));
+        assert!(!r.tripped_tick(p, k, t0.plus(600), true, false)); // bounced back: restart the hold
+        assert!(!r.tripped_tick(p, k, t0.plus(700), false, false));
+        assert!(!r.tripped_tick(p, k, t0.plus(1699), false, false));
+        assert!(r.tripped_tick(p, k, t0.plus(1700), false, false));
     }
 }

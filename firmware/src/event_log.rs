@@ -33,6 +33,12 @@ pub enum Cause {
     SensorFault = 6,
     /// An output pin reported an error when driven.
     OutputFault = 7,
+    /// The MCU started (any reset): latched until a person resets (`reset.rs`). In the log, the
+    /// event's flags hold the [`ResetCause`](crate::ResetCause) code instead of `FLAG_*` bits.
+    Reset = 8,
+    /// A fault handler (HardFault, NMI, an unexpected interrupt, a panic) ran and de-energised the
+    /// outputs; the board records it in the retained latch before the part resets.
+    FaultHandler = 9,
 }
 
 impl Cause {
@@ -46,6 +52,8 @@ impl Cause {
             5 => Cause::MissedDeadline,
             6 => Cause::SensorFault,
             7 => Cause::OutputFault,
+            8 => Cause::Reset,
+            9 => Cause::FaultHandler,
             _ => return None,
         })
     }
@@ -60,6 +68,8 @@ impl Cause {
             Cause::MissedDeadline => "missed-deadline",
             Cause::SensorFault => "sensor-fault",
             Cause::OutputFault => "output-fault",
+            Cause::Reset => "reset",
+            Cause::FaultHandler => "fault-handler",
         }
     }
 }
@@ -70,6 +80,8 @@ pub const FLAG_EDGE: u8 = 1 << 0;
 pub const FLAG_ESCALATED: u8 = 1 << 1;
 /// Flag: the glitch filter delayed this trip (`first_seen` before `at`).
 pub const FLAG_FILTERED: u8 = 1 << 2;
+/// Flag: this latch was found in retained RAM at start-up (it was in force when the part reset).
+pub const FLAG_RETAINED: u8 = 1 << 3;
 
 /// One entry of the log.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]

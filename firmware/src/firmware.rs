@@ -13,7 +13,8 @@
 use crate::clock::{Clock, Micros};
 use crate::debounce::{ChatterGuard, ChatterState, Debouncer, Filter};
 use crate::detector::{ResetPolicy, ResetTracker, State};
-use crate::event_log::{Cause, EventLog, FLAG_EDGE, FLAG_ESCALATED, FLAG_FILTERED};
+use crate::event_log::{Cause, EventLog, FLAG_EDGE, FLAG_ESCALATED, FLAG_FILTERED, FLAG_RETAINED};
+use crate::reset::{Boot, ResetCause, ResetPress, Retained, StartPolicy};
 use crate::selftest::{self, Phase, SelfTestConfig, Step};
 use crate::sensor::{Sample, Sensor};
 use crate::stop_output::StopOutputs;
@@ -40,12 +41,17 @@ pub struct Config {
     pub budget: BudgetConfig,
     /// Start-up self-test timing.
     pub selftest: SelfTestConfig,
+    /// Whether a start (any MCU reset) waits for a person (`reset.rs`).
+    pub start: StartPolicy,
+    /// What counts as a deliberate reset press (acts on release; too short or too long is refused).
+    pub reset_press: ResetPress,
 }
 
 impl Config {
     /// Defaults around a tick period and a budget: no glitch filter (the edge stops directly), slack
     /// half a tick, stall after one repeated instant, chatter guard of 6 changes in 20 ms, reset by
-    /// input, self-test 1 ms supply-off settle and 2 ms at rest.
+    /// input acting on release of a 50 ms to 5 s press, every start latched until that reset,
+    /// self-test 1 ms supply-off settle and 2 ms at rest.
     pub const fn new(tick_period_us: u32, budget: BudgetConfig) -> Config {
         Config {
             tick_period_us,
@@ -56,6 +62,8 @@ impl Config {
             reset: ResetPolicy::Input,
             budget,
             selftest: SelfTestConfig { supply_off_settle_us: 1_000, rest_quiet_us: 2_000 },
+            start: StartPolicy::ManualReset,
+            reset_press: ResetPress::DEFAULT,
         }
     }
 
@@ -82,6 +90,12 @@ impl Config {
         if matches!(self.chatter, Some(ChatterGuard { max_transitions: 0, .. })) {
             return Err(ConfigError::ChatterLimitZero);
         }
+        if self.reset_press.min_us == 0
+            || self.reset_press.min_us > self.reset_press.max_us
+            || self.reset_press.max_us >= 1 << 30
+        {
+            return Err(ConfigError::ResetPressRange);
+        }
         Ok(())
     }
 }
@@ -103,6 +117,8 @@ pub enum ConfigError {
     StrokeNotPositive,
     /// `chatter.max_transitions` is 0.
     ChatterLimitZero,
+    /// `reset_press` is not `0 < min_us <= max_us < 2^30`.
+    ResetPressRange,
 }
 
 impl ConfigError {
@@ -118,6 +134,9 @@ impl ConfigError {
             ConfigError::DecelerationZero => "budget.decel_um_per_s2 must be > 0",
             ConfigError::StrokeNotPositive => "budget.stroke_um must be > 0",
             ConfigError::ChatterLimitZero => "chatter.max_transitions must be >= 1",
+            ConfigError::ResetPressRange => {
+                "reset_press must have 0 < min_us <= max_us < 2^30 us (a zero minimum lets a glitch reset)"
+            }
         }
     }
 }
@@ -149,6 +168,8 @@ pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16> {
     verdict: Option<Verdict>,
     last_sample: Sample,
     log: EventLog<LOG>,
+    retained: Retained,
+    boots: u32,
 }
 
 impl<C, S, STOP, ESC, RST, const LOG: usize> Firmware<C, S, STOP, ESC, RST, LOG>
@@ -159,8 +180,27 @@ where
     ESC: OutputPin,
     RST: InputPin,
 {
-    /// Take the peripherals, de-energise both outputs and start the self-test (it runs on the ticks).
+    /// Take the peripherals and de-energise both outputs, not knowing why the MCU started
+    /// ([`Boot::UNKNOWN`]): latched in [`State::Fault`]`(`[`Cause::Reset`]`)` until a reset press,
+    /// whatever [`Config::start`] says. A board passes what it knows with [`Firmware::after_reset`].
     pub fn new(cfg: Config, clock: C, sensor: S, stop: STOP, escalation: ESC, reset: RST) -> Result<Self, ConfigError> {
+        Self::after_reset(cfg, Boot::UNKNOWN, clock, sensor, stop, escalation, reset)
+    }
+
+    /// Take the peripherals and de-energise both outputs after the reset described by `boot`. The
+    /// reset cause is logged ([`Cause::Reset`], flags = [`ResetCause`] code), and so is a latch found
+    /// in the retained record ([`FLAG_RETAINED`]). The firmware then waits for a reset press and
+    /// release, unless [`StartPolicy::AutoAfterPowerOn`] is configured, the cause is a clean
+    /// power-on and no latch survived: only then does the self-test start by itself.
+    pub fn after_reset(
+        cfg: Config,
+        boot: Boot,
+        clock: C,
+        sensor: S,
+        stop: STOP,
+        escalation: ESC,
+        reset: RST,
+    ) -> Result<Self, ConfigError> {
         cfg.validate()?;
         let (out, ok) = StopOutputs::new(stop, escalation);
         let mut fw = Firmware {
@@ -179,7 +219,27 @@ where
             verdict: None,
             last_sample: Sample::default(),
             log: EventLog::new(),
+            retained: Retained::default(),
+            boots: 0,
         };
+        let now = fw.clock.now();
+        let record = boot.retained.decode();
+        let latched_before = record.and_then(|(c, _)| c);
+        fw.boots = record.map_or(0, |(_, n)| n.wrapping_add(1));
+        fw.log.push(Cause::Reset, boot.cause as u8, now, now, 0);
+        if let Some(c) = latched_before {
+            fw.log.push(c, FLAG_RETAINED, now, now, 0);
+        }
+        let auto = cfg.start == StartPolicy::AutoAfterPowerOn
+            && boot.cause == ResetCause::PowerOn
+            && latched_before.is_none();
+        if auto {
+            fw.retained = Retained::new(None, fw.boots);
+        } else {
+            fw.state = State::Fault(Cause::Reset);
+            fw.retained = Retained::new(Some(latched_before.unwrap_or(Cause::Reset)), fw.boots);
+            warn!("start latched after a {=str} reset: waiting for a reset press", boot.cause.name());
+        }
         if !ok {
             let now = fw.clock.now();
             fw.fault(Cause::OutputFault, now);
@@ -268,12 +328,13 @@ where
                 }
             }
             State::Tripped => {
-                if self.resetter.tripped_tick(self.cfg.reset, now, sample.trip, reset_level) {
+                let (policy, press) = (self.cfg.reset, self.cfg.reset_press);
+                if self.resetter.tripped_tick(policy, press, now, sample.trip, reset_level) {
                     self.arm(now);
                 }
             }
             State::Fault(_) => {
-                if self.resetter.fault_tick(reset_level) {
+                if self.resetter.fault_tick(self.cfg.reset_press, now, reset_level) {
                     info!("fault cleared by the reset input: self-test again");
                     self.watchdog.restart();
                     self.watchdog.check(now).ok();
@@ -298,7 +359,8 @@ where
         self.detected_at = Some(now);
         self.verdict = Some(verdict);
         self.debounce.clear();
-        self.resetter.begin_trip();
+        self.resetter.begin_latch();
+        self.retained = Retained::new(Some(Cause::Trip), self.boots);
         self.log.push(Cause::Trip, flags, now, first_seen, travel_um);
         warn!("trip at {=u32} us, travel {=i32} um, escalate {=bool}", now.0, travel_um, verdict.escalate);
     }
@@ -307,6 +369,7 @@ where
         self.debounce.clear();
         if self.out.energise() {
             self.state = State::Armed;
+            self.retained = Retained::new(None, self.boots);
             info!("armed at {=u32} us", now.0);
         } else {
             self.fault(Cause::OutputFault, now);
@@ -316,13 +379,25 @@ where
     /// Latch a fault: both outputs de-energised; logged once per fault episode.
     fn fault(&mut self, cause: Cause, now: Micros) {
         self.out.drop_all();
-        if let State::Fault(_) = self.state {
-            return;
+        match self.state {
+            // A real fault found while latched after a reset replaces the start latch, so the state
+            // and the retained record name the problem.
+            State::Fault(Cause::Reset) if cause != Cause::Reset => {}
+            State::Fault(_) => return,
+            _ => {}
         }
         self.sensor.set_supply(true);
+        self.resetter.begin_latch();
+        self.retained = Retained::new(Some(cause), self.boots);
         self.state = State::Fault(cause);
         self.log.push(cause, FLAG_ESCALATED, now, now, self.last_sample.travel_um);
         warn!("fault {=str} at {=u32} us", cause.name(), now.0);
+    }
+
+    /// The record to keep in retained RAM (backup SRAM): the latch in force and the boot count. The
+    /// board copies it after every tick and edge; [`Firmware::after_reset`] reads it back.
+    pub const fn retained(&self) -> Retained {
+        self.retained
     }
 
     /// The current state.

@@ -19,8 +19,10 @@
 //!    dead time, deceleration, stroke), self-test timing.
 //! 2. Wrap the input in a sensor: [`DigitalSwitch`] (with a [`SwitchKind`] and the switching travel
 //!    d_sw) or [`AnalogTravel`] (an [`Adc`] and an [`AnalogConfig`]).
-//! 3. [`Firmware::new`] with a [`Clock`], the sensor, the stop and escalation outputs and the reset
-//!    input ([`Unconnected`] if none). Both outputs are de-energised from here on until armed.
+//! 3. [`Firmware::after_reset`] with why the MCU started ([`Boot`]: the [`ResetCause`] and the
+//!    [`Retained`] latch), a [`Clock`], the sensor, the stop and escalation outputs and the reset
+//!    input ([`Unconnected`] if none). Both outputs are de-energised from here on until armed, and
+//!    by default every start waits for a reset press and release ([`StartPolicy`]).
 //! 4. Call [`Firmware::tick`] every `tick_period_us`, and [`Firmware::on_edge`] on every edge of the
 //!    switch input. The first ticks run the self-test, then the firmware arms.
 //! 5. Read the stop and escalation pins (low = stop / category 0), [`Firmware::detected_at`],
@@ -53,9 +55,23 @@
 //!                             decel_um_per_s2: 1_000_000, stroke_um: 10_000 };
 //! let mut cfg = Config::new(1_000, budget);
 //! cfg.reset = ResetPolicy::Auto { hold_us: 50_000 };
+//! // No reset button on this rig: only a clean power-on may start by itself (reset.rs).
+//! cfg.start = StartPolicy::AutoAfterPowerOn;
+//!
+//! // After a watchdog reset the firmware stays stopped: without a button, for ever.
+//! let boot = Boot { cause: ResetCause::from_rcc_csr(1 << 29 | 1 << 26), retained: Retained::default() };
 //! let sensor = DigitalSwitch::new(Pin(&switch), SwitchKind::Inductive, 5_000); // d_sw = 5 mm
 //! let mut fw: Firmware<_, _, _, _, _> =
-//!     Firmware::new(cfg, Time(&t), sensor, Pin(&stop), Pin(&esc), Unconnected).unwrap();
+//!     Firmware::after_reset(cfg, boot, Time(&t), sensor, Pin(&stop), Pin(&esc), Unconnected).unwrap();
+//! for k in 0..100 { t.set(k * 1_000); fw.tick(); }
+//! assert_eq!(fw.state(), State::Fault(Cause::Reset));
+//! assert!(!stop.get() && !esc.get());
+//!
+//! // After a clean power-on it runs the self-test and arms.
+//! t.set(0);
+//! let sensor = DigitalSwitch::new(Pin(&switch), SwitchKind::Inductive, 5_000);
+//! let mut fw: Firmware<_, _, _, _, _> =
+//!     Firmware::after_reset(cfg, Boot::POWER_ON, Time(&t), sensor, Pin(&stop), Pin(&esc), Unconnected).unwrap();
 //! assert!(!stop.get(), "de-energised until armed");
 //!
 //! for k in 0..10 { t.set(k * 1_000); fw.tick(); }          // self-test, then armed
@@ -103,6 +119,7 @@ panic_free_modules! {
     event_log;
     firmware;
     pins;
+    reset;
     selftest;
     sensor;
     stop_output;
@@ -116,6 +133,7 @@ pub use detector::{ResetPolicy, State};
 pub use event_log::{Cause, EventLog, TripEvent};
 pub use firmware::{Config, ConfigError, Firmware};
 pub use pins::Unconnected;
+pub use reset::{Boot, ResetCause, ResetPress, Retained, StartPolicy};
 pub use selftest::SelfTestConfig;
 pub use sensor::{Adc, AnalogConfig, AnalogTravel, DigitalSwitch, Mm, Sample, Sensor, SwitchKind};
 pub use stroke_budget::{stopping_distance_m, stopping_distance_um, BudgetConfig, Verdict};

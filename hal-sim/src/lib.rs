@@ -36,7 +36,8 @@
 //! let t_detect = rig.detected_at_s().unwrap();
 //! assert!((t_detect - 0.053).abs() < 2e-5, "{t_detect}");
 //! assert!(rig.stop_requested() && !rig.category0_requested());
-//! assert_eq!(rig.events()[0].cause, Cause::Trip);
+//! assert_eq!(rig.events()[0].cause, Cause::Reset); // the start, latched until the reset press
+//! assert_eq!(rig.events()[1].cause, Cause::Trip);
 //! ```
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering::SeqCst};

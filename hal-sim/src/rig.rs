@@ -13,7 +13,7 @@
 
 use super::{PinFault, SimAdc, SimClock, SimPin};
 use flinch_firmware::{
-    AnalogConfig, AnalogTravel, Config, ConfigError, DigitalSwitch, Firmware, Micros, Mm, Sensor, State, SwitchKind,
+    AnalogConfig, AnalogTravel, Boot, Cause, Config, ConfigError, DigitalSwitch, Firmware, Micros, Mm, Sensor, State, SwitchKind,
     TripEvent,
 };
 
@@ -54,10 +54,16 @@ impl SimRig<DigitalSwitch<SimPin, SimPin>> {
     /// switchable by the firmware (so the start-up stuck-input test runs), wired so that the unpowered
     /// switch reads as a trip. The plant starts with the tool on the front stop.
     pub fn digital(cfg: Config, kind: SwitchKind, switch_travel_um: i32) -> Result<Self, ConfigError> {
+        SimRig::digital_after(cfg, Boot::UNKNOWN, kind, switch_travel_um)
+    }
+
+    /// [`SimRig::digital`] starting from the reset described by `boot` (its cause and the retained
+    /// record the board would hand over).
+    pub fn digital_after(cfg: Config, boot: Boot, kind: SwitchKind, switch_travel_um: i32) -> Result<Self, ConfigError> {
         let supply = SimPin::new(false);
         let pin = SimPin::powered_by(kind.level_for(false), supply.clone(), kind.level_for(true));
         let sensor = DigitalSwitch::with_supply(pin.clone(), supply.clone(), kind, switch_travel_um);
-        let mut rig = SimRig::with_sensor(cfg, sensor, PlantInput::Switch { pin, kind, switch_travel_um })?;
+        let mut rig = SimRig::with_sensor(cfg, boot, sensor, PlantInput::Switch { pin, kind, switch_travel_um })?;
         rig.supply = Some(supply);
         Ok(rig)
     }
@@ -76,7 +82,7 @@ impl SimRig<AnalogTravel<SimAdc>> {
     pub fn analog(cfg: Config, acfg: AnalogConfig) -> Result<Self, ConfigError> {
         let adc = SimAdc::new(acfg.counts_for(Mm::ZERO));
         let sensor = AnalogTravel::new(adc.clone(), acfg);
-        SimRig::with_sensor(cfg, sensor, PlantInput::Analog { adc, cfg: acfg })
+        SimRig::with_sensor(cfg, Boot::UNKNOWN, sensor, PlantInput::Analog { adc, cfg: acfg })
     }
 
     /// The ADC handle (inject faults with [`SimAdc::set_fault`]).
@@ -89,12 +95,12 @@ impl SimRig<AnalogTravel<SimAdc>> {
 }
 
 impl<S: Sensor> SimRig<S> {
-    fn with_sensor(cfg: Config, sensor: S, input: PlantInput) -> Result<Self, ConfigError> {
+    fn with_sensor(cfg: Config, boot: Boot, sensor: S, input: PlantInput) -> Result<Self, ConfigError> {
         let clock = SimClock::new(Micros(0));
         let stop = SimPin::new(true); // whatever the pin was: the firmware must drop it at once
         let escalation = SimPin::new(true);
         let reset = SimPin::new(false);
-        let fw = Firmware::new(cfg, clock.clone(), sensor, stop.clone(), escalation.clone(), reset.clone())?;
+        let fw = Firmware::after_reset(cfg, boot, clock.clone(), sensor, stop.clone(), escalation.clone(), reset.clone())?;
         let tick_us = i64::from(cfg.tick_period_us);
         Ok(SimRig {
             fw,
@@ -135,12 +141,26 @@ impl<S: Sensor> SimRig<S> {
         self.edge_irq = enabled;
     }
 
-    /// Tick the firmware from the clock's current value until it arms, at most `max_us`. Returns the
-    /// boot time in microseconds, or the state it got stuck in. Sim time 0 is one tick after the last
-    /// boot tick, so the firmware's tick cadence carries on into the plant run.
+    /// Power the firmware up and tick it from the clock's current value until it arms, at most
+    /// `max_us` after the operator's reset. The firmware starts latched (`flinch_firmware::reset`),
+    /// so the rig first does what the operator does: presses the reset button for
+    /// `Config::reset_press.min_us` (rounded up to whole ticks) and releases it. Returns the time
+    /// from the release to arming in microseconds, or the state it got stuck in. Sim time 0 is one
+    /// tick after the last boot tick, so the firmware's tick cadence carries on into the plant run.
     pub fn boot(&mut self, max_us: u32) -> Result<u32, State> {
-        let start = self.clock.true_now();
-        let mut t = start;
+        let mut t = self.clock.true_now();
+        if self.fw.state() == State::Fault(Cause::Reset) {
+            let tick = self.tick_us.max(1) as u32;
+            let press_ticks = self.fw.config().reset_press.min_us.div_ceil(tick);
+            self.reset.set(true);
+            for _ in 0..press_ticks {
+                self.clock.set(t);
+                self.fw.tick();
+                t = t.plus(tick);
+            }
+            self.reset.set(false);
+        }
+        let start = t;
         let limit = u64::from(max_us) / self.tick_us.max(1) as u64 + 1;
         for _ in 0..limit {
             self.clock.set(t);

@@ -3,7 +3,8 @@
 
 use flinch_firmware::event_log::{FLAG_EDGE, FLAG_ESCALATED, FLAG_FILTERED};
 use flinch_firmware::{
-    AnalogConfig, BudgetConfig, Cause, ChatterGuard, Config, Filter, Micros, Mm, ResetPolicy, State, SwitchKind,
+    AnalogConfig, BudgetConfig, Cause, ChatterGuard, Config, Filter, Micros, Mm, ResetCause, ResetPolicy, State,
+    SwitchKind,
 };
 use flinch_hal_sim::{AdcFault, PinFault, SimRig, SIM_LOG};
 
@@ -30,10 +31,12 @@ fn outputs_are_de_energised_until_the_self_test_passes() {
     let mut rig = SimRig::digital(cfg(), SwitchKind::Inductive, 5_000).unwrap();
     assert!(rig.stop_requested() && rig.category0_requested(), "dropped in Firmware::new");
     let boot_us = rig.boot(50_000).unwrap();
-    // supply off: trip seen on the 2nd tick; supply on: rest from the 3rd tick, 2 ms quiet -> 5th.
-    assert_eq!(boot_us, 4 * T);
+    // The release of the reset press starts the self-test (1st tick); supply off: trip seen on the
+    // 3rd tick; supply on: rest from the 4th tick, 2 ms quiet -> 6th.
+    assert_eq!(boot_us, 5 * T);
     assert!(!rig.stop_requested() && !rig.category0_requested());
-    assert!(rig.fw.log().is_empty());
+    let starts: Vec<_> = rig.events().iter().map(|e| (e.cause, e.flags)).collect();
+    assert_eq!(starts, [(Cause::Reset, ResetCause::Unknown as u8)], "only the start is logged");
 }
 
 #[test]
@@ -46,7 +49,7 @@ fn trip_on_the_edge_writes_stop_at_the_edge_instant() {
     assert!(rig.stop_requested(), "same call: no tick needed");
     assert!(!rig.category0_requested(), "budget fits: controlled stop");
     assert_eq!(rig.detected_at_s(), Some(0.010_25));
-    let ev = rig.events()[0];
+    let ev = rig.events()[1];
     assert_eq!((ev.cause, ev.flags, ev.travel_um), (Cause::Trip, FLAG_EDGE, 5_000));
     // Latched: the tool going back does not release the stop (Input policy, no press).
     rig.set_travel_m(0.0);
@@ -77,7 +80,7 @@ fn cut_wire_reads_as_a_trip() {
     rig.inject_switch_fault(PinFault::CutWire);
     assert!(rig.stop_requested());
     assert_eq!(rig.fw.state(), State::Tripped);
-    assert_eq!(rig.events()[0].cause, Cause::Trip);
+    assert_eq!(rig.events()[1].cause, Cause::Trip);
 }
 
 #[test]
@@ -86,16 +89,16 @@ fn stuck_high_input_fails_the_start_up_self_test() {
     rig.switch_pin().unwrap().set_fault(PinFault::StuckHigh);
     assert_eq!(rig.boot(50_000), Err(State::Fault(Cause::StuckInput)));
     assert!(rig.stop_requested() && rig.category0_requested());
-    assert_eq!(rig.events()[0].cause, Cause::StuckInput);
+    assert_eq!(rig.events()[1].cause, Cause::StuckInput);
     // It does not go away by itself; the reset input re-runs the self-test, which fails again while
     // the input is stuck and passes once it is repaired.
     rig.advance_to(0.1);
     assert_eq!(rig.fw.state(), State::Fault(Cause::StuckInput));
     rig.switch_pin().unwrap().set_fault(PinFault::None);
     rig.set_reset(true);
-    rig.advance_to(0.101);
+    rig.advance_to(0.160); // a 60 ms press: the reset acts on its release
     rig.set_reset(false);
-    rig.advance_to(0.110);
+    rig.advance_to(0.170);
     assert!(rig.fw.is_armed(), "{:?}", rig.fw.state());
     assert!(!rig.stop_requested());
 }
@@ -147,7 +150,7 @@ fn timer_wrap_during_a_trip() {
     let mut c = cfg();
     c.reset = ResetPolicy::Auto { hold_us: 20_000 };
     let mut rig = SimRig::digital(c, SwitchKind::Inductive, 5_000).unwrap();
-    rig.start_clock_at(Micros(u32::MAX - 30_000)); // wraps about 25 ms into the plant run
+    rig.start_clock_at(Micros(u32::MAX - 81_000)); // 50 ms reset press + 6 ms self-test: wraps about 25 ms into the plant run
     rig.boot(50_000).unwrap();
     let wrap_s = rig.seconds_at(Micros(0));
     assert!(wrap_s > 0.02 && wrap_s < 0.03, "{wrap_s}");
@@ -181,12 +184,19 @@ fn reset_by_input_needs_the_tool_back_and_a_new_press() {
     rig.advance_to(0.04);
     assert!(rig.stop_requested(), "back, but no press yet");
     rig.set_reset(true);
-    rig.advance_to(0.041);
-    assert!(!rig.stop_requested() && rig.fw.is_armed());
-    // A held button does not re-arm after the next trip.
+    rig.advance_to(0.2);
+    assert!(rig.stop_requested(), "pressing does not reset (ISO 13849-1 5.2.2: on release)");
+    rig.set_reset(false);
+    rig.advance_to(0.201);
+    assert!(!rig.stop_requested() && rig.fw.is_armed(), "the release does");
+    // A button held across the next trip does not re-arm on its release.
+    rig.set_reset(true);
+    rig.advance_to(0.25);
     rig.set_travel_m(0.006);
     rig.set_travel_m(0.0);
-    rig.advance_to(0.1);
+    rig.advance_to(0.3);
+    rig.set_reset(false);
+    rig.advance_to(0.4);
     assert!(rig.stop_requested());
 }
 
@@ -220,7 +230,7 @@ fn faults_are_not_cleared_by_the_automatic_reset() {
     rig.clock.set_stalled(false);
     rig.advance_to(0.5);
     assert_eq!(rig.fw.state(), State::Fault(Cause::ClockStall));
-    assert_eq!(rig.fw.log().len(), 1, "logged once per fault, not once per tick");
+    assert_eq!(rig.fw.log().len(), 2, "the start, then the fault logged once, not once per tick");
 }
 
 #[test]
@@ -242,7 +252,7 @@ fn glitch_filter_latency_end_to_end() {
             let lat = (rig.detected_at_s().unwrap() * 1e6).round() as i64 - edge_us;
             assert!(lat >= i64::from(lo) && lat < i64::from(hi), "{filter:?} phase {phase}: {lat} us");
             assert!(lat <= i64::from(filter.max_added_latency_us(T)));
-            let ev = rig.events()[0];
+            let ev = rig.events()[1];
             assert_eq!(ev.flags & FLAG_FILTERED, FLAG_FILTERED);
             // first_seen: the edge itself for MinDuration (timestamped by the interrupt), the first
             // tripped tick for Consecutive.
@@ -277,7 +287,7 @@ fn short_stroke_budget_escalates_to_category_0() {
     rig.advance_to(0.01);
     rig.set_travel_m(0.005);
     assert!(rig.stop_requested() && rig.category0_requested());
-    let ev = rig.events()[0];
+    let ev = rig.events()[1];
     assert_eq!(ev.flags, FLAG_EDGE | FLAG_ESCALATED);
     let v = rig.fw.last_verdict().unwrap();
     assert_eq!((v.required_um, v.remaining_um), (35_250, 5_000));
@@ -299,10 +309,10 @@ fn event_log_wraps_over_many_trips() {
     rig.advance_to(0.01 * trips as f64);
     let log = rig.fw.log();
     assert_eq!(log.len(), SIM_LOG);
-    assert_eq!(log.overwritten(), 8);
+    assert_eq!(log.overwritten(), 9);
     let evs = rig.events();
-    assert_eq!(evs.first().unwrap().seq, 8);
-    assert_eq!(evs.last().unwrap().seq as usize, trips - 1);
+    assert_eq!(evs.first().unwrap().seq, 9, "the start (seq 0) and the first 8 trips overwritten");
+    assert_eq!(evs.last().unwrap().seq as usize, trips);
     let bytes = rig.event_log_bytes();
     let (h, decoded) = flinch_firmware::event_log::decode(&bytes).unwrap();
     assert_eq!(usize::from(h.count), SIM_LOG);
@@ -334,7 +344,7 @@ fn analog_sensor_trips_at_its_threshold_and_reports_travel() {
     rig.set_travel_m(0.0016);
     rig.advance_to(0.011);
     assert!(rig.stop_requested());
-    let ev = rig.events()[0];
+    let ev = rig.events()[1];
     assert!((ev.travel_um - 1600).abs() < 10, "{}", ev.travel_um);
 }
 
@@ -365,4 +375,138 @@ fn analog_measured_closing_speed_drives_the_budget() {
     let v = rig.fw.last_verdict().unwrap();
     // The smoothed estimate (velocity_shift = 1) lags the true 1 m/s; at 0.5 m/s it is already 133 mm.
     assert!(v.required_um > 100_000, "{v:?}");
+}
+
+// ---- Resets never re-arm by themselves (IEC 60204-1 7.5, ISO 13849-1 5.2.2) ---------------------
+
+use flinch_firmware::{Boot, Retained, StartPolicy};
+
+const ALL_CAUSES: [ResetCause; 7] = [
+    ResetCause::PowerOn,
+    ResetCause::BrownOut,
+    ResetCause::Watchdog,
+    ResetCause::Software,
+    ResetCause::Pin,
+    ResetCause::LowPower,
+    ResetCause::Unknown,
+];
+
+/// Tick a freshly reset rig for `secs` of healthy sensor at rest, without touching the reset button.
+fn run_untouched(rig: &mut SimRig<flinch_firmware::DigitalSwitch<flinch_hal_sim::SimPin, flinch_hal_sim::SimPin>>, secs: f64) {
+    let tick = 1e-3;
+    let mut t = 0.0;
+    while t < secs {
+        rig.advance_to(t);
+        assert!(rig.stop_requested() && rig.category0_requested(), "went to \"go\" by itself at {t} s");
+        t += tick;
+    }
+}
+
+#[test]
+fn no_reset_of_any_cause_re_arms_by_itself_by_default() {
+    for cause in ALL_CAUSES {
+        let boot = Boot { cause, retained: Retained::default() };
+        let mut rig = SimRig::digital_after(cfg(), boot, SwitchKind::Inductive, 5_000).unwrap();
+        run_untouched(&mut rig, 10.0);
+        assert_eq!(rig.fw.state(), State::Fault(Cause::Reset), "{cause:?}");
+        let ev = rig.events()[0];
+        assert_eq!((ev.cause, ev.flags), (Cause::Reset, cause as u8), "the reset cause is logged");
+    }
+}
+
+#[test]
+fn auto_start_only_after_a_clean_power_on() {
+    let mut c = cfg();
+    c.start = StartPolicy::AutoAfterPowerOn;
+    for cause in ALL_CAUSES {
+        let boot = Boot { cause, retained: Retained::default() };
+        let mut rig = SimRig::digital_after(c, boot, SwitchKind::Inductive, 5_000).unwrap();
+        rig.advance_to(1.0);
+        if cause == ResetCause::PowerOn {
+            assert!(rig.fw.is_armed(), "a clean power-on arms by itself under AutoAfterPowerOn");
+        } else {
+            assert!(rig.stop_requested(), "{cause:?} must wait for a person even under AutoAfterPowerOn");
+            assert_eq!(rig.fw.state(), State::Fault(Cause::Reset));
+        }
+    }
+}
+
+#[test]
+fn a_latch_in_force_when_the_part_reset_survives_the_reset() {
+    // Trip, then the part resets (the board hands the retained record over), even at power-on with
+    // auto start allowed: still stopped, and the log says why.
+    let mut c = cfg();
+    c.start = StartPolicy::AutoAfterPowerOn;
+    let mut rig = booted(c);
+    rig.advance_to(0.01);
+    rig.set_travel_m(0.006);
+    assert!(rig.stop_requested());
+    let kept = rig.fw.retained();
+    assert_eq!(kept.decode().map(|(l, _)| l), Some(Some(Cause::Trip)));
+    for cause in [ResetCause::PowerOn, ResetCause::Watchdog, ResetCause::BrownOut] {
+        let mut again = SimRig::digital_after(c, Boot { cause, retained: kept }, SwitchKind::Inductive, 5_000).unwrap();
+        run_untouched(&mut again, 2.0);
+        let evs: Vec<_> = again.events().iter().map(|e| (e.cause, e.flags)).collect();
+        assert_eq!(evs, [(Cause::Reset, cause as u8), (Cause::Trip, flinch_firmware::event_log::FLAG_RETAINED)]);
+        assert_eq!(again.fw.retained().decode().map(|(l, n)| (l, n)), Some((Some(Cause::Trip), 1)), "latch and boot count carried on");
+    }
+    // A fault handler that ran before a watchdog reset.
+    let handler = Retained::new(Some(Cause::FaultHandler), 3);
+    let mut again = SimRig::digital_after(c, Boot { cause: ResetCause::Watchdog, retained: handler }, SwitchKind::Inductive, 5_000).unwrap();
+    run_untouched(&mut again, 1.0);
+    assert_eq!(again.events()[1].cause, Cause::FaultHandler);
+    // A corrupted record is no record: a watchdog reset is latched anyway, a power-on may auto-start.
+    let mut torn = kept;
+    torn.words[1] ^= 0x10;
+    let mut again = SimRig::digital_after(c, Boot { cause: ResetCause::Watchdog, retained: torn }, SwitchKind::Inductive, 5_000).unwrap();
+    run_untouched(&mut again, 1.0);
+}
+
+#[test]
+fn a_stuck_or_too_short_reset_press_never_arms() {
+    let boot = Boot { cause: ResetCause::Watchdog, retained: Retained::default() };
+    // Button held from before the reset (stuck), released after 6 s: its release is not a reset.
+    let mut rig = SimRig::digital_after(cfg(), boot, SwitchKind::Inductive, 5_000).unwrap();
+    rig.set_reset(true);
+    run_untouched(&mut rig, 6.0);
+    rig.set_reset(false);
+    run_untouched(&mut rig, 7.0);
+    // Pressed after the reset but held 6 s (jammed): refused.
+    let mut rig = SimRig::digital_after(cfg(), boot, SwitchKind::Inductive, 5_000).unwrap();
+    rig.advance_to(0.1);
+    rig.set_reset(true);
+    run_untouched(&mut rig, 6.1);
+    rig.set_reset(false);
+    run_untouched(&mut rig, 7.0);
+    // A 20 ms blip (below the 50 ms minimum): refused.
+    let mut rig = SimRig::digital_after(cfg(), boot, SwitchKind::Inductive, 5_000).unwrap();
+    rig.advance_to(0.1);
+    rig.set_reset(true);
+    rig.advance_to(0.12);
+    rig.set_reset(false);
+    run_untouched(&mut rig, 1.0);
+    // A proper press: arms after the release, not before.
+    rig.set_reset(true);
+    rig.advance_to(1.2);
+    assert!(rig.stop_requested(), "still pressed");
+    rig.set_reset(false);
+    rig.advance_to(1.21);
+    assert!(rig.fw.is_armed(), "{:?}", rig.fw.state());
+}
+
+#[test]
+fn a_fault_right_after_the_reset_replaces_the_start_latch() {
+    let boot = Boot { cause: ResetCause::Watchdog, retained: Retained::default() };
+    let mut rig = SimRig::digital_after(cfg(), boot, SwitchKind::Inductive, 5_000).unwrap();
+    rig.advance_to(0.002);
+    rig.clock.set_stalled(true); // the timer clock died with the reset
+    rig.advance_to(0.01);
+    assert_eq!(rig.fw.state(), State::Fault(Cause::ClockStall));
+    assert_eq!(rig.fw.retained().decode().map(|(l, _)| l), Some(Some(Cause::ClockStall)));
+    // A press cannot even be timed on a dead clock (it reads 0 us held): refused, still stopped.
+    rig.set_reset(true);
+    rig.advance_to(0.1);
+    rig.set_reset(false);
+    rig.advance_to(1.0);
+    assert!(rig.stop_requested() && !rig.fw.is_armed());
 }

@@ -17,8 +17,16 @@
 //! path is short enough at that speed (the QEMU build measures it in instructions).
 //!
 //! Failure handling: the independent watchdog (IWDG, LSI) is fed from the tick; a firmware that stops
-//! ticking resets the MCU within about 8 ms, and the reset state de-energises the outputs. The panic
-//! and HardFault handlers write the stop and escalation pins low before anything else.
+//! ticking resets the MCU within about 8 ms, and the reset state de-energises the outputs. The panic,
+//! HardFault and default (NMI, any unexpected interrupt) handlers write the stop and escalation pins
+//! low before anything else and record `Cause::FaultHandler` in the retained latch.
+//!
+//! Resets (`flinch_firmware::reset`): `main` reads why the part reset from `RCC_CSR` (then clears the
+//! flags with RMVF) and the retained latch from `RETAINED`, four words in cortex-m-rt's `.uninit`
+//! section, which the start-up code does not zero: it survives watchdog, software, pin and fault
+//! resets, and a power cycle turns it into garbage that its CRC rejects. Every start waits for a
+//! reset press and release (`StartPolicy::ManualReset`). (Backup SRAM with a VBAT cell would keep the
+//! latch across a power cycle too; it is not used because QEMU's STM32F405 does not model it.)
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
@@ -43,13 +51,17 @@ mod board {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
-    use flinch_firmware::{BudgetConfig, Clock, Config, DigitalSwitch, Firmware, Micros, SwitchKind};
+    use flinch_firmware::{
+        Boot, BudgetConfig, Cause, Clock, Config, DigitalSwitch, Firmware, Micros, ResetCause, Retained, SwitchKind,
+    };
 
     // ---- Registers (RM0090 Rev 19) --------------------------------------------------------------
     const RCC: u32 = 0x4002_3800; // sec. 7.3
     const RCC_AHB1ENR: u32 = RCC + 0x30;
     const RCC_APB1ENR: u32 = RCC + 0x40;
     const RCC_APB2ENR: u32 = RCC + 0x44;
+    const RCC_CSR: u32 = RCC + 0x74; // sec. 7.3.21: reset flags
+    const RCC_CSR_RMVF: u32 = 1 << 24;
     const GPIOA: u32 = 0x4002_0000; // sec. 8.4
     const GPIOD: u32 = 0x4002_0C00;
     const MODER: u32 = 0x00;
@@ -157,6 +169,30 @@ mod board {
         wr(GPIOD + BSRR, (1 << (12 + 16)) | (1 << (13 + 16)));
     }
 
+    /// The latch that survives a reset: not zeroed by the start-up code (cortex-m-rt `.uninit`).
+    #[link_section = ".uninit.flinch_retained"]
+    static mut RETAINED: core::mem::MaybeUninit<[u32; 4]> = core::mem::MaybeUninit::uninit();
+
+    fn retained_load() -> Retained {
+        // SAFETY: four aligned words of RAM; any bit pattern is a valid [u32; 4] (garbage after a
+        // power cycle is rejected by the record's CRC). Read once in `main` before interrupts run.
+        Retained { words: unsafe { read_volatile(core::ptr::addr_of!(RETAINED).cast::<[u32; 4]>()) } }
+    }
+
+    fn retained_store(r: Retained) {
+        // SAFETY: as above; written from the handlers, which all run at the same priority, and from
+        // the fault handlers, which never return.
+        unsafe { write_volatile(core::ptr::addr_of_mut!(RETAINED).cast::<[u32; 4]>(), r.words) }
+    }
+
+    /// A fault handler ran: outputs low first, then latch `FaultHandler` for the next start.
+    #[inline(always)]
+    fn fault_handler_stop() {
+        emergency_stop();
+        let boots = retained_load().words[2];
+        retained_store(Retained::new(Some(Cause::FaultHandler), boots));
+    }
+
     #[entry]
     fn main() -> ! {
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
@@ -182,10 +218,18 @@ mod board {
         wr(IWDG_RLR, 64);
         wr(IWDG_KR, 0xCCCC);
 
+        // Why did the part reset? Read the flags, then clear them so the next reset reads its own.
+        let cause = ResetCause::from_rcc_csr(rd(RCC_CSR));
+        modify(RCC_CSR, 0, RCC_CSR_RMVF);
+        let boot = Boot { cause, retained: retained_load() };
+
         let sensor = DigitalSwitch::with_supply(In::<GPIOA, 0>, Out::<GPIOD, 14>, SwitchKind::Inductive, SWITCH_TRAVEL_UM);
-        match Firmware::new(config(), Tim2, sensor, Out, Out, In) {
-            // SAFETY: once, before SysTick and EXTI0 are enabled below.
-            Ok(fw) => unsafe { FW.init(fw) },
+        match Firmware::after_reset(config(), boot, Tim2, sensor, Out, Out, In) {
+            Ok(fw) => {
+                retained_store(fw.retained());
+                // SAFETY: once, before SysTick and EXTI0 are enabled below.
+                unsafe { FW.init(fw) }
+            }
             Err(e) => {
                 defmt::error!("bad configuration: {=str}", e.message());
                 loop {
@@ -228,6 +272,7 @@ mod board {
         let fw = unsafe { FW.get() };
         fw.on_edge();
         wr(EXTI_PR, 1); // clear the pending line after the stop write, not before
+        retained_store(fw.retained());
     }
 
     #[exception]
@@ -235,12 +280,13 @@ mod board {
         // SAFETY: same priority as EXTI0, initialised before SysTick was enabled.
         let fw = unsafe { FW.get() };
         fw.tick();
+        retained_store(fw.retained());
         wr(IWDG_KR, 0xAAAA); // the tick ran: feed the watchdog
     }
 
     #[exception]
     unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
-        emergency_stop();
+        fault_handler_stop();
         loop {
             cortex_m::asm::nop(); // the IWDG resets the part
         }
@@ -248,10 +294,19 @@ mod board {
 
     #[panic_handler]
     fn panic(_info: &core::panic::PanicInfo) -> ! {
-        emergency_stop();
+        fault_handler_stop();
         defmt::error!("panic: outputs de-energised");
         loop {
             cortex_m::asm::nop(); // the IWDG resets the part
+        }
+    }
+
+    /// NMI and every interrupt without a handler: de-energise and latch, then let the IWDG reset.
+    #[exception]
+    unsafe fn DefaultHandler(_irqn: i16) {
+        fault_handler_stop();
+        loop {
+            cortex_m::asm::nop();
         }
     }
 

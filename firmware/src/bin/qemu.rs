@@ -55,11 +55,22 @@ mod qemu {
     use flinch_firmware::event_log::{self, FLAG_EDGE, FLAG_ESCALATED};
     use flinch_firmware::{
         stopping_distance_um, AnalogConfig, AnalogTravel, BudgetConfig, Cause, ChatterGuard, Clock, Config,
-        DigitalSwitch, Filter, Firmware, Micros, Mm, ResetPolicy, State, SwitchKind, Unconnected,
+        Boot, DigitalSwitch, Filter, Firmware, Micros, Mm, ResetCause, ResetPolicy, ResetPress, Retained, StartPolicy,
+        State, SwitchKind, Unconnected,
     };
 
     const SYST_CVR: u32 = 0xE000_E018;
     const T: u32 = 1_000;
+
+    /// The bench's configuration: it starts as after a clean power-on with auto start allowed (the
+    /// scenarios are about detection; `reset_latch` checks the start latch), and its reset presses
+    /// are one tick long, so the press window is 1 us to 1 s.
+    const fn bench_config(budget: BudgetConfig) -> Config {
+        let mut c = Config::new(T, budget);
+        c.start = StartPolicy::AutoAfterPowerOn;
+        c.reset_press = ResetPress { min_us: 1, max_us: 1_000_000 };
+        c
+    }
 
     // ---- RAM pins and a settable clock ----------------------------------------------------------
     struct Level<'a>(&'a AtomicBool);
@@ -135,13 +146,17 @@ mod qemu {
             }
         }
         fn firmware(&self, cfg: Config) -> Option<BenchFw<'_>> {
+            self.firmware_after(cfg, Boot::POWER_ON)
+        }
+        fn firmware_after(&self, cfg: Config, boot: Boot) -> Option<BenchFw<'_>> {
             let sensor = DigitalSwitch::with_supply(
                 Switch { level: &self.level, supply: &self.supply, stuck_high: &self.stuck },
                 Level(&self.supply),
                 SwitchKind::Inductive,
                 5_000,
             );
-            Firmware::new(cfg, Time(&self.now), sensor, Level(&self.stop), Level(&self.esc), Level(&self.reset)).ok()
+            Firmware::after_reset(cfg, boot, Time(&self.now), sensor, Level(&self.stop), Level(&self.esc), Level(&self.reset))
+                .ok()
         }
         fn ticks(&self, fw: &mut BenchFw<'_>, n: u32) {
             for _ in 0..n {
@@ -184,7 +199,7 @@ mod qemu {
 
     fn trip_latch_reset() -> Check {
         let b = Bench::new(0);
-        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        let mut fw = b.firmware(bench_config(BUDGET)).ok_or("config")?;
         ensure(b.stop_requested() && b.cat0_requested(), "outputs low before the self-test")?;
         ensure(b.boot(&mut fw), "arms")?;
         ensure(!b.stop_requested() && !b.cat0_requested(), "energised when armed")?;
@@ -200,12 +215,29 @@ mod qemu {
         ensure(b.stop_requested() && fw.state() == State::Tripped, "latched")?;
         b.reset.store(true, Relaxed);
         b.ticks(&mut fw, 1);
-        ensure(fw.is_armed() && !b.stop_requested(), "reset input re-arms")
+        ensure(b.stop_requested(), "pressing does not re-arm")?;
+        b.reset.store(false, Relaxed);
+        b.ticks(&mut fw, 1);
+        ensure(fw.is_armed() && !b.stop_requested(), "the release of the reset input re-arms")
+    }
+
+    fn reset_latch() -> Check {
+        // RCC_CSR after an IWDG reset: IWDGRSTF | PINRSTF.
+        let boot = Boot { cause: ResetCause::from_rcc_csr(1 << 29 | 1 << 26), retained: Retained::default() };
+        let b = Bench::new(0);
+        let mut fw = b.firmware_after(bench_config(BUDGET), boot).ok_or("config")?;
+        b.ticks(&mut fw, 2_000);
+        ensure(b.stop_requested() && b.cat0_requested(), "a watchdog reset stays stopped")?;
+        ensure(fw.state() == State::Fault(Cause::Reset), "latched by the reset")?;
+        b.reset.store(true, Relaxed);
+        b.ticks(&mut fw, 2);
+        b.reset.store(false, Relaxed);
+        ensure(b.boot(&mut fw), "a reset press and release starts the self-test and arms")
     }
 
     fn auto_reset_across_the_wrap() -> Check {
         let b = Bench::new(u32::MAX - 30_000);
-        let mut cfg = Config::new(T, BUDGET);
+        let mut cfg = bench_config(BUDGET);
         cfg.reset = ResetPolicy::Auto { hold_us: 20_000 };
         let mut fw = b.firmware(cfg).ok_or("config")?;
         ensure(b.boot(&mut fw), "arms")?;
@@ -224,7 +256,7 @@ mod qemu {
     fn stuck_input_at_start_up() -> Check {
         let b = Bench::new(0);
         b.stuck.store(true, Relaxed);
-        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        let mut fw = b.firmware(bench_config(BUDGET)).ok_or("config")?;
         ensure(!b.boot(&mut fw), "does not arm")?;
         ensure(fw.state() == State::Fault(Cause::StuckInput), "stuck-input fault")?;
         ensure(b.stop_requested() && b.cat0_requested(), "outputs low")
@@ -232,7 +264,7 @@ mod qemu {
 
     fn cut_wire() -> Check {
         let b = Bench::new(0);
-        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        let mut fw = b.firmware(bench_config(BUDGET)).ok_or("config")?;
         ensure(b.boot(&mut fw), "arms")?;
         b.level.store(false, Relaxed); // a cut wire reads low, like a trip: caught by polling too
         b.ticks(&mut fw, 1);
@@ -241,7 +273,7 @@ mod qemu {
 
     fn clock_stall() -> Check {
         let b = Bench::new(0);
-        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        let mut fw = b.firmware(bench_config(BUDGET)).ok_or("config")?;
         ensure(b.boot(&mut fw), "arms")?;
         fw.tick(); // same instant again
         ensure(fw.state() == State::Fault(Cause::ClockStall), "stall fault")?;
@@ -250,7 +282,7 @@ mod qemu {
 
     fn missed_deadline() -> Check {
         let b = Bench::new(0);
-        let mut fw = b.firmware(Config::new(T, BUDGET)).ok_or("config")?;
+        let mut fw = b.firmware(bench_config(BUDGET)).ok_or("config")?;
         ensure(b.boot(&mut fw), "arms")?;
         b.now.store(b.now.load(Relaxed).wrapping_add(2 * T), Relaxed);
         fw.tick();
@@ -260,7 +292,7 @@ mod qemu {
 
     fn chatter() -> Check {
         let b = Bench::new(0);
-        let mut cfg = Config::new(T, BUDGET);
+        let mut cfg = bench_config(BUDGET);
         cfg.filter = Filter::Consecutive(3);
         cfg.chatter = Some(ChatterGuard { max_transitions: 6, window_us: 20_000 });
         let mut fw = b.firmware(cfg).ok_or("config")?;
@@ -278,7 +310,7 @@ mod qemu {
         let b = Bench::new(0);
         // Fig. 46 mode 3 speed, 0.25 m/s: 35.25 mm needed, 5 mm left.
         let fast = BudgetConfig { robot_speed_um_per_s: 250_000, ..BUDGET };
-        let mut fw = b.firmware(Config::new(T, fast)).ok_or("config")?;
+        let mut fw = b.firmware(bench_config(fast)).ok_or("config")?;
         ensure(b.boot(&mut fw), "arms")?;
         b.level.store(false, Relaxed);
         fw.on_edge();
@@ -298,7 +330,7 @@ mod qemu {
         let raw = AtomicU32::new(u32::from(acfg.counts_for(Mm::ZERO)));
         let (stop, esc, now) = (AtomicBool::new(true), AtomicBool::new(true), AtomicU32::new(0));
         let sensor = AnalogTravel::new(Raw(&raw), acfg);
-        let mut fw = Firmware::<_, _, _, _, _>::new(Config::new(T, BUDGET), Time(&now), sensor, Level(&stop), Level(&esc), Unconnected)
+        let mut fw = Firmware::<_, _, _, _, _>::after_reset(bench_config(BUDGET), Boot::POWER_ON, Time(&now), sensor, Level(&stop), Level(&esc), Unconnected)
             .map_err(|_| "config")?;
         for k in 1..10u32 {
             now.store(k * T, Relaxed);
@@ -432,7 +464,7 @@ mod qemu {
             SwitchKind::Inductive,
             5_000,
         );
-        let fw = Firmware::new(Config::new(T, BUDGET), Time(&M_NOW), sensor, MeasuredStop, Level(&M_ESC), Level(&M_RESET))
+        let fw = Firmware::after_reset(bench_config(BUDGET), Boot::POWER_ON, Time(&M_NOW), sensor, MeasuredStop, Level(&M_ESC), Level(&M_RESET))
             .map_err(|_| "config")?;
         // SAFETY: once, before the edge interrupt is unmasked.
         unsafe { MFW.init(fw) };
@@ -491,9 +523,10 @@ mod qemu {
         cp.SYST.enable_counter();
 
         hprintln!("flinch firmware self-test on mps2-an386");
-        let scenarios: [Scenario; 10] = [
+        let scenarios: [Scenario; 11] = [
             ("trip on the edge, latch, reset by input", trip_latch_reset),
             ("automatic reset across the u32 wrap", auto_reset_across_the_wrap),
+            ("a watchdog reset stays stopped until a reset press", reset_latch),
             ("stuck input fails the start-up test", stuck_input_at_start_up),
             ("cut wire reads as a trip", cut_wire),
             ("clock stall is a fault", clock_stall),
