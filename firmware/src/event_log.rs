@@ -39,6 +39,9 @@ pub enum Cause {
     /// A fault handler (HardFault, NMI, an unexpected interrupt, a panic) ran and de-energised the
     /// outputs; the board records it in the retained latch before the part resets.
     FaultHandler = 9,
+    /// The two channels of a [`DualSwitch`](crate::DualSwitch) disagreed longer than the
+    /// discrepancy time, or a trip ended without both channels having shown it: one is stuck.
+    Discrepancy = 10,
 }
 
 impl Cause {
@@ -54,6 +57,7 @@ impl Cause {
             7 => Cause::OutputFault,
             8 => Cause::Reset,
             9 => Cause::FaultHandler,
+            10 => Cause::Discrepancy,
             _ => return None,
         })
     }
@@ -70,6 +74,7 @@ impl Cause {
             Cause::OutputFault => "output-fault",
             Cause::Reset => "reset",
             Cause::FaultHandler => "fault-handler",
+            Cause::Discrepancy => "discrepancy",
         }
     }
 }

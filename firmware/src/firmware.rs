@@ -299,7 +299,17 @@ where
                     return self.fault(Cause::Chatter, now);
                 }
                 self.resetter.idle_tick(reset_level);
-                match selftest::step(&mut phase, &self.cfg.selftest, now, sample.trip, self.sensor.has_supply()) {
+                // With the supply off every channel must read the trip (a two-channel sensor with
+                // one channel stuck at rest fails here); at rest, every channel must be at rest.
+                let trip = match phase {
+                    Phase::Start => {
+                        self.sensor.clear_cycle();
+                        sample.trip
+                    }
+                    Phase::SupplyOff(_) => sample.trip && self.sensor.channels_cycled(),
+                    Phase::WaitRest(_) => sample.trip,
+                };
+                match selftest::step(&mut phase, &self.cfg.selftest, now, trip, self.sensor.has_supply()) {
                     Step::Continue(supply) => {
                         if let Some(on) = supply {
                             self.sensor.set_supply(on);
@@ -315,6 +325,9 @@ where
                 if sample.fault {
                     return self.fault(Cause::SensorFault, now);
                 }
+                if sample.discrepancy {
+                    return self.fault(Cause::Discrepancy, now);
+                }
                 if self.chatter.observe(now, sample.trip) {
                     return self.fault(Cause::Chatter, now);
                 }
@@ -328,6 +341,12 @@ where
                 }
             }
             State::Tripped => {
+                // A stuck channel of a two-channel sensor: disagreeing too long, or the trip over
+                // without every channel having shown it (dual.rs). Never re-arm on one channel.
+                if sample.discrepancy || (!sample.trip && !self.sensor.channels_cycled()) {
+                    self.resetter.idle_tick(reset_level);
+                    return self.fault(Cause::Discrepancy, now);
+                }
                 let (policy, press) = (self.cfg.reset, self.cfg.reset_press);
                 if self.resetter.tripped_tick(policy, press, now, sample.trip, reset_level) {
                     self.arm(now);
@@ -367,6 +386,7 @@ where
 
     fn arm(&mut self, now: Micros) {
         self.debounce.clear();
+        self.sensor.clear_cycle();
         if self.out.energise() {
             self.state = State::Armed;
             self.retained = Retained::new(None, self.boots);

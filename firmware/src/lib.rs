@@ -116,6 +116,7 @@ panic_free_modules! {
     clock;
     debounce;
     detector;
+    dual;
     event_log;
     firmware;
     pins;
@@ -130,6 +131,7 @@ panic_free_modules! {
 pub use clock::{Clock, Micros};
 pub use debounce::{ChatterGuard, Filter};
 pub use detector::{ResetPolicy, State};
+pub use dual::DualSwitch;
 pub use event_log::{Cause, EventLog, TripEvent};
 pub use firmware::{Config, ConfigError, Firmware};
 pub use pins::Unconnected;

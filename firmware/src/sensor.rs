@@ -38,6 +38,8 @@ pub struct Sample {
     pub velocity_um_per_s: i32,
     /// The reading is implausible (ADC out of its valid window, ADC error, pin read error).
     pub fault: bool,
+    /// Two-channel sensors: the channels have disagreed for longer than the discrepancy time.
+    pub discrepancy: bool,
 }
 
 /// A collision sensor as the detector sees it.
@@ -58,6 +60,15 @@ pub trait Sensor {
 
     /// The travel at which this sensor trips, micrometres (the stroke budget's starting point).
     fn trip_travel_um(&self) -> i32;
+
+    /// Two-channel sensors: every channel has shown a trip since [`Sensor::clear_cycle`] (the
+    /// firmware re-arms after a trip only if so). Single-channel sensors: always `true`.
+    fn channels_cycled(&self) -> bool {
+        true
+    }
+
+    /// Start watching for a new cycle of every channel (called when the firmware arms).
+    fn clear_cycle(&mut self) {}
 }
 
 /// How the digital travel switch is wired.
@@ -137,7 +148,13 @@ impl<P: InputPin, Q: OutputPin> DigitalSwitch<P, Q> {
 impl<P: InputPin, Q: OutputPin> Sensor for DigitalSwitch<P, Q> {
     fn sample(&mut self, _now: Micros) -> Sample {
         let (trip, fault) = self.read_trip();
-        Sample { trip, travel_um: if trip { self.switch_travel_um } else { 0 }, velocity_um_per_s: 0, fault }
+        Sample {
+            trip,
+            travel_um: if trip { self.switch_travel_um } else { 0 },
+            velocity_um_per_s: 0,
+            fault,
+            discrepancy: false,
+        }
     }
 
     #[inline(always)]
@@ -290,6 +307,7 @@ impl<A: Adc> Sensor for AnalogTravel<A> {
             travel_um: mm_to_um(travel),
             velocity_um_per_s: mm_to_um(self.velocity),
             fault,
+            discrepancy: false,
         }
     }
 

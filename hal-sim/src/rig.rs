@@ -13,7 +13,7 @@
 
 use super::{PinFault, SimAdc, SimClock, SimPin};
 use flinch_firmware::{
-    AnalogConfig, AnalogTravel, Boot, Cause, Config, ConfigError, DigitalSwitch, Firmware, Micros, Mm, Sensor, State, SwitchKind,
+    AnalogConfig, AnalogTravel, Boot, Cause, Config, ConfigError, DigitalSwitch, DualSwitch, Firmware, Micros, Mm, Sensor, State, SwitchKind,
     TripEvent,
 };
 
@@ -24,6 +24,7 @@ pub const SIM_LOG: usize = 32;
 enum PlantInput {
     Switch { pin: SimPin, kind: SwitchKind, switch_travel_um: i32 },
     Analog { adc: SimAdc, cfg: AnalogConfig },
+    Dual { a: SimPin, kind_a: SwitchKind, b: SimPin, kind_b: SwitchKind, switch_travel_um: i32 },
 }
 
 /// Firmware plus its simulated peripherals.
@@ -72,7 +73,39 @@ impl SimRig<DigitalSwitch<SimPin, SimPin>> {
     pub fn switch_pin(&self) -> Option<&SimPin> {
         match &self.input {
             PlantInput::Switch { pin, .. } => Some(pin),
-            PlantInput::Analog { .. } => None,
+            PlantInput::Analog { .. } | PlantInput::Dual { .. } => None,
+        }
+    }
+}
+
+impl SimRig<DualSwitch<SimPin, SimPin, SimPin>> {
+    /// A rig with a two-channel travel switch (`dual.rs`): channel A of `kind_a`, channel B of
+    /// `kind_b` (opposite polarity: antivalent), both firing at `switch_travel_um`, on one switchable
+    /// supply, wired so that unpowered channels read as a trip. Starts as [`SimRig::digital_after`].
+    pub fn dual_after(
+        cfg: Config,
+        boot: Boot,
+        kind_a: SwitchKind,
+        kind_b: SwitchKind,
+        switch_travel_um: i32,
+        discrepancy_us: u32,
+    ) -> Result<Self, ConfigError> {
+        let supply = SimPin::new(false);
+        let a = SimPin::powered_by(kind_a.level_for(false), supply.clone(), kind_a.level_for(true));
+        let b = SimPin::powered_by(kind_b.level_for(false), supply.clone(), kind_b.level_for(true));
+        let sensor = DualSwitch::new(a.clone(), kind_a, b.clone(), kind_b, switch_travel_um, discrepancy_us)
+            .with_supply(supply.clone());
+        let input = PlantInput::Dual { a, kind_a, b, kind_b, switch_travel_um };
+        let mut rig = SimRig::with_sensor(cfg, boot, sensor, input)?;
+        rig.supply = Some(supply);
+        Ok(rig)
+    }
+
+    /// Channel A's and channel B's pin handles (inject faults with [`SimRig::inject_pin_fault`]).
+    pub fn channel_pins(&self) -> Option<(SimPin, SimPin)> {
+        match &self.input {
+            PlantInput::Dual { a, b, .. } => Some((a.clone(), b.clone())),
+            _ => None,
         }
     }
 }
@@ -89,7 +122,7 @@ impl SimRig<AnalogTravel<SimAdc>> {
     pub fn adc(&self) -> Option<&SimAdc> {
         match &self.input {
             PlantInput::Analog { adc, .. } => Some(adc),
-            PlantInput::Switch { .. } => None,
+            PlantInput::Switch { .. } | PlantInput::Dual { .. } => None,
         }
     }
 }
@@ -237,7 +270,24 @@ impl<S: Sensor> SimRig<S> {
                 let mm = Mm::saturating_from_num(travel_um) / 1000;
                 adc.set(cfg.counts_for(mm));
             }
+            PlantInput::Dual { a, kind_a, b, kind_b, switch_travel_um } => {
+                let before = (a.level(), b.level());
+                let tripped = travel_um >= *switch_travel_um;
+                a.set(kind_a.level_for(tripped));
+                b.set(kind_b.level_for(tripped));
+                let changed = (a.level(), b.level()) != before;
+                self.edge_if(changed);
+            }
         }
+    }
+
+    /// Inject a fault into any input pin of the rig (a channel of the switch); an observed level
+    /// change fires the edge interrupt, as EXTI on both edges of both channels does.
+    pub fn inject_pin_fault(&mut self, pin: &SimPin, fault: PinFault) {
+        let before = pin.level();
+        pin.set_fault(fault);
+        let changed = pin.level() != before;
+        self.edge_if(changed);
     }
 
     /// Inject a fault into the switch input; an observed level change fires the edge interrupt.

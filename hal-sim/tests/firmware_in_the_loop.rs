@@ -510,3 +510,117 @@ fn a_fault_right_after_the_reset_replaces_the_start_latch() {
     rig.advance_to(1.0);
     assert!(rig.stop_requested() && !rig.fw.is_armed());
 }
+
+// ---- Two-channel switch: a stuck channel ends in stop (ISO 13849-1 6.2.6, category 3) -----------
+
+type DualRig = SimRig<flinch_firmware::DualSwitch<flinch_hal_sim::SimPin, flinch_hal_sim::SimPin, flinch_hal_sim::SimPin>>;
+
+const NC: SwitchKind = SwitchKind::Inductive; // high at rest
+const NO: SwitchKind = SwitchKind::Magnetic { trip_high: true }; // low at rest: antivalent to NC
+const DISCREPANCY_US: u32 = 20_000;
+
+fn dual() -> DualRig {
+    let mut rig = SimRig::dual_after(cfg(), Boot::POWER_ON, NC, NO, 5_000, DISCREPANCY_US).unwrap();
+    rig.boot(50_000).unwrap();
+    rig
+}
+
+/// Press and release the reset button (60 ms) starting at `t`; returns the time after.
+fn press_reset(rig: &mut DualRig, t: f64) -> f64 {
+    rig.advance_to(t);
+    rig.set_reset(true);
+    rig.advance_to(t + 0.06);
+    rig.set_reset(false);
+    rig.advance_to(t + 0.07);
+    t + 0.07
+}
+
+#[test]
+fn dual_healthy_pair_trips_on_the_edge_and_re_arms_after_a_reset() {
+    let mut rig = dual();
+    assert!(rig.fw.is_armed());
+    rig.advance_to(0.010);
+    rig.set_travel_m(0.006);
+    assert!(rig.stop_requested(), "stopped in the edge interrupt");
+    assert_eq!(rig.detected_at_s(), Some(0.010));
+    rig.advance_to(0.1); // both channels agree: no discrepancy however long the trip
+    assert_eq!(rig.fw.state(), State::Tripped);
+    rig.set_travel_m(0.0);
+    press_reset(&mut rig, 0.2);
+    assert!(rig.fw.is_armed(), "{:?}", rig.fw.state());
+}
+
+#[test]
+fn dual_channel_stuck_at_rest_fails_the_start_up_test() {
+    let mut rig = SimRig::dual_after(cfg(), Boot::POWER_ON, NC, NO, 5_000, DISCREPANCY_US).unwrap();
+    let (_, b) = rig.channel_pins().unwrap();
+    b.set_fault(PinFault::StuckLow); // the NO channel stuck at rest: ignores the supply pulse
+    assert_eq!(rig.boot(50_000), Err(State::Fault(Cause::StuckInput)));
+    assert!(rig.stop_requested() && rig.category0_requested());
+}
+
+#[test]
+fn dual_channel_sticking_at_rest_while_armed_still_stops_and_never_re_arms() {
+    // The issue-10 case: a channel sticks at rest during operation, then the tool is pushed 6 mm back.
+    for stuck in ["a", "b"] {
+        let mut rig = dual();
+        let (a, b) = rig.channel_pins().unwrap();
+        rig.advance_to(0.5);
+        if stuck == "a" {
+            rig.inject_pin_fault(&a, PinFault::StuckHigh); // NC stuck at rest (high)
+        } else {
+            rig.inject_pin_fault(&b, PinFault::StuckLow); // NO stuck at rest (low)
+        }
+        assert!(rig.fw.is_armed(), "stuck at rest is invisible at rest");
+        rig.advance_to(1.0);
+        rig.set_travel_m(0.006);
+        assert!(rig.stop_requested(), "{stuck}: the healthy channel stops at once (1oo2)");
+        rig.advance_to(1.0 + f64::from(DISCREPANCY_US) * 1e-6 + 0.002);
+        assert_eq!(rig.fw.state(), State::Fault(Cause::Discrepancy), "{stuck}: found within the discrepancy time");
+        rig.set_travel_m(0.0);
+        let t = press_reset(&mut rig, 1.5);
+        rig.advance_to(t + 1.0);
+        assert!(rig.stop_requested(), "{stuck}: the self-test after the reset finds the stuck channel");
+        assert_eq!(rig.fw.state(), State::Fault(Cause::StuckInput));
+    }
+}
+
+#[test]
+fn dual_stuck_channel_found_even_by_a_trip_shorter_than_the_discrepancy_time() {
+    let mut rig = dual();
+    let (_, b) = rig.channel_pins().unwrap();
+    rig.advance_to(0.2);
+    rig.inject_pin_fault(&b, PinFault::StuckLow);
+    rig.advance_to(0.3);
+    rig.set_travel_m(0.006);
+    assert!(rig.stop_requested());
+    rig.advance_to(0.3005); // 0.5 ms: not even one tick
+    rig.set_travel_m(0.0);
+    rig.advance_to(0.302);
+    assert_eq!(rig.fw.state(), State::Fault(Cause::Discrepancy), "B never showed the trip");
+    rig.advance_to(2.0);
+    assert!(rig.stop_requested());
+}
+
+#[test]
+fn dual_channel_stuck_at_trip_or_wires_shorted_stop_without_a_demand() {
+    // A stuck at "trip": stops at once (1oo2), then the discrepancy latches a fault.
+    let mut rig = dual();
+    let (a, b) = rig.channel_pins().unwrap();
+    rig.advance_to(0.1);
+    rig.inject_pin_fault(&a, PinFault::StuckLow);
+    assert!(rig.stop_requested());
+    rig.advance_to(0.15);
+    assert_eq!(rig.fw.state(), State::Fault(Cause::Discrepancy));
+    // The two wires shorted together at rest (both read high): antivalent wiring sees it as a
+    // disagreement while the tool has not moved.
+    drop((a, b));
+    let mut rig = dual();
+    rig.advance_to(0.1);
+    let (_, b) = rig.channel_pins().unwrap();
+    rig.inject_pin_fault(&b, PinFault::StuckHigh);
+    assert!(rig.stop_requested(), "B reads 'trip': stop at once");
+    rig.advance_to(0.15);
+    assert_eq!(rig.fw.state(), State::Fault(Cause::Discrepancy));
+    assert!(rig.category0_requested());
+}
