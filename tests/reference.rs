@@ -263,6 +263,7 @@ scenes! {
     tables5_7_bistable_v020 => "tables5-7_bistable_v020.toml";
     tables5_7_bistable_v025 => "tables5-7_bistable_v025.toml";
     tables5_7_rigid => "tables5-7_rigid.toml";
+    robot_two_link => "robot_two_link.toml";
 }
 
 #[test]

@@ -59,6 +59,8 @@ pub struct Chain {
     pub joint_names: Vec<String>,
     /// Their kinds.
     pub joint_kinds: Vec<JointKind>,
+    /// Their `<limit lower upper>` (rad or m); `None` for `continuous` or an absent or empty limit.
+    pub joint_limits: Vec<Option<(f64, f64)>>,
     pub(crate) nodes: Vec<Node>,
     pub(crate) tip: usize,
 }
@@ -159,6 +161,7 @@ impl Chain {
         let mut chain_of_joint: HashMap<usize, (usize, JointKind)> = HashMap::new();
         let mut chain_names = Vec::new();
         let mut chain_kinds = Vec::new();
+        let mut chain_limits = Vec::new();
         for &j in &path_joints {
             let jt = &robot.joints[j];
             let kind = match jt.joint_type {
@@ -168,13 +171,16 @@ impl Chain {
                 ref t => {
                     return Err(err(
                         format!("joint \"{}\"", jt.name),
-                        format!("type {t:?} between base_link and tip_link; allowed: revolute, continuous, prismatic, fixed"),
+                        format!("type {} between base_link and tip_link; allowed: revolute, continuous, prismatic, fixed", format!("{t:?}").to_lowercase()),
                     ))
                 }
             };
             chain_of_joint.insert(j, (chain_names.len(), kind));
             chain_names.push(jt.name.clone());
             chain_kinds.push(kind);
+            let (lo, hi) = (jt.limit.lower, jt.limit.upper);
+            let limited = jt.joint_type != urdf_rs::JointType::Continuous && lo.is_finite() && hi.is_finite() && lo < hi;
+            chain_limits.push(limited.then_some((lo, hi)));
         }
         if chain_names.is_empty() {
             return Err(err(
@@ -240,6 +246,7 @@ impl Chain {
             tip_link: tip_link.to_string(),
             joint_names: chain_names,
             joint_kinds: chain_kinds,
+            joint_limits: chain_limits,
             nodes,
             tip,
         })

@@ -369,6 +369,8 @@ impl Tab<'_> {
 /// The file's text and every problem found so far.
 pub(super) struct Ctx<'t> {
     pub text: &'t str,
+    /// The scene file as named in messages: a path a key may be relative to (`robot.urdf`).
+    pub file: &'t str,
     pub issues: Vec<SceneIssue>,
 }
 

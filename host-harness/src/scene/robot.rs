@@ -1,7 +1,16 @@
 //! `[robot]`: the robot's compliance at the flange, a base-excited mass (eq 33,
 //! `plant/robot.rs`); absent, the robot is rigid.
-use super::check::{Bound::*, Ctx, Key, Tab, Ty};
+//!
+//! Either given as lumped values (`mass`, `stiffness`, `damping`: Table 7's m_r, k_r, c_r) or
+//! reduced from the robot's URDF at a configuration (`urdf`, `base_link`, `tip_link`, `joints`,
+//! `direction`, `joint_stiffness`, `joint_damping`; thesis eq 10-16, `src/kinematics`). The
+//! reduced values go into the same [`Robot`], so the plant uses them exactly as Table 7's, and
+//! they must lie in the same ranges.
+use super::check::{approx, num, Bound::*, Ctx, Key, SceneError, SceneIssue, Span, Tab, Ty};
 use super::model::Robot;
+use crate::kinematics::{self, Chain, KinError, Reduced};
+use std::path::{Path, PathBuf};
+use toml_edit::{ImDocument, Item, Value};
 
 /// The `[robot]` table in the top level.
 pub const TABLE: Key = Key::of(
@@ -18,12 +27,285 @@ pub const STIFFNESS: Key = Key::number("stiffness", "N/m", Incl(1e3), Incl(1e8),
 /// c_r.
 pub const DAMPING: Key = Key::number("damping", "N s/m", Incl(0.0), Incl(1e5), "71 N s/m for the Viper s650 (Table 7); 1e5 N s/m is beyond critical for the stiffest, heaviest arm in range", "c_r, the robot's damping at the flange");
 
+/// The URDF (instead of mass, stiffness, damping).
+pub const URDF: Key = Key::of("urdf", Ty::Text, "the robot's URDF file, relative to the scene file: m_r, k_r, c_r are then reduced from joint space (thesis eq 10-16); replaces mass, stiffness, damping")
+    .optional("mass, stiffness and damping are given");
+/// The chain's first link.
+pub const BASE_LINK: Key = Key::of("base_link", Ty::Text, "the URDF link the chain starts from (fixed; `direction` is in its frame); with urdf");
+/// The flange.
+pub const TIP_LINK: Key = Key::of("tip_link", Ty::Text, "the URDF link at the flange: its frame's origin is where the tool is held; with urdf");
+/// q.
+pub const JOINTS: Key = Key::of("joints", Ty::Table(PER_JOINT), "q, the configuration just before the collision (Table 7), rad (revolute) or m (prismatic); with urdf");
+/// u.
+pub const DIRECTION: Key = Key::of("direction", Ty::Table("a list [x, y, z] of numbers, not all zero"), "the approach direction in the base_link frame (any length); with urdf");
+/// diag K_q.
+pub const JOINT_STIFFNESS: Key = Key::of("joint_stiffness", Ty::Table(PER_JOINT), "K_q's diagonal (eq 11), N m/rad (revolute) or N/m (prismatic); with urdf");
+/// diag D_q.
+pub const JOINT_DAMPING: Key = Key::of("joint_damping", Ty::Table(PER_JOINT), "D_q's diagonal (eq 11), N m s/rad (revolute) or N s/m (prismatic); with urdf");
+
+const PER_JOINT: &str = "one number per moving joint: a list in chain order from base_link to tip_link, or a table by URDF joint name";
+
+/// The range of each configuration value: revolute.
+pub const Q_REVOLUTE: Span = Span { lo: Incl(-2.0 * std::f64::consts::PI), hi: Incl(2.0 * std::f64::consts::PI), unit: "rad", source: "one turn either way holds every pose of a joint" };
+/// Prismatic.
+pub const Q_PRISMATIC: Span = Span { lo: Incl(-10.0), hi: Incl(10.0), unit: "m", source: "beyond the stroke of a robot's linear axis" };
+/// Joint stiffness.
+pub const K_JOINT: Span = Span { lo: Incl(1e2), hi: Incl(1e9), unit: "N m/rad or N/m", source: "joint stiffness of arms is 1e4-1e7 N m/rad (harmonic and cycloidal drives)" };
+/// Joint damping.
+pub const D_JOINT: Span = Span { lo: Incl(0.0), hi: Incl(1e6), unit: "N m s/rad or N s/m", source: "beyond critical for the stiffest joint at the largest inertia in range" };
+/// Direction components.
+const U_SPAN: Span = Span { lo: Incl(-1e3), hi: Incl(1e3), unit: "", source: "a direction: only its orientation matters" };
+
 /// The keys of `[robot]`.
-pub const KEYS: &[Key] = &[MASS, STIFFNESS, DAMPING];
+pub const KEYS: &[Key] = &[MASS, STIFFNESS, DAMPING, URDF, BASE_LINK, TIP_LINK, JOINTS, DIRECTION, JOINT_STIFFNESS, JOINT_DAMPING];
+
+/// The URDF keys.
+const URDF_KEYS: [&Key; 7] = [&URDF, &BASE_LINK, &TIP_LINK, &JOINTS, &DIRECTION, &JOINT_STIFFNESS, &JOINT_DAMPING];
+
+/// The URDFs shipped in `scenes/robots/`, embedded so the shipped scenes run from any directory.
+const SHIPPED_URDFS: &[(&str, &str)] = &[("robots/two_link.urdf", include_str!("../../../scenes/robots/two_link.urdf"))];
+
+/// A `[robot]` given by its URDF: what `flinch robot` prints and sweeps.
+#[derive(Debug, Clone)]
+pub struct UrdfRobot {
+    /// The URDF as named in messages (resolved against the scene file).
+    pub urdf: String,
+    /// The chain base_link -> tip_link.
+    pub chain: Chain,
+    /// q, rad or m, chain order.
+    pub joints: Vec<f64>,
+    /// The approach direction, base frame.
+    pub direction: [f64; 3],
+    /// K_q's diagonal.
+    pub joint_stiffness: Vec<f64>,
+    /// D_q's diagonal.
+    pub joint_damping: Vec<f64>,
+}
+
+impl UrdfRobot {
+    /// m_r, k_r, c_r at the scene's configuration.
+    pub fn reduce(&self) -> Result<Reduced, KinError> {
+        self.reduce_at(&self.joints)
+    }
+
+    /// m_r, k_r, c_r at another configuration.
+    pub fn reduce_at(&self, q: &[f64]) -> Result<Reduced, KinError> {
+        kinematics::reduce(&self.chain, q, self.direction, &self.joint_stiffness, &self.joint_damping)
+    }
+}
+
+/// The `[robot]` of a scene's text when it is given by a URDF (`None` for lumped values or a
+/// rigid robot); `file` names the scene and is the path `urdf` is relative to.
+pub fn urdf_robot(text: &str, file: &str) -> Result<Option<UrdfRobot>, SceneError> {
+    let fail = |issues: Vec<SceneIssue>| SceneError { file: file.to_string(), issues };
+    let doc = ImDocument::parse(text).map_err(|e| fail(vec![SceneIssue { line: None, key: String::new(), message: format!("not valid TOML: {}", e.message().trim()) }]))?;
+    let Some(t) = doc.as_table().get("robot").and_then(Item::as_table_like) else { return Ok(None) };
+    if !t.contains_key(URDF.name) {
+        return Ok(None);
+    }
+    let mut cx = Ctx { text, file, issues: Vec::new() };
+    let tab = Tab { path: "robot".into(), t, line: None };
+    let spec = read_urdf_robot(&mut cx, &tab);
+    match spec {
+        Some(s) if cx.issues.is_empty() => Ok(Some(s)),
+        _ => {
+            let mut issues = cx.issues;
+            issues.sort_by_key(|i| i.line);
+            Err(fail(issues))
+        }
+    }
+}
+
+/// Where `urdf` points: relative to the scene file's folder, else (a shipped scene run by name)
+/// a shipped URDF. Returns the name for messages and the text.
+fn read_urdf(scene_file: &str, rel: &str) -> Result<(String, String), String> {
+    let p = Path::new(rel);
+    let path: PathBuf = if p.is_absolute() || scene_file == "<stdin>" {
+        p.to_path_buf()
+    } else {
+        Path::new(scene_file).parent().map_or_else(|| p.to_path_buf(), |d| d.join(p))
+    };
+    match std::fs::read_to_string(&path) {
+        Ok(text) => Ok((path.display().to_string(), text)),
+        Err(e) => {
+            let key = rel.trim_start_matches("./");
+            match SHIPPED_URDFS.iter().find(|(k, _)| *k == key) {
+                Some((k, text)) if !path.exists() => Ok((format!("scenes/{k}"), text.to_string())),
+                _ => Err(format!("cannot read the URDF {}: {e}", path.display())),
+            }
+        }
+    }
+}
+
+/// Reports a [`KinError`] at the scene key it comes from.
+fn kin_bad(cx: &mut Ctx, t: &Tab, e: &KinError) {
+    let key = match e.element.as_str() {
+        k @ ("joints" | "direction" | "joint_stiffness" | "joint_damping" | "base_link" | "tip_link") => k,
+        _ => "urdf",
+    };
+    cx.bad(t, key, e.to_string());
+}
+
+/// A list of numbers, each in `span`.
+fn numbers(cx: &mut Ctx, t: &Tab, key: &Key, span: impl Fn(usize) -> Span) -> Option<Vec<f64>> {
+    let Some(item) = t.t.get(key.name) else {
+        cx.missing(t, key.name, &key.what());
+        return None;
+    };
+    let Some(list) = item.as_value().and_then(Value::as_array) else {
+        cx.bad(t, key.name, format!("must be {}", key.what()));
+        return None;
+    };
+    let mut out = Vec::new();
+    for (i, v) in list.iter().enumerate() {
+        let x = match v {
+            Value::Integer(n) => *n.value() as f64,
+            Value::Float(f) => *f.value(),
+            other => {
+                cx.bad(t, key.name, format!("item {} must be a number, got {}", i + 1, other.to_string().trim()));
+                return None;
+            }
+        };
+        let s = span(i);
+        if !x.is_finite() || !s.contains(x) {
+            cx.bad(t, key.name, format!("item {}: {}", i + 1, s.refuse(x)));
+            return None;
+        }
+        out.push(x);
+    }
+    Some(out)
+}
+
+/// One number per chain joint: a list in chain order, or a table by joint name.
+fn per_joint(cx: &mut Ctx, t: &Tab, key: &Key, chain: &Chain, span: impl Fn(usize) -> Span) -> Option<Vec<f64>> {
+    let n = chain.dof();
+    let names = chain.joint_names.join(", ");
+    if let Some(table) = t.t.get(key.name).and_then(Item::as_table_like) {
+        let mut out = vec![f64::NAN; n];
+        let mut ok = true;
+        for (name, v) in table.iter() {
+            let Some(i) = chain.joint_names.iter().position(|j| j == name) else {
+                cx.bad(t, key.name, format!("\"{name}\" is not a moving joint of the chain \"{}\" -> \"{}\" ({names})", chain.base_link, chain.tip_link));
+                ok = false;
+                continue;
+            };
+            let x = match v.as_value() {
+                Some(Value::Integer(k)) => *k.value() as f64,
+                Some(Value::Float(f)) => *f.value(),
+                _ => {
+                    cx.bad(t, key.name, format!("{name} must be a number"));
+                    ok = false;
+                    continue;
+                }
+            };
+            let s = span(i);
+            if !x.is_finite() || !s.contains(x) {
+                cx.bad(t, key.name, format!("{name}: {}", s.refuse(x)));
+                ok = false;
+                continue;
+            }
+            out[i] = x;
+        }
+        let missing: Vec<&str> = chain.joint_names.iter().zip(&out).filter(|(_, x)| x.is_nan()).map(|(j, _)| j.as_str()).collect();
+        if ok && !missing.is_empty() {
+            cx.bad(t, key.name, format!("gives no value for {}; the chain has {n} moving joints ({names})", missing.join(", ")));
+            return None;
+        }
+        return ok.then_some(out);
+    }
+    let out = numbers(cx, t, key, span)?;
+    if out.len() != n {
+        cx.bad(
+            t,
+            key.name,
+            format!("has {} values; the chain \"{}\" -> \"{}\" has {n} moving joints ({names})", out.len(), chain.base_link, chain.tip_link),
+        );
+        return None;
+    }
+    Some(out)
+}
+
+fn read_urdf_robot(cx: &mut Ctx, t: &Tab) -> Option<UrdfRobot> {
+    let rel = cx.string(t, &URDF);
+    let base = cx.string(t, &BASE_LINK);
+    let tip = cx.string(t, &TIP_LINK);
+    let direction = numbers(cx, t, &DIRECTION, |_| U_SPAN);
+    let direction = match direction {
+        Some(d) if d.len() == 3 && d.iter().any(|x| *x != 0.0) => Some([d[0], d[1], d[2]]),
+        Some(d) => {
+            cx.bad(t, DIRECTION.name, format!("must be {}, got {} values{}", DIRECTION.what(), d.len(), if d.len() == 3 { ", all zero" } else { "" }));
+            None
+        }
+        None => None,
+    };
+    let (rel, base, tip) = (rel?, base?, tip?);
+    let (label, text) = match read_urdf(cx.file, &rel) {
+        Ok(x) => x,
+        Err(m) => {
+            cx.bad(t, URDF.name, m);
+            return None;
+        }
+    };
+    let chain = match Chain::from_urdf_str(&text, &label, &base, &tip) {
+        Ok(c) => c,
+        Err(e) => {
+            kin_bad(cx, t, &e);
+            return None;
+        }
+    };
+    let kinds = chain.joint_kinds.clone();
+    let joints = per_joint(cx, t, &JOINTS, &chain, |i| if kinds[i] == kinematics::JointKind::Revolute { Q_REVOLUTE } else { Q_PRISMATIC });
+    let k = per_joint(cx, t, &JOINT_STIFFNESS, &chain, |_| K_JOINT);
+    let d = per_joint(cx, t, &JOINT_DAMPING, &chain, |_| D_JOINT);
+    let joints = joints?;
+    // Inside the URDF's own joint limits.
+    for (i, q) in joints.iter().enumerate() {
+        if let Some((lo, hi)) = chain.joint_limits[i] {
+            if *q < lo || *q > hi {
+                cx.bad(
+                    t,
+                    JOINTS.name,
+                    format!("joint \"{}\" at {} is outside its URDF <limit> [{}, {}] ({label})", chain.joint_names[i], num(*q), num(lo), num(hi)),
+                );
+            }
+        }
+    }
+    Some(UrdfRobot { urdf: label, chain, joints, direction: direction?, joint_stiffness: k?, joint_damping: d? })
+}
 
 /// Reads `[robot]`.
 pub(super) fn robot(cx: &mut Ctx, t: &Tab) -> Option<Robot> {
     cx.check_keys(t, KEYS, "");
+    if t.has(URDF.name) {
+        for k in [&MASS, &STIFFNESS, &DAMPING] {
+            if t.has(k.name) {
+                cx.bad(t, k.name, format!("is given with urdf, which reduces {} from the URDF; give one or the other", k.name));
+            }
+        }
+        let spec = read_urdf_robot(cx, t)?;
+        let r = match spec.reduce() {
+            Ok(r) => r,
+            Err(e) => {
+                kin_bad(cx, t, &e);
+                return None;
+            }
+        };
+        // The reduced values must lie where lumped ones would be accepted.
+        let mut ok = true;
+        for (key, x) in [(&MASS, r.mass_kg), (&STIFFNESS, r.stiffness_npm), (&DAMPING, r.damping_nspm)] {
+            let s = key.span().expect("number keys");
+            if !s.contains(x) {
+                cx.bad(t, URDF.name, format!("reduces to {} = {} at this configuration and direction, outside the range of [robot] {}: {}", key.name, approx(x), key.name, s.refuse(x)));
+                ok = false;
+            }
+        }
+        return ok.then_some(Robot { mass: r.mass_kg, stiffness: r.stiffness_npm, damping: r.damping_nspm });
+    }
+    for k in URDF_KEYS {
+        if t.has(k.name) {
+            cx.bad(t, k.name, "is only read with urdf; give urdf, or remove it and give mass, stiffness, damping".to_string());
+        }
+    }
     let mass = cx.number(t, &MASS);
     let stiffness = cx.number(t, &STIFFNESS);
     let damping = cx.number(t, &DAMPING);
