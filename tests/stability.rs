@@ -469,3 +469,66 @@ fn output_interval_zero_records_every_step_and_ends() {
     let (s, history) = sim::run(&sc, true).unwrap();
     assert!(history.len() as u64 >= s.steps, "{} samples for {} steps", history.len(), s.steps);
 }
+
+/// Issue 18: a summary field that cannot be defined is null with the reason, never a number
+/// outside its physical range. Table 2's linear module with a 0.1 mm gap: the first contact comes
+/// while the spring still accelerates the tool (a driven contact), which left at 10.5 times its
+/// approach speed; a 5e-324 m gap gave 2e21.
+#[test]
+fn driven_first_contact_has_no_restitution_but_a_reason() {
+    let text = std::fs::read_to_string(flinch_tests::scene_path("table2_linear.toml")).unwrap();
+    for gap in ["1e-4", "1e-6", "1e-3"] {
+        let t = text.replacen("gap = 0.15 ", &format!("gap = {gap} "), 1);
+        let sc = scene::parse(&t, "driven.toml").unwrap_or_else(|e| panic!("{e}"));
+        let s = run_checked(&sc).unwrap().expect("runs");
+        match s.achieved_restitution {
+            Some(e) => assert!((0.0..=1.0).contains(&e), "gap {gap}: restitution {e}"),
+            None => {
+                let why = s.achieved_restitution_null_reason.as_deref().unwrap_or_else(|| panic!("gap {gap}: null without a reason"));
+                assert!(why.contains("driven") || why.contains("not an impact") || why.contains("had not ended"), "{why}");
+            }
+        }
+        if gap == "1e-4" {
+            assert!(s.achieved_restitution.is_none(), "gap 1e-4 is the issue's driven contact: {s:?}");
+        }
+    }
+    // The isolated impact still reports its restitution, with no reason.
+    let s = run_checked(&scene::parse(&text, "t2.toml").unwrap()).unwrap().unwrap();
+    assert!(s.achieved_restitution.is_some_and(|e| (0.0..=1.0).contains(&e)), "{s:?}");
+    assert_eq!(s.achieved_restitution_null_reason, None);
+}
+
+#[test]
+fn undefined_summary_fields_say_why() {
+    // Restitution: the ratio outside [0, 1] is refused, the edges kept.
+    assert_eq!(sim::achieved_restitution(Some(0.019), Some(-0.2)).0, None);
+    assert!(sim::achieved_restitution(Some(0.019), Some(-0.2)).1.unwrap().contains("driven"));
+    assert_eq!(sim::achieved_restitution(Some(1.0), Some(-1.0)), (Some(1.0), None));
+    assert_eq!(sim::achieved_restitution(Some(1.0), Some(0.0)), (Some(0.0), None));
+    assert_eq!(sim::achieved_restitution(Some(1.0), Some(-1.0000017)), (Some(1.0), None), "integration error at e = 1");
+    assert_eq!(sim::achieved_restitution(Some(1.0), Some(-1.01)).0, None);
+    assert_eq!(sim::achieved_restitution(Some(1.0), Some(0.5)).0, None, "a tool still moving in: not a rebound");
+    assert!(sim::achieved_restitution(None, None).1.unwrap().contains("no tool-target contact"));
+    assert!(sim::achieved_restitution(Some(1.0), None).1.unwrap().contains("had not ended"));
+    // Detection delay: never negative.
+    assert_eq!(sim::detection_delay(Some(0.25), Some(0.2)).0, None);
+    assert!(sim::detection_delay(Some(0.25), Some(0.2)).1.unwrap().contains("before the first contact"));
+    assert_eq!(sim::detection_delay(Some(0.25), Some(0.25)), (Some(0.0), None));
+    assert!(sim::detection_delay(Some(0.25), None).1.unwrap().contains("nothing detected"));
+}
+
+/// Braking commanded after the end of the run is reported as such, not as if simulated.
+#[test]
+fn events_after_the_run_are_flagged() {
+    let text = std::fs::read_to_string(flinch_tests::scene_path("tables5-7_bistable.toml")).unwrap();
+    // Contact near 0.3 s, detection a few ms later, 16 ms dead time, 25 ms braking: end at 0.3 s.
+    let s0 = run_checked(&scene::parse(&text, "a.toml").unwrap()).unwrap().unwrap();
+    let end = s0.t_detect.unwrap() + 0.005;
+    let t = text.replacen("duration = 0.6 ", &format!("duration = {end} "), 1);
+    let s = run_checked(&scene::parse(&t, "short.toml").unwrap_or_else(|e| panic!("{e}"))).unwrap().unwrap();
+    assert!(s.t_brake.unwrap() > end && s.t_stop.unwrap() > end, "{s:?}");
+    for name in ["t_brake", "t_stop"] {
+        assert!(s.warnings.iter().any(|w| w.starts_with(name) && w.contains("after the end of the run")), "{name}: {:?}", s.warnings);
+    }
+    assert!(!s0.warnings.iter().any(|w| w.contains("after the end of the run")), "{:?}", s0.warnings);
+}
