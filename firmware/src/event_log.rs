@@ -42,6 +42,9 @@ pub enum Cause {
     /// The two channels of a [`DualSwitch`](crate::DualSwitch) disagreed longer than the
     /// discrepancy time, or a trip ended without both channels having shown it: one is stuck.
     Discrepancy = 10,
+    /// External device monitoring: a stop relay did not follow the stop output within the settle
+    /// time (welded, stuck, feedback wire cut or shorted), or was not released before arming.
+    EdmMismatch = 11,
 }
 
 impl Cause {
@@ -58,6 +61,7 @@ impl Cause {
             8 => Cause::Reset,
             9 => Cause::FaultHandler,
             10 => Cause::Discrepancy,
+            11 => Cause::EdmMismatch,
             _ => return None,
         })
     }
@@ -75,6 +79,7 @@ impl Cause {
             Cause::Reset => "reset",
             Cause::FaultHandler => "fault-handler",
             Cause::Discrepancy => "discrepancy",
+            Cause::EdmMismatch => "edm-mismatch",
         }
     }
 }

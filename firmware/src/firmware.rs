@@ -14,6 +14,7 @@ use crate::clock::{Clock, Micros};
 use crate::debounce::{ChatterGuard, ChatterState, Debouncer, Filter};
 use crate::detector::{ResetPolicy, ResetTracker, State};
 use crate::event_log::{Cause, EventLog, FLAG_EDGE, FLAG_ESCALATED, FLAG_FILTERED, FLAG_RETAINED};
+use crate::edm::{Feedback, NoFeedback, Reading};
 use crate::reset::{Boot, ResetCause, ResetPress, Retained, StartPolicy};
 use crate::selftest::{self, Phase, SelfTestConfig, Step};
 use crate::sensor::{Sample, Sensor};
@@ -45,6 +46,9 @@ pub struct Config {
     pub start: StartPolicy,
     /// What counts as a deliberate reset press (acts on release; too short or too long is refused).
     pub reset_press: ResetPress,
+    /// Time the stop relays have to follow a change of the stop output before a read-back mismatch
+    /// is a fault (`edm.rs`), microseconds.
+    pub edm_settle_us: u32,
 }
 
 impl Config {
@@ -64,6 +68,7 @@ impl Config {
             selftest: SelfTestConfig { supply_off_settle_us: 1_000, rest_quiet_us: 2_000 },
             start: StartPolicy::ManualReset,
             reset_press: ResetPress::DEFAULT,
+            edm_settle_us: 20_000,
         }
     }
 
@@ -89,6 +94,9 @@ impl Config {
         }
         if matches!(self.chatter, Some(ChatterGuard { max_transitions: 0, .. })) {
             return Err(ConfigError::ChatterLimitZero);
+        }
+        if self.edm_settle_us >= 1 << 30 {
+            return Err(ConfigError::EdmSettleRange);
         }
         if self.reset_press.min_us == 0
             || self.reset_press.min_us > self.reset_press.max_us
@@ -119,6 +127,8 @@ pub enum ConfigError {
     ChatterLimitZero,
     /// `reset_press` is not `0 < min_us <= max_us < 2^30`.
     ResetPressRange,
+    /// `edm_settle_us` is not below 2^30.
+    EdmSettleRange,
 }
 
 impl ConfigError {
@@ -134,6 +144,7 @@ impl ConfigError {
             ConfigError::DecelerationZero => "budget.decel_um_per_s2 must be > 0",
             ConfigError::StrokeNotPositive => "budget.stroke_um must be > 0",
             ConfigError::ChatterLimitZero => "chatter.max_transitions must be >= 1",
+            ConfigError::EdmSettleRange => "edm_settle_us must be below 2^30 us",
             ConfigError::ResetPressRange => {
                 "reset_press must have 0 < min_us <= max_us < 2^30 us (a zero minimum lets a glitch reset)"
             }
@@ -151,8 +162,8 @@ impl core::fmt::Display for ConfigError {
 ///
 /// Type parameters: `C` the clock, `S` the sensor, `STOP` and `ESC` the stop and escalation outputs,
 /// `RST` the reset input ([`Unconnected`](crate::Unconnected) if there is none), `LOG` the event-log
-/// capacity.
-pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16> {
+/// capacity, `FB` the stop output's read-back ([`NoFeedback`] unless [`Firmware::with_feedback`]).
+pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16, FB = NoFeedback> {
     cfg: Config,
     clock: C,
     sensor: S,
@@ -170,9 +181,11 @@ pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16> {
     log: EventLog<LOG>,
     retained: Retained,
     boots: u32,
+    feedback: FB,
+    edm_mismatch_since: Option<Micros>,
 }
 
-impl<C, S, STOP, ESC, RST, const LOG: usize> Firmware<C, S, STOP, ESC, RST, LOG>
+impl<C, S, STOP, ESC, RST, const LOG: usize> Firmware<C, S, STOP, ESC, RST, LOG, NoFeedback>
 where
     C: Clock,
     S: Sensor,
@@ -221,6 +234,8 @@ where
             log: EventLog::new(),
             retained: Retained::default(),
             boots: 0,
+            feedback: NoFeedback,
+            edm_mismatch_since: None,
         };
         let now = fw.clock.now();
         let record = boot.retained.decode();
@@ -247,6 +262,42 @@ where
         Ok(fw)
     }
 
+    /// Read the stop output back through `feedback` ([`Edm`](crate::Edm): the two relays' NC mirror
+    /// contacts) from now on. Call it right after construction, before the first tick.
+    pub fn with_feedback<FB: Feedback>(self, feedback: FB) -> Firmware<C, S, STOP, ESC, RST, LOG, FB> {
+        Firmware {
+            cfg: self.cfg,
+            clock: self.clock,
+            sensor: self.sensor,
+            out: self.out,
+            reset: self.reset,
+            state: self.state,
+            fast_edge: self.fast_edge,
+            debounce: self.debounce,
+            chatter: self.chatter,
+            watchdog: self.watchdog,
+            resetter: self.resetter,
+            detected_at: self.detected_at,
+            verdict: self.verdict,
+            last_sample: self.last_sample,
+            log: self.log,
+            retained: self.retained,
+            boots: self.boots,
+            feedback,
+            edm_mismatch_since: None,
+        }
+    }
+}
+
+impl<C, S, STOP, ESC, RST, const LOG: usize, FB> Firmware<C, S, STOP, ESC, RST, LOG, FB>
+where
+    C: Clock,
+    S: Sensor,
+    STOP: OutputPin,
+    ESC: OutputPin,
+    RST: InputPin,
+    FB: Feedback,
+{
     /// The edge interrupt's entry point (call it on both edges of the switch input).
     ///
     /// Armed and unfiltered: read the pin; on a trip write the stop pin at once, then do the
@@ -289,6 +340,7 @@ where
         if let Err(cause) = self.watchdog.check(now) {
             self.fault(cause, now);
         }
+        self.check_edm(now);
         let sample = self.sensor.sample(now);
         self.last_sample = sample;
         let reset_level = self.reset.is_high().unwrap_or(false);
@@ -364,6 +416,33 @@ where
         }
     }
 
+    /// External device monitoring: each relay must follow the stop output within the settle time.
+    fn check_edm(&mut self, now: Micros) {
+        let want_released = self.out.stop_requested();
+        let ok = match self.feedback.read() {
+            Reading::NotMonitored => return,
+            Reading::Released(a, b) => a == want_released && b == want_released,
+            Reading::Error => false,
+        };
+        if ok {
+            self.edm_mismatch_since = None;
+            return;
+        }
+        let since = *self.edm_mismatch_since.get_or_insert(now);
+        if now.since(since) > self.cfg.edm_settle_us {
+            self.fault(Cause::EdmMismatch, now);
+        }
+    }
+
+    /// Both relays released (or no read-back): the EDM start check before energising.
+    fn relays_released(&mut self) -> bool {
+        match self.feedback.read() {
+            Reading::NotMonitored => true,
+            Reading::Released(a, b) => a && b,
+            Reading::Error => false,
+        }
+    }
+
     /// Record a trip whose stop write has already happened.
     fn commit_trip(&mut self, now: Micros, first_seen: Micros, travel_um: i32, closing_um_per_s: u32, flags: u8) {
         let verdict = self.cfg.budget.check_at(travel_um, closing_um_per_s);
@@ -387,6 +466,10 @@ where
     fn arm(&mut self, now: Micros) {
         self.debounce.clear();
         self.sensor.clear_cycle();
+        if !self.relays_released() {
+            return self.fault(Cause::EdmMismatch, now);
+        }
+        self.edm_mismatch_since = None;
         if self.out.energise() {
             self.state = State::Armed;
             self.retained = Retained::new(None, self.boots);

@@ -117,6 +117,7 @@ panic_free_modules! {
     debounce;
     detector;
     dual;
+    edm;
     event_log;
     firmware;
     pins;
@@ -132,6 +133,7 @@ pub use clock::{Clock, Micros};
 pub use debounce::{ChatterGuard, Filter};
 pub use detector::{ResetPolicy, State};
 pub use dual::DualSwitch;
+pub use edm::{Edm, Feedback, NoFeedback};
 pub use event_log::{Cause, EventLog, TripEvent};
 pub use firmware::{Config, ConfigError, Firmware};
 pub use pins::Unconnected;

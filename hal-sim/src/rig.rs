@@ -13,7 +13,7 @@
 
 use super::{PinFault, SimAdc, SimClock, SimPin};
 use flinch_firmware::{
-    AnalogConfig, AnalogTravel, Boot, Cause, Config, ConfigError, DigitalSwitch, DualSwitch, Firmware, Micros, Mm, Sensor, State, SwitchKind,
+    AnalogConfig, AnalogTravel, Boot, Cause, Config, ConfigError, DigitalSwitch, DualSwitch, Edm, Firmware, Micros, Mm, Sensor, State, SwitchKind,
     TripEvent,
 };
 
@@ -30,7 +30,7 @@ enum PlantInput {
 /// Firmware plus its simulated peripherals.
 pub struct SimRig<S> {
     /// The firmware under test (read its state, log, verdicts directly if needed).
-    pub fw: Firmware<SimClock, S, SimPin, SimPin, SimPin, SIM_LOG>,
+    pub fw: Firmware<SimClock, S, SimPin, SimPin, SimPin, SIM_LOG, Edm<SimPin, SimPin>>,
     /// The clock handle (stall it with [`SimClock::set_stalled`]).
     pub clock: SimClock,
     /// The stop output (low = stop requested).
@@ -39,6 +39,12 @@ pub struct SimRig<S> {
     pub escalation: SimPin,
     /// The reset input (drive high for a reset press).
     pub reset: SimPin,
+    /// The EDM inputs: the NC mirror contacts of the two stop relays K1, K2 (high = released). The
+    /// rig's relays follow the stop output before every tick; a welded relay is
+    /// `k1.set_fault(PinFault::StuckLow)` (never reads released).
+    pub k1: SimPin,
+    /// See [`SimRig::k1`].
+    pub k2: SimPin,
     /// The sensor supply output, digital sensors only.
     pub supply: Option<SimPin>,
     input: PlantInput,
@@ -133,7 +139,9 @@ impl<S: Sensor> SimRig<S> {
         let stop = SimPin::new(true); // whatever the pin was: the firmware must drop it at once
         let escalation = SimPin::new(true);
         let reset = SimPin::new(false);
-        let fw = Firmware::after_reset(cfg, boot, clock.clone(), sensor, stop.clone(), escalation.clone(), reset.clone())?;
+        let (k1, k2) = (SimPin::new(true), SimPin::new(true));
+        let fw = Firmware::after_reset(cfg, boot, clock.clone(), sensor, stop.clone(), escalation.clone(), reset.clone())?
+            .with_feedback(Edm::new(k1.clone(), k2.clone()));
         let tick_us = i64::from(cfg.tick_period_us);
         Ok(SimRig {
             fw,
@@ -141,6 +149,8 @@ impl<S: Sensor> SimRig<S> {
             stop,
             escalation,
             reset,
+            k1,
+            k2,
             supply: None,
             input,
             epoch: Micros(0),
@@ -188,7 +198,8 @@ impl<S: Sensor> SimRig<S> {
             self.reset.set(true);
             for _ in 0..press_ticks {
                 self.clock.set(t);
-                self.fw.tick();
+                self.relays_follow();
+            self.fw.tick();
                 t = t.plus(tick);
             }
             self.reset.set(false);
@@ -197,6 +208,7 @@ impl<S: Sensor> SimRig<S> {
         let limit = u64::from(max_us) / self.tick_us.max(1) as u64 + 1;
         for _ in 0..limit {
             self.clock.set(t);
+            self.relays_follow();
             self.fw.tick();
             if self.fw.is_armed() {
                 self.epoch = t.plus(self.tick_us as u32);
@@ -208,6 +220,14 @@ impl<S: Sensor> SimRig<S> {
             t = t.plus(self.tick_us as u32);
         }
         Err(self.fw.state())
+    }
+
+    /// The stop relays follow the stop output (released while it is low); faults injected on
+    /// [`SimRig::k1`] / [`SimRig::k2`] override what they show.
+    fn relays_follow(&mut self) {
+        let released = !self.stop.level();
+        self.k1.set(released);
+        self.k2.set(released);
     }
 
     /// Convert simulation seconds to the firmware's clock.
@@ -235,6 +255,7 @@ impl<S: Sensor> SimRig<S> {
     pub fn advance_to_us(&mut self, t_us: i64) {
         while self.next_tick_us <= t_us {
             self.clock.set(self.epoch.plus(self.next_tick_us as u32));
+            self.relays_follow();
             self.fw.tick();
             self.next_tick_us += self.tick_us;
         }

@@ -624,3 +624,64 @@ fn dual_channel_stuck_at_trip_or_wires_shorted_stop_without_a_demand() {
     assert_eq!(rig.fw.state(), State::Fault(Cause::Discrepancy));
     assert!(rig.category0_requested());
 }
+
+// ---- External device monitoring: a welded or stuck stop relay ends in a latched stop ------------
+
+#[test]
+fn edm_welded_relay_is_found_at_the_next_stop_and_escalates_to_category_0() {
+    for k in 1..=2 {
+        let mut rig = booted(cfg());
+        let settle_s = f64::from(rig.fw.config().edm_settle_us) * 1e-6;
+        rig.advance_to(0.1);
+        let relay = if k == 1 { rig.k1.clone() } else { rig.k2.clone() };
+        relay.set_fault(PinFault::StuckLow); // contacts welded: the mirror contact never closes again
+        rig.advance_to(0.2);
+        assert!(rig.fw.is_armed(), "K{k}: a welded relay looks like a pulled-in one while armed");
+        rig.set_travel_m(0.006);
+        assert!(rig.stop_requested() && !rig.category0_requested(), "K{k}: controlled stop first");
+        rig.advance_to(0.2 + settle_s + 0.0025); // first mismatching tick + settle + one tick
+        assert_eq!(rig.fw.state(), State::Fault(Cause::EdmMismatch), "K{k}: found within the settle time");
+        assert!(rig.category0_requested(), "K{k}: the drive-power channel takes over from the welded one");
+        // Reset with the tool back: the EDM start check refuses to energise while it is welded.
+        rig.set_travel_m(0.0);
+        rig.set_reset(true);
+        rig.advance_to(0.4);
+        rig.set_reset(false);
+        rig.advance_to(2.0);
+        assert!(rig.stop_requested() && !rig.fw.is_armed(), "K{k}: never 'go' with a welded relay");
+    }
+}
+
+#[test]
+fn edm_start_check_refuses_to_arm_over_a_relay_welded_while_stopped() {
+    let mut rig = SimRig::digital(cfg(), SwitchKind::Inductive, 5_000).unwrap();
+    rig.k2.set_fault(PinFault::StuckLow);
+    assert_eq!(rig.boot(50_000), Err(State::Fault(Cause::EdmMismatch)));
+    assert!(rig.stop_requested() && rig.category0_requested());
+}
+
+#[test]
+fn edm_feedback_wire_cut_while_armed_is_a_fault_without_a_demand() {
+    let mut rig = booted(cfg());
+    rig.advance_to(0.1);
+    rig.k1.set_fault(PinFault::StuckHigh); // reads "released" while the relay is pulled in
+    rig.advance_to(0.1 + 0.0225); // first mismatching tick + 20 ms settle + one tick
+    assert_eq!(rig.fw.state(), State::Fault(Cause::EdmMismatch));
+    assert!(rig.stop_requested() && rig.category0_requested());
+}
+
+#[test]
+fn edm_healthy_relays_never_false_alarm_over_many_trips_and_resets() {
+    let mut c = cfg();
+    c.reset = ResetPolicy::Auto { hold_us: 2_000 };
+    let mut rig = booted(c);
+    for k in 0..100 {
+        let t0 = 0.05 * f64::from(k);
+        rig.advance_to(t0);
+        rig.set_travel_m(0.006);
+        rig.advance_to(t0 + 0.01);
+        rig.set_travel_m(0.0);
+    }
+    rig.advance_to(5.1);
+    assert!(rig.fw.is_armed(), "{:?}", rig.fw.state());
+}

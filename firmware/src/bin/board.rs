@@ -5,7 +5,8 @@
 //! | signal            | pin  | notes                                                             |
 //! |-------------------|------|-------------------------------------------------------------------|
 //! | travel switch in  | PA0  | EXTI0 on both edges; pull-down, so a cut wire reads low = trip     |
-//! | reset input       | PA1  | pull-down, active high                                            |
+//! | reset input       | PA1  | pull-down, active high; acts on release (`flinch_firmware::reset`) |
+//! | EDM K1, K2        | PA2, PA3 | the stop relays' force-guided NC mirror contacts, high = released; pull-down (`flinch_firmware::edm`) |
 //! | stop out          | PD12 | high = energised = go; low = controlled stop (fit an external pull-down: a reset or dead MCU floats the pin) |
 //! | escalation out    | PD13 | high = energised; low = category-0 stop                           |
 //! | sensor supply out | PD14 | high = powered; switched off by the start-up stuck-input test     |
@@ -52,7 +53,8 @@ mod board {
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
     use flinch_firmware::{
-        Boot, BudgetConfig, Cause, Clock, Config, DigitalSwitch, Firmware, Micros, ResetCause, Retained, SwitchKind,
+        Boot, BudgetConfig, Cause, Clock, Config, DigitalSwitch, Edm, Firmware, Micros, ResetCause, Retained,
+        SwitchKind,
     };
 
     // ---- Registers (RM0090 Rev 19) --------------------------------------------------------------
@@ -146,7 +148,7 @@ mod board {
     }
 
     type Switch = DigitalSwitch<In<GPIOA, 0>, Out<GPIOD, 14>>;
-    type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>>;
+    type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>, 16, Edm<In<GPIOA, 2>, In<GPIOA, 3>>>;
     static FW: IsrCell<Fw> = IsrCell::new();
 
     /// The installation's configuration. The numbers are those of the thesis's Ch. 3 set-up and
@@ -205,8 +207,8 @@ mod board {
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
         modify(GPIOD + MODER, 0b11_11_11 << 24, 0b01_01_01 << 24); // PD12..14 output
-        modify(GPIOA + MODER, 0b11_11, 0); // PA0, PA1 input
-        modify(GPIOA + PUPDR, 0b11_11, 0b10_10); // pull-down
+        modify(GPIOA + MODER, 0xFF, 0); // PA0..PA3 input
+        modify(GPIOA + PUPDR, 0xFF, 0b10_10_10_10); // pull-down
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
         wr(TIM2_PSC, HSI_HZ / 1_000_000 - 1);
         wr(TIM2_ARR, u32::MAX);
@@ -226,6 +228,7 @@ mod board {
         let sensor = DigitalSwitch::with_supply(In::<GPIOA, 0>, Out::<GPIOD, 14>, SwitchKind::Inductive, SWITCH_TRAVEL_UM);
         match Firmware::after_reset(config(), boot, Tim2, sensor, Out, Out, In) {
             Ok(fw) => {
+                let fw = fw.with_feedback(Edm::new(In::<GPIOA, 2>, In::<GPIOA, 3>));
                 retained_store(fw.retained());
                 // SAFETY: once, before SysTick and EXTI0 are enabled below.
                 unsafe { FW.init(fw) }
