@@ -9,6 +9,16 @@ use flinch_tests::scene_path;
 
 fn run(name: &str) -> (Avoid, PathResult) {
     let scene = Avoid::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
+    run_scene(scene)
+}
+
+fn thesis(name: &str) -> (Avoid, PathResult) {
+    let mut scene = Avoid::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
+    scene.safety.mode = "off".into();
+    run_scene(scene)
+}
+
+fn run_scene(scene: Avoid) -> (Avoid, PathResult) {
     let setup = Setup::new(&scene, None).unwrap();
     let res = simulate(&scene, &setup, Engine::Reference).unwrap();
     (scene, res)
@@ -44,27 +54,103 @@ fn honest(name: &str, scene: &Avoid, r: &PathResult) {
     assert!((vmax - r.max_speed_mps).abs() < 1e-12, "{name}");
 }
 
-/// The thesis's vortex law (eq 76) goes through the operator on these scenes: the report says so.
-/// (When the safety layer lands these become "never inside"; until then this pins the honesty.)
+/// The thesis's vortex law alone (eq 76, `--thesis`) goes through the operator on these scenes:
+/// the report says so.
 #[test]
 fn crossings_are_reported_as_collisions() {
     for name in ["avoid_forearm_across.toml", "avoid_wall.toml", "avoid_goal_covered.toml", "avoid_head_on.toml"] {
-        let (scene, r) = run(name);
+        let (scene, r) = thesis(name);
         honest(name, &scene, &r);
         assert!(matches!(r.status, Status::Collision(_)), "{name}: {:?}, {} m", r.status, r.min_signed_distance_m);
         assert!(r.min_signed_distance_m < -0.01, "{name}: the depth is not clamped: {}", r.min_signed_distance_m);
-        let json = avoid::metrics_json(&r, Engine::Reference);
+        let json = avoid::metrics_json(&r, Engine::Reference, false);
         assert_eq!(json["status"], "collision", "{name}");
         assert_eq!(json["collided"], true);
         assert_eq!(json["reached_goal"], false, "{name}: never reached after a crossing");
     }
 }
 
+const ADVERSARIAL: [&str; 9] = [
+    "avoid_operator_hand.toml",
+    "avoid_head_on.toml",
+    "avoid_forearm_across.toml",
+    "avoid_goal_covered.toml",
+    "avoid_wall.toml",
+    "avoid_under_tool.toml",
+    "avoid_fast_hand.toml",
+    "avoid_empty_diagonal.toml",
+    "avoid_extreme_gain.toml",
+];
+
+/// The speed limit of ISO/TS 15066 5.5.4 at a true separation `s` (the bound the monitor must stay
+/// under, whatever it sensed), m/s.
+fn ssm_bound(scene: &Avoid, s: f64) -> f64 {
+    let f = &scene.safety;
+    let free = s - f.human_speed_mps * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_m - f.sensor_uncertainty_m - f.robot_uncertainty_m;
+    (free / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps)
+}
+
+/// With the monitor on (as shipped): never inside the operator, never above the cap, and at every
+/// step the commanded speed is within the SSM bound computed from the TRUE separation at the start
+/// of the step (a sensing chain that misses the operator, a blind zone, would break this).
+fn safe(name: &str, scene: &Avoid, r: &PathResult) {
+    honest(name, scene, r);
+    assert!(!matches!(r.status, Status::Collision(_)), "{name}: {:?}", r.status);
+    assert!(r.min_signed_distance_m > 0.0, "{name}: {} m", r.min_signed_distance_m);
+    assert!(r.max_speed_mps <= scene.speed_mps + 1e-9, "{name}: {} m/s", r.max_speed_mps);
+    for (k, row) in r.rows.iter().enumerate() {
+        let s_true = r.signed_distance_m[k];
+        let v = row.v_mps[0].hypot(row.v_mps[1]);
+        assert!(v <= ssm_bound(scene, s_true) + 1e-6, "{name}: t = {} s: {v} m/s at {s_true} m (bound {})", row.t_s, ssm_bound(scene, s_true));
+    }
+}
+
 #[test]
-fn every_adversarial_scene_is_reported_honestly() {
-    for name in ["avoid_operator_hand.toml", "avoid_under_tool.toml", "avoid_fast_hand.toml", "avoid_empty_diagonal.toml", "avoid_extreme_gain.toml"] {
+fn every_adversarial_scene_is_safe_with_the_monitor() {
+    for name in ADVERSARIAL {
         let (scene, r) = run(name);
+        assert!(scene.safety.on(), "{name}: shipped with the monitor on");
+        safe(name, &scene, &r);
+    }
+}
+
+/// The thesis's law on every scene: whatever it does, the report is honest.
+#[test]
+fn every_adversarial_scene_is_reported_honestly_without_the_monitor() {
+    for name in ADVERSARIAL {
+        let (scene, r) = thesis(name);
         honest(name, &scene, &r);
+    }
+}
+
+/// Randomised variants of the shipped scene (seeded, reproducible): the hand reaches from a random
+/// point of the near edge to a random point, at up to 1.6 m/s; with the monitor on, zero
+/// penetrations and the SSM bound holds at every step.
+#[test]
+fn random_variants_never_penetrate() {
+    let base = Avoid::load(&scene_path("avoid_under_tool.toml")).unwrap();
+    let setup = Setup::new(&base, None).unwrap();
+    let mut seed: u64 = 0x5EED_F11C;
+    let mut next = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for k in 0..12 {
+        let mut s = base.clone();
+        let ex = 0.1 + 0.85 * next();
+        s.operator.entry_m = [ex, 0.0];
+        let (hx, hy) = (0.1 + 0.85 * next(), 0.2 + 0.75 * next());
+        let t0 = 2.0 * next();
+        let dist = ((hx - ex).powi(2) + (hy - 0.05).powi(2)).sqrt();
+        let speed = 0.2 + 1.4 * next();
+        s.operator.keyframes[0].t_s = t0;
+        s.operator.keyframes[0].hand_m = [ex, 0.05];
+        s.operator.keyframes[1].t_s = t0 + dist / speed;
+        s.operator.keyframes[1].hand_m = [hx, hy];
+        s.camera.seed = k;
+        s.max_time_s = 6.0;
+        let r = simulate(&s, &setup, Engine::Reference).unwrap();
+        safe(&format!("variant {k} (hand to [{hx:.2}, {hy:.2}] at {speed:.2} m/s from t = {t0:.2} s)"), &s, &r);
     }
 }
 
@@ -73,7 +159,7 @@ fn every_adversarial_scene_is_reported_honestly() {
 #[test]
 fn cli_verdict_and_csv() {
     let csv = std::env::temp_dir().join(format!("flinch-avoid-{}.csv", std::process::id()));
-    let args = |name: &str, csv: Option<std::path::PathBuf>| AvoidArgs {
+    let args = |name: &str, csv: Option<std::path::PathBuf>, thesis: bool| AvoidArgs {
         scene: scene_path(name),
         plot: None,
         json: true,
@@ -82,14 +168,19 @@ fn cli_verdict_and_csv() {
         save_calibration: None,
         compare: false,
         csv,
+        thesis,
         save_depth: None,
     };
-    assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()))), Ok(false));
+    assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(false));
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state"));
     let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').take(7).map(|v| v.parse().unwrap()).collect()).collect();
     assert!(rows.iter().any(|r| r[5] < 0.0), "the crossing shows in the CSV's separation");
     std::fs::remove_file(&csv).ok();
-    assert_eq!(avoid::run(&args("avoid_operator_hand.toml", None)), Ok(true));
+    // With the monitor the wall is a safe stop, still exit 1 (the goal is not reached).
+    assert_eq!(avoid::run(&args("avoid_wall.toml", None, false)), Ok(false));
+    let mut thesis_demo = args("avoid_operator_hand.toml", None, true);
+    thesis_demo.json = false;
+    assert_eq!(avoid::run(&thesis_demo), Ok(true));
 }

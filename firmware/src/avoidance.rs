@@ -11,6 +11,9 @@
 //! `f64`) and the Gaussian ([`gauss`]: lookup table, `micromath`, `libm`), so the host can measure the
 //! error of each choice against an `f64` reference while the target runs the fixed-point one.
 //!
+//! [`safe`] then limits the command by speed and separation monitoring (ISO/TS 15066, 5.5.4), from
+//! the sensed separation and not from the field, and caps it at the configured speed.
+//!
 //! Units: metres, seconds, metres per second; heights of `f*` in metres; gradients dimensionless.
 //! No heap, no panics, bounded loops: like the detection modules, the non-test code is held to
 //! clippy's `unwrap_used`, `expect_used`, `panic`, `indexing_slicing` and `arithmetic_side_effects`
@@ -32,6 +35,7 @@ pub mod frame;
 pub mod gauss;
 pub mod num;
 pub mod receiver;
+pub mod safe;
 
 pub use control::{Command, Controller, Gains, Repulsion, Watchdog};
 pub use field::{sample, FieldSample, Grid, MAX_AXIS, MAX_CENTRES, MAX_WINDOW, TRUNC_SIGMAS};
@@ -39,3 +43,4 @@ pub use frame::{encode_frame, frame_len, FrameHeader};
 pub use gauss::{Gauss, GaussLibm, GaussLut, GaussMicromath};
 pub use num::Real;
 pub use receiver::{Receiver, RxStats};
+pub use safe::{SafeCommand, SafeController, SafeState, Sensed, SsmParams};

@@ -123,6 +123,9 @@ mod tests {
         scene.camera.m_per_px = 0.01;
         scene.robot.calibration_step_m = 0.06;
         scene.robot.calibration_dilate_m = 0.045;
+        // The field law's numbers, on the thesis's loop (monitor off, no latency).
+        scene.safety.mode = "off".into();
+        scene.latency_s = 0.0;
         let setup = Setup::new(&scene, None).unwrap();
         let reference = simulate_with(&scene, &setup, &mut RefEngine::new(&scene).unwrap()).unwrap();
         let pts: Vec<[f64; 2]> = (0..900).map(|k| [((k % 30) as f64 + 0.5) * 0.035, ((k / 30) as f64 + 0.5) * 0.035]).collect();

@@ -42,6 +42,10 @@ pub struct AvoidArgs {
     /// grid and on the other of 15 x 15 / 30 x 30 (slow: about a minute).
     #[arg(long)]
     pub compare: bool,
+    /// The thesis's law alone (eq 74-79): the speed and separation monitor off (`safety.mode =
+    /// "off"`), for comparison. Not safe near a person.
+    #[arg(long)]
+    pub thesis: bool,
     /// Write the path, one row per control step (`t_s,x_m,y_m,vx_mps,vy_mps,separation_m,
     /// speed_limit_mps,state`); `-` is standard output.
     #[arg(long, value_name = "FILE")]
@@ -52,10 +56,12 @@ pub struct AvoidArgs {
 }
 
 /// Metrics of one run, as printed.
-pub fn metrics_json(res: &PathResult, engine: Engine) -> serde_json::Value {
+pub fn metrics_json(res: &PathResult, engine: Engine, monitor: bool) -> serde_json::Value {
+    let monitor = if monitor { "ssm" } else { "off" };
     let reason = res.status.reason().map(|r| r.name());
     serde_json::json!({
         "engine": match engine { Engine::Reference => "reference-f64", Engine::Mcu => "mcu-i16f16" },
+        "monitor": monitor,
         "status": res.status.name(),
         "reason": reason,
         "reason_null_reason": if reason.is_none() { Some("reached the goal") } else { None },
@@ -100,7 +106,10 @@ pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> 
 /// Entry point of `flinch avoid`: `Ok(true)` when the tool reached the goal without ever entering
 /// the operator, `Ok(false)` otherwise (exit 1: a collision, or a stop before the goal).
 pub fn run(args: &AvoidArgs) -> Result<bool, String> {
-    let scene = scene::Avoid::load(&args.scene)?;
+    let mut scene = scene::Avoid::load(&args.scene)?;
+    if args.thesis {
+        scene.safety.mode = "off".into();
+    }
     let cal = match &args.calibration {
         Some(p) => Some(calib::Calibration::load(p)?),
         None => None,
@@ -131,10 +140,24 @@ pub fn run(args: &AvoidArgs) -> Result<bool, String> {
         write_csv(&res, p)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&metrics_json(&res, engine)).map_err(|e| e.to_string())?);
+        println!("{}", serde_json::to_string_pretty(&metrics_json(&res, engine, scene.safety.on())).map_err(|e| e.to_string())?);
     } else {
         let name = args.scene.display();
         println!("avoid {name}: engine {}", if args.mcu { "mcu (I16F16, LUT, serial frames)" } else { "reference (f64)" });
+        let sf = &scene.safety;
+        if sf.on() {
+            println!(
+                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, T_r {} s, T_s {} s, C+Z {} m, latency {} s, cap {} m/s",
+                sf.human_speed_mps,
+                sf.reaction_time_s,
+                sf.stopping_time_s,
+                sf.intrusion_m + sf.sensor_uncertainty_m + sf.robot_uncertainty_m,
+                scene.latency_s,
+                scene.speed_mps
+            );
+        } else {
+            println!("  monitor           OFF (the thesis's law alone; latency {} s)", scene.latency_s);
+        }
         println!(
             "  grid {} x {}, fit sigma = {:.3} x spacing/2, eval sigma x {:.2}; {} frames, {} steps of {} s",
             setup.fitter.grid.nx,

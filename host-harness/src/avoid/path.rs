@@ -7,7 +7,7 @@
 //! fit is encoded into a serial frame, fed to a [`Receiver`] in `I16F16`, and the step uses the
 //! lookup-table Gaussian over the truncated window plus the weights-age watchdog.
 
-use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, Watchdog};
+use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Watchdog};
 use flinch_firmware::avoidance::num::I16F16;
 use flinch_hal_sim::serial::SimSerial;
 
@@ -29,24 +29,71 @@ pub enum Engine {
 pub trait StepEngine {
     /// A new fit is available (frame `seq` at `now_ms`).
     fn new_field(&mut self, field: &Field, seq: u32, now_ms: u32) -> Result<(), String>;
-    /// Velocity command at `p`, m/s.
-    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32) -> [f64; 2];
+    /// Velocity command at `p`, after the speed and separation monitor when `sensed` is given (the
+    /// last frame's separation, tool position and age): what the drive receives.
+    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32, sensed: Option<&Sensed<f64>>) -> Cmd;
     /// Receiver counters, if there is a receiver.
     fn rx_stats(&self) -> Option<RxStats> {
         None
     }
 }
 
-/// The `f64` reference: full-sum field, firmware controller in `f64`.
+/// One command as the drive receives it.
+#[derive(Clone, Copy, Debug)]
+pub struct Cmd {
+    /// Velocity, m/s.
+    pub v: [f64; 2],
+    /// Speed limit that applied, m/s.
+    pub limit_mps: f64,
+    /// `run`, `slow`, `protective_stop`, `no_data` (the monitor) or `field` (monitor off).
+    pub state: &'static str,
+}
+
+fn state_name(s: SafeState) -> &'static str {
+    match s {
+        SafeState::Run => "run",
+        SafeState::Slow => "slow",
+        SafeState::ProtectiveStop => "protective_stop",
+        SafeState::NoData => "no_data",
+    }
+}
+
+/// The monitor's parameters for a scene (`None`: monitor off).
+pub fn ssm<R: Real>(scene: &Avoid) -> Option<SsmParams<R>> {
+    let s = &scene.safety;
+    s.on().then(|| SsmParams {
+        human_speed_mps: R::from_f64(s.human_speed_mps),
+        reaction_time_s: R::from_f64(s.reaction_time_s),
+        stopping_time_s: R::from_f64(s.stopping_time_s),
+        margin_m: R::from_f64(s.intrusion_m + s.sensor_uncertainty_m + s.robot_uncertainty_m),
+        speed_cap_mps: R::from_f64(scene.speed_mps),
+    })
+}
+
+fn monitored<R: Real>(safe: &Option<SafeController<R>>, v: [R; 2], p: [f64; 2], sensed: Option<&Sensed<f64>>, cap: f64) -> Cmd {
+    match safe {
+        None => Cmd { v: [v[0].to_f64(), v[1].to_f64()], limit_mps: cap, state: "field" },
+        Some(c) => {
+            let q = R::from_f64;
+            let sn = sensed.map(|s| Sensed { separation_m: q(s.separation_m), tool_x_m: q(s.tool_x_m), tool_y_m: q(s.tool_y_m), age_s: q(s.age_s) });
+            let out = c.limit(v[0], v[1], q(p[0]), q(p[1]), sn.as_ref());
+            Cmd { v: [out.vx.to_f64(), out.vy.to_f64()], limit_mps: out.limit_mps.to_f64(), state: state_name(out.state) }
+        }
+    }
+}
+
+/// The `f64` reference: full-sum field, firmware controller and monitor in `f64`.
 pub struct RefEngine {
     ctl: Controller<f64>,
+    safe: Option<SafeController<f64>>,
+    cap: f64,
     field: Option<Field>,
 }
 
 impl RefEngine {
     /// For a scene.
     pub fn new(scene: &Avoid) -> Result<Self, String> {
-        Ok(RefEngine { ctl: Controller::new(gains(scene)?), field: None })
+        Ok(RefEngine { ctl: Controller::new(gains(scene)?), safe: ssm(scene).map(SafeController::new), cap: scene.speed_mps, field: None })
     }
 }
 
@@ -55,11 +102,11 @@ impl StepEngine for RefEngine {
         self.field = Some(field.clone());
         Ok(())
     }
-    fn command(&mut self, p: [f64; 2], goal: [f64; 2], _: u32) -> [f64; 2] {
+    fn command(&mut self, p: [f64; 2], goal: [f64; 2], _: u32, sensed: Option<&Sensed<f64>>) -> Cmd {
         let (h, fx, fy) = self.field.as_ref().map_or((0.0, 0.0, 0.0), |f| f.sample(p[0], p[1]));
         let s = fw::FieldSample { height: h, grad_x: fx, grad_y: fy };
         let c = self.ctl.command(p[0], p[1], goal[0], goal[1], &s, 1.0);
-        [c.vx, c.vy]
+        monitored(&self.safe, [c.vx, c.vy], p, sensed, self.cap)
     }
 }
 
@@ -68,6 +115,8 @@ impl StepEngine for RefEngine {
 /// truncated-window field, controller, weights-age watchdog.
 pub struct FwEngine<R, G> {
     ctl: Controller<R>,
+    safe: Option<SafeController<R>>,
+    cap: f64,
     rx: Box<Receiver<R>>,
     /// The host's end of the line and the MCU's.
     line: (SimSerial, SimSerial),
@@ -80,6 +129,8 @@ impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
     pub fn new(scene: &Avoid, gauss: G) -> Result<Self, String> {
         Ok(FwEngine {
             ctl: Controller::new(gains(scene)?),
+            safe: ssm(scene).map(SafeController::new),
+            cap: scene.speed_mps,
             rx: Box::new(Receiver::new(200, 20)),
             line: SimSerial::pair(),
             gauss,
@@ -98,14 +149,14 @@ impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
         embedded_io::Write::write_all(&mut self.line.0, &frame).map_err(|e| format!("serial line: {e:?}"))?;
         Ok(())
     }
-    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32) -> [f64; 2] {
+    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32, sensed: Option<&Sensed<f64>>) -> Cmd {
         // Bounded per call, as on the MCU: what is left is read on the next steps.
         let _ = self.rx.poll(&mut self.line.1, now_ms);
         let q = R::from_f64;
         let s = fw::sample(self.rx.grid(), &self.gauss, q(p[0]), q(p[1]));
         let wd = self.watchdog.factor::<R>(self.rx.weights_age_ms(now_ms));
         let c = self.ctl.command(q(p[0]), q(p[1]), q(goal[0]), q(goal[1]), &s, wd);
-        [c.vx.to_f64(), c.vy.to_f64()]
+        monitored(&self.safe, [c.vx, c.vy], p, sensed, self.cap)
     }
     fn rx_stats(&self) -> Option<RxStats> {
         Some(self.rx.stats)
@@ -297,14 +348,43 @@ pub struct PathResult {
 
 /// The field fitted to one frame (robot at `tool`, hand at `hand`).
 pub fn fit_frame(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> Field {
+    fit_and_sense(scene, setup, tool, hand, rng).0
+}
+
+/// No obstacle pixel in view: the separation reported, m.
+pub const NOTHING_SENSED_M: f64 = 10.0;
+
+/// The field fitted to one frame, and the separation the sensor sees: the distance from the tool to
+/// the nearest pixel of the height map (after robot removal, before the raise) higher than
+/// `safety.sense_height_m`, less half a pixel; [`NOTHING_SENSED_M`] when there is none.
+pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> (Field, f64) {
     let cam = scene.camera();
     let robot = scene.robot_shape();
     let op = scene.operator_shape();
     let img = render(&cam, Some((&robot, tool)), Some((&op, hand)), rng);
-    let map = preprocess(&img, &cam, scene.fit.offset_m, Some((&setup.calibration, tool)));
+    let mut map = preprocess(&img, &cam, 0.0, Some((&setup.calibration, tool)));
+    let sep = nearest_obstacle(&map, cam.m_per_px, tool, scene.safety.sense_height_m);
+    super::depth::raise(&mut map, scene.fit.offset_m);
     let mut w = setup.fitter.weights(&map);
     filter_weights(&mut w);
-    Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor)
+    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep)
+}
+
+/// Distance from `p` to the nearest pixel above `height_m`, less half a pixel, m.
+pub fn nearest_obstacle(map: &super::depth::HeightMap, m_per_px: f64, p: [f64; 2], height_m: f64) -> f64 {
+    let mut best = f64::INFINITY;
+    for (k, v) in map.m.iter().enumerate() {
+        if *v > height_m {
+            let (c, r) = ((k % map.width) as f64, (k / map.width) as f64);
+            let d2 = ((c + 0.5) * m_per_px - p[0]).powi(2) + ((r + 0.5) * m_per_px - p[1]).powi(2);
+            best = best.min(d2);
+        }
+    }
+    if best.is_finite() {
+        (best.sqrt() - 0.5 * m_per_px).max(0.0)
+    } else {
+        NOTHING_SENSED_M
+    }
 }
 
 /// The firmware gains of a scene.
@@ -362,10 +442,17 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
     let mut points = vec![p];
     let mut signed = vec![op.signed_distance(scene.hand_at(0.0), p)];
     let mut rows = Vec::with_capacity(steps.min(1 << 20));
-    let mut field = fit_frame(scene, setup, p, scene.hand_at(0.0), &mut rng);
+    // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
+    // capture). Each reaches the controller `latency_s` after capture.
+    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2])> = std::collections::VecDeque::new();
+    let (f0, sep0) = fit_and_sense(scene, setup, p, scene.hand_at(0.0), &mut rng);
+    let mut field = f0.clone();
+    in_flight.push_back((scene.latency_s, 0.0, f0, sep0, p));
     let mut frames = 1;
     let mut seq: u32 = 0;
-    engine.new_field(&field, seq, 0)?;
+    let mut sensed: Option<Sensed<f64>> = None;
+    let mut capture_t = 0.0;
+    let mut last_state = "no_data";
     let mut next_frame = scene.frame_period_s;
     let mut best = Snapshot { t_s: 0.0, tool_m: p, hand_m: scene.hand_at(0.0), field: field.clone() };
     let mut min_s = signed[0];
@@ -384,13 +471,26 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         let t_prev = t - dt;
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
-            field = fit_frame(scene, setup, p, scene.hand_at(t_prev), &mut rng);
+            let (f, sep) = fit_and_sense(scene, setup, p, scene.hand_at(t_prev), &mut rng);
+            in_flight.push_back((t_prev + scene.latency_s, t_prev, f, sep, p));
             frames += 1;
             next_frame += scene.frame_period_s;
-            seq = seq.wrapping_add(1);
-            engine.new_field(&field, seq, now)?;
         }
-        let [vx, vy] = engine.command(p, goal, now);
+        while in_flight.front().is_some_and(|f| f.0 <= t_prev + 1e-12) {
+            let Some((_, tc, f, sep, at)) = in_flight.pop_front() else { break };
+            engine.new_field(&f, seq, now)?;
+            seq = seq.wrapping_add(1);
+            field = f;
+            capture_t = tc;
+            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0 });
+        }
+        if let Some(sn) = sensed.as_mut() {
+            // Counted from capture: latency plus the time since it arrived.
+            sn.age_s = t_prev - capture_t;
+        }
+        let cmd = engine.command(p, goal, now, sensed.as_ref());
+        last_state = cmd.state;
+        let [vx, vy] = cmd.v;
         let speed = (vx * vx + vy * vy).sqrt();
         // Eq 79.
         let q = [p[0] + vx * dt, p[1] + vy * dt];
@@ -415,7 +515,7 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         }
         points.push(p);
         signed.push(sd);
-        rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: scene.speed_mps, state: "run" });
+        rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: cmd.limit_mps, state: cmd.state });
         if sd < min_s {
             min_s = sd;
             best = Snapshot { t_s: t, tool_m: p, hand_m: hand, field: field.clone() };
@@ -428,7 +528,10 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
             ended = Some(Reason::LeftView);
             break;
         }
-        if dist_goal(p) <= best_goal - scene.progress_m {
+        if matches!(cmd.state, "protective_stop" | "no_data") {
+            // Waiting for the person to step back is not a lack of progress.
+            t_best += dt;
+        } else if dist_goal(p) <= best_goal - scene.progress_m {
             (best_goal, t_best, p_best, spread) = (dist_goal(p), t, p, 0.0);
         } else {
             spread = spread.max(((p[0] - p_best[0]).powi(2) + (p[1] - p_best[1]).powi(2)).sqrt());
@@ -441,7 +544,11 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         }
     }
     if time_to_goal.is_none() && ended.is_none() {
-        ended = Some(Reason::Timeout);
+        ended = Some(match last_state {
+            "protective_stop" => Reason::Blocked,
+            "no_data" => Reason::StaleWeights,
+            _ => Reason::Timeout,
+        });
     }
     if let Some(r) = rows.last_mut() {
         if ended.is_some() {
@@ -491,6 +598,9 @@ mod tests {
         s.robot.calibration_dilate_m = 0.045;
         s.repulsion = repulsion.into();
         s.max_time_s = 8.0;
+        // These tests are about the thesis's field law itself: the monitor off, no latency.
+        s.safety.mode = "off".into();
+        s.latency_s = 0.0;
         s.operator.keyframes = vec![super::super::scene::Keyframe { t_s: 0.0, hand_m: hand }];
         s
     }

@@ -51,6 +51,13 @@ pub struct Avoid {
     /// See `progress_window_s`, m.
     #[serde(default = "default_progress")]
     pub progress_m: f64,
+    /// Capture-to-command latency: a frame taken at `t` reaches the controller at `t + latency_s`
+    /// (capture, fit and transmission; the thesis measured 81 ms), s.
+    #[serde(default = "default_latency")]
+    pub latency_s: f64,
+    /// Speed and separation monitoring.
+    #[serde(default)]
+    pub safety: SafetyCfg,
     /// The camera.
     pub camera: CameraCfg,
     /// The fit.
@@ -73,6 +80,55 @@ fn default_stall_window() -> f64 {
 fn default_stall_move() -> f64 {
     0.005
 }
+fn default_latency() -> f64 {
+    0.081
+}
+
+/// `[avoid.safety]`: speed and separation monitoring (ISO/TS 15066, 5.5.4) after the field.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SafetyCfg {
+    /// `"ssm"` (default): the monitor limits every command; `"off"`: the thesis's law alone (eq 74-79,
+    /// for comparison only).
+    pub mode: String,
+    /// `v_h`, the human's approach speed (ISO 13855, 6.2: 1.6 m/s), m/s.
+    pub human_speed_mps: f64,
+    /// `T_r`, from the command to the drive braking (one control period plus the drive's delay), s.
+    pub reaction_time_s: f64,
+    /// `T_s`, the robot's stopping time from the cruise speed, s.
+    pub stopping_time_s: f64,
+    /// `C`, intrusion distance (ISO 13855, 5.3), m.
+    pub intrusion_m: f64,
+    /// `Z_d`, the sensor's position uncertainty on the plane, m.
+    pub sensor_uncertainty_m: f64,
+    /// `Z_r`, the robot's position uncertainty, m.
+    pub robot_uncertainty_m: f64,
+    /// A pixel higher than this above the plane, after robot removal, is an obstacle, m.
+    pub sense_height_m: f64,
+}
+
+impl Default for SafetyCfg {
+    fn default() -> Self {
+        SafetyCfg {
+            mode: "ssm".into(),
+            human_speed_mps: 1.6,
+            reaction_time_s: 0.02,
+            stopping_time_s: 0.1,
+            intrusion_m: 0.0,
+            sensor_uncertainty_m: 0.01,
+            robot_uncertainty_m: 0.005,
+            sense_height_m: 0.03,
+        }
+    }
+}
+
+impl SafetyCfg {
+    /// True when the monitor is on.
+    pub fn on(&self) -> bool {
+        self.mode == "ssm"
+    }
+}
+
 fn default_progress_window() -> f64 {
     2.0
 }
@@ -215,6 +271,25 @@ impl Avoid {
         pos("stall_window_s", self.stall_window_s)?;
         pos("progress_window_s", self.progress_window_s)?;
         pos("progress_m", self.progress_m)?;
+        let range = |k: &str, v: f64, lo: f64, hi: f64| {
+            if v.is_finite() && (lo..=hi).contains(&v) {
+                Ok(())
+            } else {
+                Err(format!("avoid.{k} = {v}: must be a number in [{lo}, {hi}]"))
+            }
+        };
+        range("latency_s", self.latency_s, 0.0, 10.0)?;
+        let sf = &self.safety;
+        if !matches!(sf.mode.as_str(), "ssm" | "off") {
+            return Err(format!("avoid.safety.mode = {:?}: expected \"ssm\" or \"off\"", sf.mode));
+        }
+        range("safety.human_speed_mps", sf.human_speed_mps, 0.0, 10.0)?;
+        range("safety.reaction_time_s", sf.reaction_time_s, 0.0, 10.0)?;
+        range("safety.stopping_time_s", sf.stopping_time_s, 0.0, 10.0)?;
+        range("safety.intrusion_m", sf.intrusion_m, 0.0, 1.0)?;
+        range("safety.sensor_uncertainty_m", sf.sensor_uncertainty_m, 0.0, 1.0)?;
+        range("safety.robot_uncertainty_m", sf.robot_uncertainty_m, 0.0, 1.0)?;
+        range("safety.sense_height_m", sf.sense_height_m, 0.001, 1.0)?;
         if self.progress_window_s > self.max_time_s.max(1.0) * 100.0 {
             return Err(format!("avoid.progress_window_s = {}: must be at most 100 x max_time_s", self.progress_window_s));
         }
@@ -355,6 +430,15 @@ mod tests {
         assert!(bad("repulsion = \"vortex\"", "repulsion = \"swirl\"").contains("avoid.repulsion"));
         assert!(bad("stop_height_m = 0.30", "stop_height_m = 0.01").contains("avoid.stop_height_m"));
         assert!(bad("goal_m = [0.93, 0.50]", "goal_m = [3.0, 0.50]").contains("avoid.goal_m"));
+        let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nlatency_s = -0.1");
+        assert!(e.starts_with("line 21: avoid.latency_s = -0.1: must be a number in [0, 10]"), "{e}");
+        let with_safety = |kv: &str| Avoid::parse(&format!("{SHIPPED}\n[avoid.safety]\n{kv}\n"));
+        assert_eq!(with_safety("human_speed_mps = 2.0").unwrap().safety.human_speed_mps, 2.0);
+        for (kv, key) in [("human_speed_mps = inf", "avoid.safety.human_speed_mps"), ("stopping_time_s = -1", "avoid.safety.stopping_time_s"), ("mode = \"fast\"", "avoid.safety.mode"), ("sense_height_m = 0", "avoid.safety.sense_height_m")] {
+            let e = with_safety(kv).unwrap_err();
+            assert!(e.contains(key) && e.starts_with("line "), "{kv}: {e}");
+        }
+        assert!(with_safety("speed = 1").unwrap_err().contains("speed"));
         let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_m = -1");
         assert!(e.starts_with("line 21: avoid.progress_m = -1: must be > 0"), "{e}");
         assert!(bad("grid = 15", "grid = 40").starts_with("line "), "the line of a nested key");
