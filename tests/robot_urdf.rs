@@ -418,3 +418,51 @@ fn scene_refuses_a_reduced_mass_outside_the_plant_range() {
     let e = scene_err(&t);
     assert!(e.contains("robot.urdf: reduces to mass = ") && e.contains("outside the range of [robot] mass"), "{e}");
 }
+
+// ---- flinch robot ---------------------------------------------------------------------------
+
+fn robot_args(scene: std::path::PathBuf, joint: Option<&str>, csv: Option<std::path::PathBuf>) -> flinch_harness::kinematics::cli::RobotArgs {
+    flinch_harness::kinematics::cli::RobotArgs { scene, sweep_joint: joint.map(str::to_string), from: None, to: None, points: 181, plot: None, csv }
+}
+
+/// Adversarial: a sweep through the singularity (stretched arm pushed along itself) must mark that
+/// point refused in the CSV, never print a finite m_r for it, and still give the others.
+#[test]
+fn robot_sweep_through_a_singularity_marks_it_refused() {
+    let dir = std::env::temp_dir().join(format!("flinch-robot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let urdf = scene_path("robots/two_link.urdf").canonicalize().unwrap();
+    let text = scene_text()
+        .replace("robots/two_link.urdf", &urdf.display().to_string())
+        .replace("shoulder = 0.3, elbow = 1.2", "shoulder = 0.0, elbow = 1.2");
+    let scene = dir.join("stretched.toml");
+    std::fs::write(&scene, text).unwrap();
+    let csv = dir.join("sweep.csv");
+    assert_eq!(flinch_harness::kinematics::cli::run(&robot_args(scene.clone(), Some("2"), Some(csv.clone()))), Ok(true));
+    let out = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<&str> = out.lines().skip(1).collect();
+    assert_eq!(rows.len(), 181);
+    assert!(out.starts_with("elbow_rad,mass_kg,stiffness_npm,damping_nspm,mobility,status,reason\n"));
+    let at_zero = rows.iter().find(|r| r.split(',').next().unwrap().parse::<f64>().unwrap().abs() < 1e-9).expect("elbow = 0 is a point");
+    assert!(at_zero.contains(",,,,,refused,") && at_zero.contains("singular configuration"), "{at_zero}");
+    let ok = rows.iter().filter(|r| r.contains(",ok,")).count();
+    assert!(ok >= 170, "only {ok} points reduced");
+    // the unswept joint named, a joint that is not there, and a scene without a URDF: bad input (2)
+    let e = flinch_harness::kinematics::cli::run(&robot_args(scene.clone(), Some("wrist"), None)).unwrap_err();
+    assert_eq!(e.code, 2);
+    assert!(e.message.contains("joints: shoulder, elbow"), "{}", e.message);
+    let e = flinch_harness::kinematics::cli::run(&robot_args(scene_path("tables5-7_bistable.toml"), None, None)).unwrap_err();
+    assert_eq!(e.code, 2);
+    assert!(e.message.contains("[robot] is not given by a URDF"), "{}", e.message);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn robot_report_says_where_each_value_comes_from() {
+    let s = flinch_harness::scene::urdf_robot(&scene_text(), &scene_path("robot_two_link.toml").display().to_string()).unwrap().unwrap();
+    let r = s.reduce().unwrap();
+    let t = flinch_harness::kinematics::cli::describe("x", &s, &r);
+    assert!(t.contains(&format!("m_r = {:.4} kg", r.mass_kg)), "{t}");
+    assert!(t.contains("shoulder") && t.contains("elbow") && t.contains("%"), "{t}");
+    assert!(t.contains("not defined (needs six joints"), "{t}");
+}

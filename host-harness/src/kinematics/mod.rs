@@ -16,11 +16,12 @@
 //! `1 / (u^T J M_q^-1 J^T u)`, and the stiffness the one of the Cartesian compliance
 //! `J K_q^-1 J^T`, eq 14 inverted).
 pub mod chain;
+pub mod cli;
 pub mod dynamics;
 pub mod reduce;
 
 pub use chain::{Chain, JointKind};
-pub use reduce::{reduce, Reduced};
+pub use reduce::{reduce, Reduced, MIN_MOBILITY};
 
 use std::fmt;
 
