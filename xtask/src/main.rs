@@ -3,7 +3,8 @@
 //! * `cargo xtask test`: every stage below, then one closing line `N passed, N failed, N skipped`.
 //!   1. host tests: `cargo test --workspace` at the repo root (its output is shown as is);
 //!   2. firmware build: `cargo build --release --target thumbv7em-none-eabihf` inside `firmware/`
-//!      (skipped if that target is not installed);
+//!      (skipped if that target is not installed), then `cargo clippy -p flinch-firmware --target
+//!      thumbv7em-none-eabihf -- -D warnings` (the panic-free lints are only as good as this run);
 //!   3. QEMU self-test: the `qemu` binary in `qemu-system-arm -machine mps2-an386` over semihosting,
 //!      its output compared with `firmware/qemu/expected.txt` (skipped without `qemu-system-arm`);
 //!   4. instruction count: the self-test's `icount:` line, `pend_to_stop <= 100` (issue 3);
@@ -88,6 +89,10 @@ fn test() -> ExitCode {
     };
     let built_ok = matches!(built, Outcome::Pass(_));
     results.push(("firmware build", built));
+    results.push((
+        "firmware clippy",
+        if have_target { firmware_clippy() } else { Outcome::Skip(format!("target {TARGET} not installed")) },
+    ));
 
     if !built_ok {
         let why = "no firmware build".to_string();
@@ -205,6 +210,20 @@ fn host_tests() -> Outcome {
         Ok(s) if s.success() => Outcome::Pass("cargo test --workspace".into()),
         Ok(s) => Outcome::Fail(format!("cargo test --workspace exited with {s}")),
         Err(e) => Outcome::Fail(format!("could not run cargo: {e}")),
+    }
+}
+
+/// The lints the panic-free claim rests on (`firmware/src/lib.rs`: no unwrap/expect/panic, no
+/// indexing, no unchecked arithmetic in the detection modules) are only lints: this stage runs them,
+/// for the target, with warnings as errors.
+fn firmware_clippy() -> Outcome {
+    let args = ["clippy", "-p", "flinch-firmware", "--target", TARGET, "--", "-D", "warnings"];
+    let status = cargo().args(args).current_dir(repo_root().join("firmware")).status();
+    let cmd = format!("cargo {} (in firmware/)", args.join(" "));
+    match status {
+        Ok(s) if s.success() => Outcome::Pass(cmd),
+        Ok(s) => Outcome::Fail(format!("{cmd} exited with {s}")),
+        Err(e) => Outcome::Fail(format!("could not run {cmd}: {e}")),
     }
 }
 
