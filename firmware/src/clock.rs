@@ -46,12 +46,22 @@ impl Micros {
 pub trait Clock {
     /// The current instant.
     fn now(&mut self) -> Micros;
+
+    /// A wrapping count of an oscillator independent of the one behind [`Clock::now`] (LSI, HSE,
+    /// RTC crystal), for the plausibility check of `clock_check.rs`; `None` if there is none.
+    fn reference_ticks(&mut self) -> Option<u32> {
+        None
+    }
 }
 
 impl<C: Clock + ?Sized> Clock for &mut C {
     #[inline(always)]
     fn now(&mut self) -> Micros {
         (**self).now()
+    }
+    #[inline(always)]
+    fn reference_ticks(&mut self) -> Option<u32> {
+        (**self).reference_ticks()
     }
 }
 

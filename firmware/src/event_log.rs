@@ -45,6 +45,8 @@ pub enum Cause {
     /// External device monitoring: a stop relay did not follow the stop output within the settle
     /// time (welded, stuck, feedback wire cut or shorted), or was not released before arming.
     EdmMismatch = 11,
+    /// The firmware's clock disagreed with the independent reference oscillator (`clock_check.rs`).
+    ClockDrift = 12,
 }
 
 impl Cause {
@@ -62,6 +64,7 @@ impl Cause {
             9 => Cause::FaultHandler,
             10 => Cause::Discrepancy,
             11 => Cause::EdmMismatch,
+            12 => Cause::ClockDrift,
             _ => return None,
         })
     }
@@ -80,6 +83,7 @@ impl Cause {
             Cause::FaultHandler => "fault-handler",
             Cause::Discrepancy => "discrepancy",
             Cause::EdmMismatch => "edm-mismatch",
+            Cause::ClockDrift => "clock-drift",
         }
     }
 }

@@ -14,6 +14,7 @@ use crate::clock::{Clock, Micros};
 use crate::debounce::{ChatterGuard, ChatterState, Debouncer, Filter};
 use crate::detector::{ResetPolicy, ResetTracker, State};
 use crate::event_log::{Cause, EventLog, FLAG_EDGE, FLAG_ESCALATED, FLAG_FILTERED, FLAG_RETAINED};
+use crate::clock_check::{ClockCheck, ClockMonitor};
 use crate::edm::{Feedback, NoFeedback, Reading};
 use crate::reset::{Boot, ResetCause, ResetPress, Retained, StartPolicy};
 use crate::selftest::{self, Phase, SelfTestConfig, Step};
@@ -49,6 +50,8 @@ pub struct Config {
     /// Time the stop relays have to follow a change of the stop output before a read-back mismatch
     /// is a fault (`edm.rs`), microseconds.
     pub edm_settle_us: u32,
+    /// Check the clock against an independent reference (`clock_check.rs`); `None`: no check.
+    pub clock_check: Option<ClockCheck>,
 }
 
 impl Config {
@@ -69,6 +72,7 @@ impl Config {
             start: StartPolicy::ManualReset,
             reset_press: ResetPress::DEFAULT,
             edm_settle_us: 20_000,
+            clock_check: None,
         }
     }
 
@@ -94,6 +98,9 @@ impl Config {
         }
         if matches!(self.chatter, Some(ChatterGuard { max_transitions: 0, .. })) {
             return Err(ConfigError::ChatterLimitZero);
+        }
+        if matches!(self.clock_check, Some(c) if c.reference_hz == 0 || c.window_us == 0 || c.window_us >= 1 << 30 || c.tolerance_pct >= 100) {
+            return Err(ConfigError::ClockCheckRange);
         }
         if self.edm_settle_us >= 1 << 30 {
             return Err(ConfigError::EdmSettleRange);
@@ -129,6 +136,8 @@ pub enum ConfigError {
     ResetPressRange,
     /// `edm_settle_us` is not below 2^30.
     EdmSettleRange,
+    /// `clock_check` needs `reference_hz > 0`, `0 < window_us < 2^30`, `tolerance_pct < 100`.
+    ClockCheckRange,
 }
 
 impl ConfigError {
@@ -145,6 +154,9 @@ impl ConfigError {
             ConfigError::StrokeNotPositive => "budget.stroke_um must be > 0",
             ConfigError::ChatterLimitZero => "chatter.max_transitions must be >= 1",
             ConfigError::EdmSettleRange => "edm_settle_us must be below 2^30 us",
+            ConfigError::ClockCheckRange => {
+                "clock_check needs reference_hz > 0, 0 < window_us < 2^30 us and tolerance_pct < 100"
+            }
             ConfigError::ResetPressRange => {
                 "reset_press must have 0 < min_us <= max_us < 2^30 us (a zero minimum lets a glitch reset)"
             }
@@ -183,6 +195,7 @@ pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16, FB = NoFeedback
     boots: u32,
     feedback: FB,
     edm_mismatch_since: Option<Micros>,
+    clock_monitor: ClockMonitor,
 }
 
 impl<C, S, STOP, ESC, RST, const LOG: usize> Firmware<C, S, STOP, ESC, RST, LOG, NoFeedback>
@@ -236,6 +249,7 @@ where
             boots: 0,
             feedback: NoFeedback,
             edm_mismatch_since: None,
+            clock_monitor: ClockMonitor::new(cfg.clock_check),
         };
         let now = fw.clock.now();
         let record = boot.retained.decode();
@@ -285,6 +299,7 @@ where
             boots: self.boots,
             feedback,
             edm_mismatch_since: None,
+            clock_monitor: self.clock_monitor,
         }
     }
 }
@@ -340,6 +355,10 @@ where
         if let Err(cause) = self.watchdog.check(now) {
             self.fault(cause, now);
         }
+        let reference = self.clock.reference_ticks();
+        if let Err(cause) = self.clock_monitor.check(now, reference) {
+            self.fault(cause, now);
+        }
         self.check_edm(now);
         let sample = self.sensor.sample(now);
         self.last_sample = sample;
@@ -368,6 +387,8 @@ where
                         }
                         self.state = State::SelfTest(phase);
                     }
+                    // Not before the clock has passed its first plausibility window.
+                    Step::Arm if !self.clock_monitor.passed() => self.state = State::SelfTest(phase),
                     Step::Arm => self.arm(now),
                     Step::Fail(cause) => self.fault(cause, now),
                 }
@@ -410,6 +431,7 @@ where
                     self.watchdog.restart();
                     self.watchdog.check(now).ok();
                     self.chatter = ChatterState::new(self.cfg.chatter);
+                    self.clock_monitor = ClockMonitor::new(self.cfg.clock_check); // a fresh window first
                     self.state = State::SelfTest(Phase::Start);
                 }
             }

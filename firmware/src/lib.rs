@@ -114,6 +114,7 @@ macro_rules! panic_free_modules {
 
 panic_free_modules! {
     clock;
+    clock_check;
     debounce;
     detector;
     dual;
@@ -130,6 +131,7 @@ panic_free_modules! {
 }
 
 pub use clock::{Clock, Micros};
+pub use clock_check::ClockCheck;
 pub use debounce::{ChatterGuard, Filter};
 pub use detector::{ResetPolicy, State};
 pub use dual::DualSwitch;

@@ -210,6 +210,9 @@ struct ClockInner {
     now: AtomicU32,
     stalled: AtomicBool,
     frozen: AtomicU32,
+    /// Reference oscillator rate in percent of nominal (1 MHz); 0: dead. Set by `set_reference_pct`.
+    reference_pct: AtomicU32,
+    reference_set: AtomicBool,
 }
 
 /// Simulation time as the firmware's [`Clock`]: microseconds the harness sets. Clones share it.
@@ -240,6 +243,15 @@ impl SimClock {
         Micros(self.0.now.load(SeqCst))
     }
 
+    /// Run the independent reference oscillator ([`Clock::reference_ticks`], nominal 1 MHz) at `pct`
+    /// percent of its nominal rate relative to the firmware's clock (100: both agree; 130: the
+    /// firmware's oscillator runs 30 % slow; 0: the reference is dead). Without a call there is no
+    /// reference. Exact only while sim time does not wrap the u32 (71 min) at a rate other than 100.
+    pub fn set_reference_pct(&self, pct: u32) {
+        self.0.reference_pct.store(pct, SeqCst);
+        self.0.reference_set.store(true, SeqCst);
+    }
+
     /// Stall (`true`: the firmware keeps reading the instant of the stall) or resume.
     pub fn set_stalled(&self, stalled: bool) {
         if stalled && !self.0.stalled.load(SeqCst) {
@@ -256,6 +268,14 @@ impl Clock for SimClock {
         } else {
             self.true_now()
         }
+    }
+
+    fn reference_ticks(&mut self) -> Option<u32> {
+        if !self.0.reference_set.load(SeqCst) {
+            return None;
+        }
+        let pct = u64::from(self.0.reference_pct.load(SeqCst));
+        Some((u64::from(self.true_now().0) * pct / 100) as u32)
     }
 }
 

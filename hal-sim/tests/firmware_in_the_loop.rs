@@ -685,3 +685,51 @@ fn edm_healthy_relays_never_false_alarm_over_many_trips_and_resets() {
     rig.advance_to(5.1);
     assert!(rig.fw.is_armed(), "{:?}", rig.fw.state());
 }
+
+// ---- Clock plausibility against an independent oscillator ----------------------------------------
+
+fn clock_checked() -> Config {
+    let mut c = cfg();
+    c.clock_check = Some(flinch_firmware::ClockCheck { reference_hz: 1_000_000, window_us: 50_000, tolerance_pct: 10 });
+    c
+}
+
+#[test]
+fn clock_check_holds_arming_until_the_first_window_and_passes_a_good_clock() {
+    let mut c = clock_checked();
+    c.clock_check = Some(flinch_firmware::ClockCheck { reference_hz: 1_000_000, window_us: 200_000, tolerance_pct: 10 });
+    let mut rig = SimRig::digital(c, SwitchKind::Inductive, 5_000).unwrap();
+    rig.clock.set_reference_pct(100);
+    // Clearing the start latch restarts the check: a fresh window opens on the tick after the
+    // release; the self-test is done 5 ms after the release, but arming waits for the window (200 ms).
+    let boot_us = rig.boot(400_000).unwrap();
+    assert!((200_000..=202_000).contains(&boot_us), "{boot_us}");
+    rig.advance_to(2.0);
+    assert!(rig.fw.is_armed(), "{:?}", rig.fw.state());
+}
+
+#[test]
+fn clock_check_a_slow_or_fast_main_oscillator_never_arms() {
+    for pct in [0, 70, 130] {
+        let mut rig = SimRig::digital(clock_checked(), SwitchKind::Inductive, 5_000).unwrap();
+        rig.clock.set_reference_pct(pct);
+        assert_eq!(rig.boot(1_000_000), Err(State::Fault(Cause::ClockDrift)), "reference at {pct} %");
+        assert!(rig.stop_requested() && rig.category0_requested());
+    }
+    // Configured but no reference wired: the same fault.
+    let mut rig = SimRig::digital(clock_checked(), SwitchKind::Inductive, 5_000).unwrap();
+    assert_eq!(rig.boot(1_000_000), Err(State::Fault(Cause::ClockDrift)));
+}
+
+#[test]
+fn clock_check_drift_while_armed_stops_within_two_windows() {
+    let mut rig = SimRig::digital(clock_checked(), SwitchKind::Inductive, 5_000).unwrap();
+    rig.clock.set_reference_pct(100);
+    rig.boot(200_000).unwrap();
+    rig.advance_to(1.0);
+    assert!(rig.fw.is_armed());
+    rig.clock.set_reference_pct(0); // the reference oscillator dies (or the main one runs away)
+    rig.advance_to(1.0 + 2.0 * 0.050 + 0.001);
+    assert_eq!(rig.fw.state(), State::Fault(Cause::ClockDrift));
+    assert!(rig.stop_requested());
+}
