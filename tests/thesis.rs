@@ -309,3 +309,64 @@ fn every_shipped_scene_reports_a_first_impact_no_larger_than_the_run_and_inside_
         }
     }
 }
+
+// ---- Issue 15: the thesis's own account of Table 4 (braking after the object has left)
+
+#[test]
+fn table4_braking_held_until_the_second_hit_ends_matches_the_measured_peaks() {
+    for (name, measured, sd) in [("figures/table4_bistable_136g_detached.toml", 1.231, 0.054), ("figures/table4_bistable_246g_detached.toml", 1.430, 0.040)] {
+        let mut s = scene::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
+        s.solver.output_interval = 1e-5;
+        let (r, h) = sim::run(&s, true).unwrap();
+        let tb = r.t_brake.expect("it brakes once the second hit is over");
+        // No tool-object contact once braking has started, and braking not before detection + DT.
+        assert!(h.iter().filter(|x| x.t > tb + 1e-5).all(|x| x.f_contact == 0.0), "{name}: contact after braking");
+        assert!(tb >= r.t_detect.unwrap() + s.motion.dead_time - 1e-12, "{name}");
+        assert_eq!(r.contacts, 2, "{name}");
+        let v = r.object_peak_velocity.unwrap();
+        assert!((v - measured).abs() <= 2.0 * sd, "{name}: {v} m/s against the measured {measured} +- {sd}");
+        assert!(r.warnings.iter().any(|w| w.contains("brake_after_contact")), "{name}: the held braking is reported");
+    }
+}
+
+#[test]
+fn brake_held_for_a_contact_that_never_comes_never_brakes_and_says_so() {
+    let text = std::fs::read_to_string(scene_path("figures/table4_bistable_136g_detached.toml")).unwrap().replace("brake_after_contact = 2 ", "brake_after_contact = 9 ");
+    let r = run_text(&text);
+    assert_eq!(r.t_brake, None, "only 2 contacts happen: braking must stay held, visibly");
+    assert!(r.warnings.iter().any(|w| w.contains("never brakes")), "{:?}", r.warnings);
+}
+
+#[test]
+fn brake_after_contact_refuses_zero_and_fractions_with_file_line_key() {
+    let base = std::fs::read_to_string(scene_path("figures/table4_bistable_136g_detached.toml")).unwrap();
+    for bad in ["brake_after_contact = 0 ", "brake_after_contact = 1.5 ", "brake_after_contact = -2 "] {
+        let e = scene::parse(&base.replace("brake_after_contact = 2 ", bad), "v.toml").err().unwrap_or_else(|| panic!("{bad} accepted")).to_string();
+        assert!(e.contains("v.toml:") && e.contains("brake_after_contact"), "{bad}: {e}");
+    }
+}
+
+// ---- Issue 15: the Z prototype's statics (Tables 9-11)
+
+#[test]
+fn z_prototype_spring_cannot_hold_the_tool_on_the_back_stop_but_the_module_switches() {
+    use flinch_harness::validate::z_statics;
+    let s = scene::load(&scene_path("table11_z_prototype.toml")).unwrap();
+    let z = z_statics(&s).unwrap();
+    assert!((z.hold_n - 1.91).abs() < 0.01 && (z.weight_n - 2.2563).abs() < 1e-3, "{z:?}");
+    assert!(z.hold_n < z.weight_n, "at C2 = 25.25 mm the weight wins");
+    let (centre, rest) = z.holds_m.expect("some back strokes hold");
+    assert!((centre - 0.0153).abs() < 2e-4 && (rest - 0.0209).abs() < 2e-4, "{centre} {rest}");
+    // The run: past the weight-shifted dead centre, short of the back stop, in mode 1.
+    let (r, h) = sim::run(&s, true).unwrap();
+    let end = h.last().unwrap().s;
+    assert!(end < -centre && end > -s_back(&s), "ends at {end}");
+    assert_eq!(r.mode, Some(1));
+}
+
+fn s_back(s: &scene::Scene) -> f64 {
+    match &s.decoupler {
+        scene::Decoupler::Bistable(b) => b.back_stroke,
+        _ => f64::NAN,
+    }
+}

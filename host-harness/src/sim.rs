@@ -190,6 +190,10 @@ pub struct Simulation {
     name: String,
     dead_time: f64,
     external_brake: bool,
+    /// `motion.brake_after_contact` (0: off).
+    brake_after_contact: u32,
+    /// Detected, braking held until that contact ends.
+    brake_pending: bool,
     in_contact: bool,
     on_front: bool,
     on_back: bool,
@@ -303,6 +307,11 @@ impl Hybrid<N, E> for Simulation {
                 if self.plant.target.is_object() {
                     self.object_velocity_at_separation = Some(k.vp);
                 }
+                if self.brake_pending && self.contacts >= self.brake_after_contact {
+                    self.brake_pending = false;
+                    let due = self.t_detect.map_or(t, |d| d + self.dead_time).max(t);
+                    self.plant.motion.brake_at(due);
+                }
             }
             EV_FRONT => self.on_front = !self.on_front,
             EV_CONTACT_PUSH => self.contact_push = !self.contact_push,
@@ -320,8 +329,14 @@ impl Hybrid<N, E> for Simulation {
             EV_SWITCH => {
                 self.detected = true;
                 self.t_detect = Some(t);
+                let n = self.brake_after_contact;
+                let held = n > 0 && (self.contacts < n || (self.contacts == n && self.in_contact));
                 if !self.external_brake {
-                    self.plant.motion.brake_at(t + self.dead_time);
+                    if held {
+                        self.brake_pending = true;
+                    } else {
+                        self.plant.motion.brake_at(t + self.dead_time);
+                    }
                 }
             }
             _ => {}
@@ -483,6 +498,9 @@ impl Simulation {
         if plant.decoupler.friction_regularised() {
             warnings.push(format!("decoupler.friction.v0 below {} m/s was raised to it (Coulomb limit regularised, plant::friction)", plant::friction::V0_MIN));
         }
+        if scene.motion.brake_after_contact > 0 {
+            warnings.push(format!("motion.brake_after_contact = {}: braking held until tool-target contact {} has ended (a test of the thesis's account, not a controller; the robot never brakes if that contact does not happen)", scene.motion.brake_after_contact, scene.motion.brake_after_contact));
+        }
         if scene.sensor.is_none() {
             warnings.push("no [sensor]: nothing detects the collision and the robot never brakes".into());
         }
@@ -491,6 +509,8 @@ impl Simulation {
             name: scene.name.clone(),
             dead_time: scene.motion.dead_time,
             external_brake,
+            brake_after_contact: scene.motion.brake_after_contact,
+            brake_pending: false,
             in_contact: false,
             on_front: false,
             on_back: false,

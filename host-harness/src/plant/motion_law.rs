@@ -106,7 +106,7 @@ mod tests {
     use super::*;
 
     fn law() -> MotionLaw {
-        MotionLaw::new(&Motion { speed: 0.05, accel: 1.0, decel: 2.0, dead_time: 0.016, gravity: 0.0, start_at_speed: false })
+        MotionLaw::new(&Motion { speed: 0.05, accel: 1.0, decel: 2.0, dead_time: 0.016, gravity: 0.0, start_at_speed: false, brake_after_contact: 0 })
     }
 
     #[test]

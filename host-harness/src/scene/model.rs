@@ -46,6 +46,11 @@ pub struct Motion {
     /// `motion.start_at_speed`: at t = 0 flange, robot and tool already cruise at V_c (the
     /// Ch. 2 set-ups, where v_t = 1 m/s at impact); `accel` is then unused.
     pub start_at_speed: bool,
+    /// `motion.brake_after_contact`: braking does not start before tool-target contact number N
+    /// has ended (0: off, braking starts `dead_time` after detection). A test device for the
+    /// thesis's account of Table 4 (Ch. 2.5: the object detached before the deceleration began),
+    /// not a controller: it delays the stop.
+    pub brake_after_contact: u32,
 }
 
 /// Compliant robot, a base-excited mass (eq 33): Table 7 gives the Viper s650 values.

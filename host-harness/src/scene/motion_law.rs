@@ -20,8 +20,12 @@ pub const GRAVITY: Key = Key::number("gravity", "m/s^2", Incl(-9.81), Incl(9.81)
 pub const START_AT_SPEED: Key = Key::of("start_at_speed", Ty::Bool, "flange, robot and tool already cruise at V_c at t = 0 (the Ch. 2 set-ups); accel is then unused")
     .optional("false: the motion starts from rest");
 
+/// Hold braking until a contact has ended (Table 4's account, Ch. 2.5).
+pub const BRAKE_AFTER_CONTACT: Key = Key::integer("brake_after_contact", 1, 100, "a count of tool-target contacts; Table 4's variant holds braking until the 2nd has ended", "braking does not start before tool-target contact number N has ended (a test of the thesis's account of Table 4, Ch. 2.5, not a controller: it delays the stop)")
+    .optional("0: braking starts dead_time after detection");
+
 /// The keys of `[motion]`.
-pub const KEYS: &[Key] = &[SPEED, ACCEL, DECEL, DEAD_TIME, GRAVITY, START_AT_SPEED];
+pub const KEYS: &[Key] = &[SPEED, ACCEL, DECEL, DEAD_TIME, GRAVITY, START_AT_SPEED, BRAKE_AFTER_CONTACT];
 
 /// Reads `[motion]`.
 pub(super) fn motion(cx: &mut Ctx, t: &Tab) -> Option<Motion> {
@@ -32,6 +36,8 @@ pub(super) fn motion(cx: &mut Ctx, t: &Tab) -> Option<Motion> {
     let dead_time = cx.number(t, &DEAD_TIME);
     let gravity = cx.number(t, &GRAVITY);
     let start_at_speed = cx.boolean(t, &START_AT_SPEED);
+    // Absent reads as None without a message; an invalid value is reported and fails the load.
+    let brake_after_contact = cx.integer(t, &BRAKE_AFTER_CONTACT).unwrap_or(0);
     Some(Motion {
         speed: speed?,
         accel: accel?,
@@ -39,6 +45,7 @@ pub(super) fn motion(cx: &mut Ctx, t: &Tab) -> Option<Motion> {
         dead_time: dead_time?,
         gravity: gravity?,
         start_at_speed: start_at_speed?.unwrap_or(false),
+        brake_after_contact,
     })
 }
 
