@@ -36,13 +36,16 @@ fn a_70_ms_controller_on_the_tables5_7_module() {
     let v = r.speed_limit_simulated.expect("speed found by bisection");
     assert!((v / r.speed_limit_formula - 1.0).abs() < 0.10, "simulated limit {v}");
     let at = r.at_limit.as_ref().unwrap();
-    assert!(!at.summary.stroke_exhausted);
-    // At the limit the flange stops (within the history's resolution) at the target.
-    assert!(at.simulated_margin.unwrap().abs() < 0.5e-3, "{:?}", at.simulated_margin);
+    assert!(!at.summary.stroke_exhausted && at.summary.safe);
+    // At the limit the tool uses its stroke up to the back end-stop (bisection resolution).
+    let left = at.summary.stroke_left_min_m.unwrap();
+    assert!((0.0..0.5e-3).contains(&left), "{left}");
     // The design point: mode 1, the flange stops about C - 9.1 mm short of the target.
     assert_eq!(r.design.summary.mode, Some(1));
     assert!(!r.design.summary.stroke_exhausted);
-    assert!((r.design.simulated_margin.unwrap() - r.margin_formula).abs() < 1e-3, "{:?}", r.design.simulated_margin);
+    let left = r.design.summary.stroke_left_min_m.unwrap();
+    assert!((left - r.margin_formula).abs() < 1e-3, "{left}");
+    assert!(r.safe && r.failures.is_empty());
 }
 
 #[test]
@@ -51,7 +54,8 @@ fn too_fast_for_the_stroke_is_reported() {
     let r = design(&template(), None, Some(0.3), Some(0.07)).unwrap();
     assert!(r.margin_formula < 0.0);
     assert!(r.design.summary.stroke_exhausted, "the simulated flange reaches the target");
-    assert!(r.design.simulated_margin.unwrap() <= 0.0);
+    assert!(r.design.summary.stroke_left_min_m.unwrap() < 0.0);
+    assert!(!r.safe && r.failures.len() == 2, "{:?}", r.failures);
     // A given stroke overrides the scene's (C1:C2 kept 1:1).
     let r = design(&template(), Some(0.06), Some(0.3), Some(0.07)).unwrap();
     assert!((r.stroke - 0.06).abs() < 1e-12 && r.margin_formula > 0.0);

@@ -7,6 +7,7 @@
 
 use crate::scene::{Decoupler, Scene, Sensor};
 use crate::sim::{self, Summary};
+use crate::verdict;
 use flinch_firmware::stopping_distance_um;
 use serde::Serialize;
 
@@ -36,8 +37,14 @@ pub struct BudgetCheck {
     pub margin: f64,
     /// The budget holds.
     pub fits: bool,
-    /// The simulation of the same scene.
+    /// The simulation of the same scene (its `safe` and `failures`: crate::verdict).
     pub simulated: Summary,
+    /// The verdict of `check`: the budget fits and the simulation is safe (docs/verdicts.md).
+    pub safe: bool,
+    /// Why not, for people: the budget's failure and the simulation's (empty when safe).
+    pub failures: Vec<String>,
+    /// Why the budget and the simulation disagree, for people (crate::verdict::explain).
+    pub explanations: Vec<String>,
 }
 
 /// Checks a scene with a travel switch on a bi-stable or hydraulic decoupler.
@@ -54,5 +61,34 @@ pub fn check(scene: &Scene) -> Result<BudgetCheck, String> {
     let stop = stopping_distance_um(um_up(m.speed), um_up(m.dead_time), um_down(m.decel).max(1)) as f64 * 1e-6;
     let remaining = stroke - threshold;
     let (simulated, _) = sim::run(scene, false).map_err(|e| e.to_string())?;
-    Ok(BudgetCheck { stopping_distance: stop, stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits: stop <= remaining, simulated })
+    let fits = stop <= remaining;
+    let budget = verdict::Budget { stroke, switch_travel: threshold, stopping_distance: stop };
+    let explanations = verdict::explain(scene, &budget, &simulated);
+    let mut failures = Vec::new();
+    if !fits {
+        failures.push(format!("stroke budget: the stopping distance after detection {} exceeds the stroke left at detection {} (escalate to a category-0 stop)", verdict::mm(stop), verdict::mm(remaining)));
+    }
+    failures.extend(simulated.failures.iter().map(|f| format!("simulation: {f}")));
+    Ok(BudgetCheck { stopping_distance: stop, stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits, safe: failures.is_empty(), failures, explanations, simulated })
+}
+
+/// The human text of `flinch check`.
+pub fn human(c: &BudgetCheck) -> String {
+    use crate::verdict::{mm, mm_signed};
+    let s = &c.simulated;
+    let mut t = format!("{}\n", s.scene);
+    t.push_str(&format!("  stopping distance after detection v DT + v^2/2d = {}\n", mm(c.stopping_distance)));
+    t.push_str(&format!("  stroke C = {}, switch travel {}, left at detection {}\n", mm(c.stroke), mm(c.switch_travel), mm(c.remaining)));
+    t.push_str(&format!("  budget: {} (margin {})\n", if c.fits { "FITS" } else { "DOES NOT FIT: escalate to a category-0 stop" }, mm_signed(c.margin)));
+    t.push_str(&format!("  simulation: max travel {}, flange reached the target: {}\n", mm(s.max_travel), if s.stroke_exhausted { "YES" } else { "no" }));
+    t.push_str(&format!("  simulation {}\n", verdict::line(s)));
+    for e in &c.explanations {
+        t.push_str(&format!("  why: {e}\n"));
+    }
+    if c.safe {
+        t.push_str("  CHECK: SAFE (the budget fits and the simulated stroke holds)\n");
+    } else {
+        t.push_str(&format!("  CHECK: NOT SAFE: {}\n", c.failures.join("; ")));
+    }
+    t
 }

@@ -52,12 +52,9 @@ pub struct Trial {
     pub speed: f64,
     /// Stroke, m.
     pub stroke: f64,
-    /// The run.
+    /// The run: its `safe`, `failures`, `stroke_left_min_m` and `closest_approach_m` are the one
+    /// definition of crate::verdict.
     pub summary: Summary,
-    /// Closest approach of the flange to the obstacle after contact: the tool's distance from the
-    /// obstacle plus the travel left before the back end-stop, minimised over the run, m (<= 0
-    /// once the flange reaches the target). `None` for a free object, which moves away.
-    pub simulated_margin: Option<f64>,
 }
 
 /// The answers.
@@ -101,6 +98,16 @@ pub struct DesignReport {
     pub at_limit: Option<Trial>,
     /// Adjustments made to candidates (duration, gap).
     pub notes: Vec<String>,
+    /// The answer: the largest speed both the budget and the simulation call safe,
+    /// min(speed_limit_formula, speed_limit_simulated), m/s; null when the simulated search failed.
+    pub speed_limit_mps: Option<f64>,
+    /// The verdict at the design point, the same as `flinch check`'s: the budget fits and the
+    /// simulation is safe (crate::verdict).
+    pub safe: bool,
+    /// Why not, for people (empty when safe).
+    pub failures: Vec<String>,
+    /// Why the budget and the simulation disagree at the design point, for people.
+    pub explanations: Vec<String>,
 }
 
 /// A module the design can scale.
@@ -174,34 +181,14 @@ impl Candidates<'_> {
     }
     fn safe(&self, v: f64, c: f64) -> Option<bool> {
         let s = self.scene(v, c).ok()?;
-        crate::sim::run(&s, false).ok().map(|(r, _)| !r.stroke_exhausted)
+        crate::sim::run(&s, false).ok().map(|(r, _)| r.safe)
     }
 }
 
-/// Runs a scene, recording, and measures the flange's closest approach to a fixed obstacle.
+/// Runs a scene (its verdict is in the summary).
 fn trial_of(s: &Scene, v: f64, c: f64) -> Result<Trial, String> {
-    let (summary, history) = crate::sim::run(s, true).map_err(|e| format!("V_c = {v}, C = {c}: {e}"))?;
-    let margin = match (s.target.kind, summary.t_contact) {
-        (crate::scene::TargetKind::Obstacle, Some(tc)) => {
-            let plant = crate::plant::Plant::new(s);
-            let stop = plant.decoupler.back_stop();
-            // x_o = x_t(t_contact); the tool's distance from the obstacle is -(integral of v_t since
-            // contact); the travel left is minus the back end-stop's penetration.
-            let (mut gone, mut best) = (0.0_f64, f64::INFINITY);
-            let mut prev: Option<(f64, f64)> = None;
-            for h in history.iter().filter(|h| h.t >= tc) {
-                if let Some((t0, v0)) = prev {
-                    gone += 0.5 * (v0 + h.v_t) * (h.t - t0);
-                }
-                prev = Some((h.t, h.v_t));
-                let room = stop.map_or(f64::INFINITY, |b| -b.penetration(h.s));
-                best = best.min(-gone + room);
-            }
-            best.is_finite().then_some(best)
-        }
-        _ => None,
-    };
-    Ok(Trial { speed: v, stroke: c, simulated_margin: margin, summary })
+    let (summary, _) = crate::sim::run(s, false).map_err(|e| format!("V_c = {}, C = {}: {e}", crate::verdict::mps(v), crate::verdict::mm(c)))?;
+    Ok(Trial { speed: v, stroke: c, summary })
 }
 
 /// Speed that uses the budget exactly: v DT + v^2 / (2 d) = room.
@@ -215,17 +202,17 @@ pub fn speed_for_budget(room: f64, dead_time: f64, decel: f64) -> f64 {
 /// Scans `xs` (ascending) for the first boundary from `want_low` to its opposite and bisects it;
 /// `f` is None where the candidate is invalid. Returns the last x on the `want_low` side and the
 /// first x past it.
-fn boundary(xs: &[f64], f: &(dyn Fn(f64) -> Option<bool> + Sync), want_low: bool, iters: usize) -> Result<(f64, f64), String> {
+fn boundary(xs: &[f64], f: &(dyn Fn(f64) -> Option<bool> + Sync), want_low: bool, iters: usize, show: fn(f64) -> String) -> Result<(f64, f64), String> {
     let scan: Vec<Option<bool>> = xs.par_iter().map(|&x| f(x)).collect();
     let valid: Vec<(f64, bool)> = xs.iter().copied().zip(scan).filter_map(|(x, s)| s.map(|s| (x, s))).collect();
     if valid.is_empty() {
         return Err("the validator refuses every candidate".into());
     }
     let Some(k) = valid.iter().position(|&(_, s)| s != want_low) else {
-        return Err(format!("no boundary between {} and {}", valid[0].0, valid[valid.len() - 1].0));
+        return Err(format!("no boundary between {} and {}", show(valid[0].0), show(valid[valid.len() - 1].0)));
     };
     if k == 0 {
-        return Err(format!("already past the boundary at the smallest candidate {}", valid[0].0));
+        return Err(format!("already past the boundary at the smallest candidate {}", show(valid[0].0)));
     }
     let (mut lo, mut hi) = (valid[k - 1].0, valid[k].0);
     for _ in 0..iters {
@@ -262,7 +249,7 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     // The design point, validated, and the budget of `flinch check` on it.
     let design_scene = cand.scene(v, c).map_err(|e| e.to_string())?;
     let budget = check::check(&design_scene)?;
-    let design = trial_of(&design_scene, v, c)?;
+    let design = Trial { speed: v, stroke: c, summary: budget.simulated.clone() };
     let needed = d_sw + budget.stopping_distance;
     let mut notes = Vec::new();
     if cand.gap_for(v) > base.target.gap {
@@ -274,9 +261,9 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     // Smallest stroke, simulated: scan 0.4..2.5 x the formula's, then bisect.
     let strokes: Vec<f64> = (0..16).map(|i| needed * (0.4 + 2.1 * i as f64 / 15.0)).collect();
     let unsafe_at = |cc: f64| cand.safe(v, cc).map(|s| !s);
-    let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, 14) {
+    let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, 14, crate::verdict::mm) {
         Ok((_, first_safe)) => (Some(first_safe), None),
-        Err(e) => (None, Some(format!("stroke search over {:.1}..{:.1} mm ({} C1:C2 scaled together): {e}", strokes[0] * 1e3, strokes[15] * 1e3, module.name()))),
+        Err(e) => (None, Some(format!("stroke search over {:.2}..{:.2} mm ({} C1:C2 scaled together): {e}", strokes[0] * 1e3, strokes[15] * 1e3, module.name()))),
     };
     // Largest safe speed for this stroke, simulated: scan 0.1..3 x the formula's, then bisect.
     let v_formula = speed_for_budget(c - d_sw, dt, decel);
@@ -285,7 +272,7 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     let (speed_sim, speed_note, at_limit) = if v_formula <= 0.0 {
         (None, Some("the switch travel takes the whole stroke: no speed is safe".to_string()), None)
     } else {
-        match boundary(&speeds, &safe_at, true, 16) {
+        match boundary(&speeds, &safe_at, true, 16, crate::verdict::mps) {
             Ok((vmax, _)) => (Some(vmax), None, cand.trial(vmax, c).ok()),
             Err(e) => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}", speeds[0], speeds[19])), None),
         }
@@ -310,6 +297,10 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
         speed_search_note: speed_note,
         at_limit,
         notes,
+        speed_limit_mps: speed_sim.map(|s| s.min(v_formula)),
+        safe: budget.safe,
+        failures: budget.failures,
+        explanations: budget.explanations,
     })
 }
 
@@ -324,43 +315,57 @@ fn mode_text(m: Option<u8>) -> &'static str {
 
 /// The human answer.
 pub fn human(r: &DesignReport) -> String {
+    use crate::verdict::{mm, mm_signed, mps, ms};
     use std::fmt::Write;
-    let mm = |x: f64| format!("{:.2} mm", x * 1e3);
     let mut o = String::new();
     let _ = writeln!(o, "{} ({} module, m_t = {} kg)", r.scene, r.module, r.tool_mass);
-    let _ = writeln!(o, "  robot: V_c = {} m/s, DT = {} ms, d_c = {} m/s^2; switch travel d_sw = {}", r.speed, r.dead_time * 1e3, r.decel, mm(r.switch_travel));
+    let _ = writeln!(o, "  robot: V_c = {}, DT = {}, d_c = {} m/s^2; switch travel d_sw = {}", mps(r.speed), ms(r.dead_time), r.decel, mm(r.switch_travel));
     let _ = writeln!(o, "  stopping distance after detection v DT + v^2/2d = {}", mm(r.stopping_distance));
     let _ = writeln!(o, "stroke needed");
     let _ = writeln!(o, "  formula d_sw + v DT + v^2/2d = {}", mm(r.stroke_needed_formula));
     match (r.stroke_needed_simulated, &r.stroke_search_note) {
         (Some(s), _) => {
-            let _ = writeln!(o, "  simulated: smallest stroke at which the flange does not reach the target = {} ({:+.2} mm vs the formula)", mm(s), (s - r.stroke_needed_formula) * 1e3);
+            let _ = writeln!(o, "  simulated: smallest stroke that the tool does not exhaust while touching the target = {} ({} vs the formula)", mm(s), mm_signed(s - r.stroke_needed_formula));
         }
         (None, Some(n)) => {
-            let _ = writeln!(o, "  simulated: not found ({n}); the formula stands, with the simulated margin below");
+            let _ = writeln!(o, "  simulated: not found ({n}); the formula stands, with the simulated stroke left below");
         }
         _ => {}
     }
     let _ = writeln!(o, "this module, C = {}", mm(r.stroke));
-    let _ = writeln!(o, "  budget margin C - d_sw - stopping distance = {:+.2} mm: {}", r.margin_formula * 1e3, if r.margin_formula >= 0.0 { "FITS" } else { "DOES NOT FIT" });
+    let _ = writeln!(o, "  budget margin C - d_sw - stopping distance = {}: {}", mm_signed(r.margin_formula), if r.margin_formula >= 0.0 { "FITS" } else { "DOES NOT FIT" });
     let d = &r.design.summary;
-    let closest = |t: &Trial| t.simulated_margin.map_or("-".to_string(), |m| format!("{:+.2} mm", m * 1e3));
-    let _ = writeln!(o, "  simulated at V_c = {} m/s: max travel {}, closest approach of the flange to the target {}, flange reached the target: {}", r.speed, mm(d.max_travel), closest(&r.design), if d.stroke_exhausted { "YES" } else { "no" });
-    let _ = writeln!(o, "  working mode {}; peak force on the robot {:.1} N, peak contact force {:.1} N", mode_text(d.mode), d.peak_robot_force, d.peak_contact_force);
-    let _ = writeln!(o, "largest safe speed with this stroke and DT = {} ms", r.dead_time * 1e3);
-    let _ = writeln!(o, "  formula (v DT + v^2/2d = C - d_sw): {:.3} m/s", r.speed_limit_formula);
+    let _ = writeln!(o, "  simulated at V_c = {}: max travel {}, working mode {}; peak force on the robot {:.1} N, peak contact force {:.1} N", mps(r.speed), mm(d.max_travel), mode_text(d.mode), d.peak_robot_force, d.peak_contact_force);
+    let _ = writeln!(o, "  simulation {}", crate::verdict::line(d));
+    for e in &r.explanations {
+        let _ = writeln!(o, "  why: {e}");
+    }
+    let _ = writeln!(o, "largest safe speed with this stroke and DT = {} (safe: docs/verdicts.md)", ms(r.dead_time));
+    let _ = writeln!(o, "  formula (v DT + v^2/2d = C - d_sw): {}", mps(r.speed_limit_formula));
     match (r.speed_limit_simulated, &r.at_limit, &r.speed_search_note) {
         (Some(v), Some(t), _) => {
-            let _ = writeln!(o, "  simulated (no stroke exhaustion): {:.3} m/s ({:+.1} % vs the formula); there the flange stops {} short of the target, mode {}, peak force on the robot {:.1} N", v, (v / r.speed_limit_formula - 1.0) * 100.0, closest(t), mode_text(t.summary.mode), t.summary.peak_robot_force);
-            let _ = writeln!(o, "  => with this module and a {} ms controller the robot may go up to {:.3} m/s (your {} m/s: {})", r.dead_time * 1e3, v.min(r.speed_limit_formula), r.speed, if r.speed <= v.min(r.speed_limit_formula) { "OK" } else { "TOO FAST" });
+            let _ = writeln!(o, "  simulated: {} ({:+.1} % vs the formula); there: working mode {}, peak force on the robot {:.1} N, {}", mps(v), (v / r.speed_limit_formula - 1.0) * 100.0, mode_text(t.summary.mode), t.summary.peak_robot_force, crate::verdict::line(&t.summary));
         }
         (_, _, Some(n)) => {
             let _ = writeln!(o, "  simulated: not found ({n})");
         }
         _ => {}
     }
+    match r.speed_limit_mps {
+        Some(v) => {
+            let _ = writeln!(o, "  => with this module and a {} controller the robot may go up to {} (the smaller of the two)", ms(r.dead_time), mps(v));
+        }
+        None => {
+            let _ = writeln!(o, "  => no safe speed could be confirmed by simulation: do not rely on the formula alone");
+        }
+    }
     for n in &r.notes {
         let _ = writeln!(o, "  note: {n}");
+    }
+    if r.safe {
+        let _ = writeln!(o, "DESIGN: SAFE at V_c = {} (the budget fits and the simulated stroke holds)", mps(r.speed));
+    } else {
+        let _ = writeln!(o, "DESIGN: NOT SAFE at V_c = {}: {}", mps(r.speed), r.failures.join("; "));
     }
     o
 }
@@ -377,22 +382,23 @@ pub fn draw(path: &Path, t: &Template, r: &DesignReport) -> Result<(), String> {
     if let Some(v) = r.speed_limit_simulated {
         marks.push((v, format!("simulated safe limit {v:.3} m/s")));
     }
-    let exhausted: Vec<(f64, f64)> = speeds.iter().zip(&trials).filter_map(|(&v, t)| t.as_ref().filter(|t| t.summary.stroke_exhausted).map(|t| (v, t.summary.peak_robot_force))).collect();
+    let exhausted: Vec<(f64, f64)> = speeds.iter().zip(&trials).filter_map(|(&v, t)| t.as_ref().filter(|t| !t.summary.safe).map(|t| (v, t.summary.peak_robot_force))).collect();
     let mut force = vec![
         Series { name: "peak force on the robot".into(), points: pts(&|t| t.summary.peak_robot_force), color: PALETTE[0], style: Style::Line },
         Series { name: "peak contact force".into(), points: pts(&|t| t.summary.peak_contact_force), color: PALETTE[1], style: Style::Line },
     ];
     if !exhausted.is_empty() {
-        force.push(Series { name: "flange reached the target".into(), points: exhausted, color: splot::PALETTE[3], style: Style::Points });
+        force.push(Series { name: "not safe (stroke exhausted)".into(), points: exhausted, color: splot::PALETTE[3], style: Style::Points });
     }
     let budget: Vec<(f64, f64)> = speeds.iter().map(|&v| (v, (r.stroke - r.switch_travel - crate::plant::motion_law::MotionLaw::stopping_distance(v, r.dead_time, r.decel)) * 1e3)).collect();
     let panels = vec![
         Panel { caption: "peak forces".into(), y_label: "force [N]".into(), series: force, marks: marks.clone(), y_log: false },
         Panel {
-            caption: format!("stroke margin, C = {:.1} mm (> 0: the flange stops short of the target)", r.stroke * 1e3),
+            caption: format!("stroke margin, C = {:.1} mm (stroke left > 0: safe)", r.stroke * 1e3),
             y_label: "margin [mm]".into(),
             series: vec![
-                Series { name: "simulated: closest approach of the flange to the target".into(), points: pts(&|t| t.simulated_margin.map_or(f64::NAN, |m| m * 1e3)), color: PALETTE[2], style: Style::Line },
+                Series { name: "simulated: stroke left while touching the target (< 0: exhausted, not safe)".into(), points: pts(&|t| t.summary.stroke_left_min_m.map_or(f64::NAN, |m| m * 1e3)), color: PALETTE[2], style: Style::Line },
+                Series { name: "simulated: closest approach to the undeformed target (counts its deformation)".into(), points: pts(&|t| t.summary.closest_approach_m.map_or(f64::NAN, |m| m * 1e3)), color: PALETTE[3], style: Style::Dashed },
                 Series { name: "formula: C - d_sw - (v DT + v^2/2d)".into(), points: budget, color: PALETTE[5], style: Style::Dashed },
             ],
             marks: marks.clone(),
@@ -418,5 +424,5 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
             println!("  plot: {}", p.display());
         }
     }
-    Ok(!r.design.summary.stroke_exhausted && r.margin_formula >= 0.0)
+    Ok(r.safe)
 }

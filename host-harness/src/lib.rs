@@ -17,3 +17,4 @@ pub mod sim;
 pub mod solver;
 pub mod sweep;
 pub mod validate;
+pub mod verdict;

@@ -273,15 +273,10 @@ fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
         }
         report::to_json(&v)
     } else {
-        let mut t = format!("{}\n", sc.name);
-        t.push_str(&format!("  stopping distance after detection v DT + v^2/2d = {:.2} mm\n", c.stopping_distance * 1e3));
-        t.push_str(&format!("  stroke C = {:.2} mm, switch travel {:.2} mm, left at detection {:.2} mm\n", c.stroke * 1e3, c.switch_travel * 1e3, c.remaining * 1e3));
-        t.push_str(&format!("  budget: {} (margin {:+.2} mm)\n", if c.fits { "FITS" } else { "DOES NOT FIT: escalate to a category-0 stop" }, c.margin * 1e3));
-        t.push_str(&format!("  simulation: max travel {:.2} mm, flange reached the target: {}\n", c.simulated.max_travel * 1e3, if c.simulated.stroke_exhausted { "YES" } else { "no" }));
-        t
+        check::human(&c)
     };
     output::print(&text)?;
-    Ok(c.fits)
+    Ok(c.safe)
 }
 
 fn scenes_cmd(what: &ScenesCmd) -> Result<bool, Failure> {

@@ -78,7 +78,8 @@ pub struct Summary {
     pub object_final_velocity: Option<f64>,
     /// Working mode of Fig. 46 (1, 2, 3), null without a back end-stop.
     pub mode: Option<u8>,
-    /// True when the flange itself reached the target (through a bottomed or rigid tool).
+    /// True when the flange itself reached the target (through a bottomed or rigid tool): the
+    /// back end-stop engaged while the tool touched the target (docs/verdicts.md).
     pub stroke_exhausted: bool,
     /// Separation over approach velocity of the first contact.
     pub achieved_restitution: Option<f64>,
@@ -137,6 +138,24 @@ pub struct Summary {
     /// Why `detection_delay` is null: no contact, no detection, or a detection before the contact
     /// (the sensor fired on something else than the collision; t_detect is still reported).
     pub detection_delay_null_reason: Option<String>,
+    /// Smallest travel left before the back end-stop while the tool touched the target, m:
+    /// negative when the tool was pushed into the back end-stop while touching it (then
+    /// `stroke_exhausted`), 0 for a rigid tool (docs/verdicts.md). Null when the tool never
+    /// touched the target or the module has no back end-stop (see the reason).
+    pub stroke_left_min_m: Option<f64>,
+    /// Why `stroke_left_min_m` is null.
+    pub stroke_left_min_m_null_reason: Option<String>,
+    /// Largest deformation of the target (tool-target contact penetration) while touching, m.
+    pub target_deformation_max_m: Option<f64>,
+    /// Closest approach of the flange (the back end-stop plane) to the target's undeformed face
+    /// while touching: the stroke left minus the target's deformation at the same instant, m.
+    /// Negative when the target is compressed by more than the stroke left: the flange passes the
+    /// undeformed surface without the tool bottoming. Informative; `safe` does not use it.
+    pub closest_approach_m: Option<f64>,
+    /// The verdict (crate::verdict, one definition for every command): no entry in `failures`.
+    pub safe: bool,
+    /// Every reason the run is not safe, for people (empty when safe).
+    pub failures: Vec<String>,
 }
 
 /// The scene as the simulator models it: `scene` without the parts its `[solver]` lets it drop,
@@ -220,6 +239,10 @@ pub struct Simulation {
     peak_gas: f64,
     max_travel: f64,
     exhausted: bool,
+    /// While touching the target: smallest stroke left, largest deformation, closest approach.
+    stroke_left_min: Option<f64>,
+    deformation_max: Option<f64>,
+    closest_min: Option<f64>,
     record_every: Option<f64>,
     next_record: f64,
     /// The recorded time history (empty unless recording).
@@ -406,6 +429,16 @@ impl Hybrid<N, E> for Simulation {
         if k.delta > 0.0 && (bottomed || self.plant.decoupler.is_rigid()) {
             self.exhausted = true;
         }
+        // The same instants as `exhausted`, so stroke_left_min_m < 0 exactly when it is set (a
+        // rigid tool: 0 and exhausted).
+        if k.delta > 0.0 {
+            let left = if self.plant.decoupler.is_rigid() { Some(0.0) } else { self.plant.decoupler.back_stop().map(|b| -b.penetration(k.s)) };
+            self.deformation_max = Some(self.deformation_max.map_or(k.delta, |d| d.max(k.delta)));
+            if let Some(l) = left {
+                self.stroke_left_min = Some(self.stroke_left_min.map_or(l, |m| m.min(l)));
+                self.closest_min = Some(self.closest_min.map_or(l - k.delta, |m| m.min(l - k.delta)));
+            }
+        }
     }
 }
 
@@ -534,6 +567,9 @@ impl Simulation {
             peak_gas: 0.0,
             max_travel: 0.0,
             exhausted: false,
+            stroke_left_min: None,
+            deformation_max: None,
+            closest_min: None,
             record_every: record.then_some(scene.solver.output_interval.max(0.0)),
             next_record: 0.0,
             history: Vec::new(),
@@ -724,7 +760,12 @@ impl Run {
             }
         }
         let stats = self.driver.stats;
-        Summary {
+        let left_null = match (s.t_contact, s.stroke_left_min) {
+            (None, _) => Some("the tool never touched the target".to_string()),
+            (Some(_), None) => Some("the module has no back end-stop: its travel is not bounded by a stroke".to_string()),
+            _ => None,
+        };
+        let mut summary = Summary {
             scene: s.name.clone(),
             t_contact: s.t_contact,
             t_detect: s.t_detect,
@@ -759,7 +800,16 @@ impl Run {
             first_impact_peak_robot_force_n: s.t_contact.map(|_| s.first_impact_robot.0),
             first_impact_peak_robot_force_t_s: s.t_contact.map(|_| s.first_impact_robot.1),
             first_impact_peak_robot_force_null_reason: s.t_contact.is_none().then(|| "no tool-target contact in the run".to_string()),
-        }
+            stroke_left_min_m: s.stroke_left_min,
+            stroke_left_min_m_null_reason: left_null,
+            target_deformation_max_m: s.deformation_max,
+            closest_approach_m: s.closest_min,
+            safe: false,
+            failures: Vec::new(),
+        };
+        summary.failures = crate::verdict::failures(&summary);
+        summary.safe = summary.failures.is_empty();
+        summary
     }
 }
 

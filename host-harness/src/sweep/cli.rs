@@ -109,19 +109,21 @@ pub fn run(args: &SweepArgs) -> Result<bool, Failure> {
         plot::draw_with(path, &result, &args.metric, args.log_color).map_err(Failure::runtime)?;
     }
     let exhausted = result.metric("stroke_exhausted").iter().filter(|&&e| e == 1.0).count();
+    let not_safe = result.metric("safe").iter().filter(|&&e| e == 0.0).count();
     let modes: Vec<String> = (1..=3u8)
         .map(|m| (m, result.points.iter().filter(|p| p.outcome.as_ref().is_ok_and(|s| s.mode == Some(m))).count()))
         .filter(|&(_, n)| n > 0)
         .map(|(m, n)| format!("mode {m}: {n}"))
         .collect();
     output::note(&format!(
-        "{}: {} points in {:.2} s ({} threads){}{}{}{}{}",
+        "{}: {} points in {:.2} s ({} threads){}{}{}{}{}{}",
         template.base.name,
         result.points.len(),
         wall,
         args.jobs.unwrap_or_else(rayon::current_num_threads),
         if modes.is_empty() { String::new() } else { format!("; {}", modes.join(", ")) },
         if exhausted > 0 { format!("; stroke exhausted at {exhausted}") } else { String::new() },
+        if not_safe > 0 { format!("; NOT SAFE at {not_safe} (docs/verdicts.md)") } else { String::new() },
         if result.refused() > 0 { format!("; REFUSED by the validator at {} (status and reason columns; --strict refuses the sweep)", result.refused()) } else { String::new() },
         if result.failures() > 0 { format!("; SOLVER FAILED at {} (status and reason columns)", result.failures()) } else { String::new() },
         [csv_out.as_ref().filter(|p| !output::is_stdout(p)).map(|p| format!("; csv {}", p.display())), svg.as_ref().map(|p| format!("; plot {}", p.display()))].into_iter().flatten().collect::<String>(),

@@ -1,0 +1,153 @@
+//! One definition of "safe", used by every command: the run's summary, `flinch check`, `flinch
+//! design`, `flinch sweep` (docs/verdicts.md says it in words).
+//!
+//! Three lengths, all measured while the tool touches the target (contact penetration > 0), at the
+//! same instants the solver accepts a step:
+//!
+//! - **stroke left** (`stroke_left_min_m`): the tool's travel left before the back end-stop. It is
+//!   negative when the tool is pushed into the (compliant) back end-stop while touching the target:
+//!   the robot then pushes the target through a solid stack. That is **stroke exhausted**
+//!   (`stroke_exhausted`), and a rigid tool is exhausted on contact (stroke left 0).
+//! - **target deformation** (`target_deformation_max_m`): how far the tool's face is pressed into
+//!   the target (the Hertz contact of eq 5).
+//! - **closest approach** (`closest_approach_m`): the stroke left minus the deformation at the same
+//!   instant: the flange's distance to where the target's face was before it was pressed in. It can
+//!   be negative while the stroke is not exhausted (a soft target squashed by more than the stroke
+//!   left); the force limits, not this length, say whether that squeeze is acceptable.
+//!
+//! **Safe** means the list of failures is empty. A failure is: the stroke exhausted. The budget of
+//! `flinch check` (`v DT + v^2/2d <= C - d_sw`) is a second, independent verdict; `check` and
+//! `design` are favourable only when both are. Where the budget and the simulation disagree,
+//! [`explain`] says why (a free object pushed away, the tool bouncing into the back end-stop, the
+//! target's deformation, the robot's compliance).
+//!
+//! Human output rounds (lengths in mm to 0.01 mm, speeds in m/s to 1 mm/s, forces to 0.1 N); JSON
+//! keeps full precision.
+
+use crate::scene::{Scene, TargetKind};
+use crate::sim::Summary;
+
+/// A length for people: mm, two decimals.
+pub fn mm(x: f64) -> String {
+    format!("{:.2} mm", x * 1e3)
+}
+
+/// A signed length for people: mm, two decimals, with its sign.
+pub fn mm_signed(x: f64) -> String {
+    format!("{:+.2} mm", x * 1e3)
+}
+
+/// A speed for people: m/s, three decimals.
+pub fn mps(x: f64) -> String {
+    format!("{x:.3} m/s")
+}
+
+/// A time for people: ms, one decimal.
+pub fn ms(x: f64) -> String {
+    format!("{:.1} ms", x * 1e3)
+}
+
+/// Every reason a run is not safe (empty: safe). The one definition; see the module docs.
+pub fn failures(s: &Summary) -> Vec<String> {
+    let mut f = Vec::new();
+    if s.stroke_exhausted {
+        let how = match s.stroke_left_min_m {
+            Some(l) if l < 0.0 => format!("the tool was pushed {} into the back end-stop while touching the target", mm(-l)),
+            _ => "a rigid tool: nothing between the flange and the target absorbs the robot's stopping distance".to_string(),
+        };
+        f.push(format!("stroke exhausted: {how}, so the flange reached the target"));
+    }
+    f
+}
+
+/// One line stating the verdict of a run, for people.
+pub fn line(s: &Summary) -> String {
+    let left = s.stroke_left_min_m.map_or_else(|| s.stroke_left_min_m_null_reason.clone().unwrap_or_default(), |l| format!("stroke left while touching the target {}", mm_signed(l)));
+    let closest = match (s.closest_approach_m, s.target_deformation_max_m) {
+        (Some(c), Some(d)) => format!("; closest approach to the undeformed target {} (target deformed up to {})", mm_signed(c), mm(d)),
+        _ => String::new(),
+    };
+    if s.safe {
+        format!("verdict: SAFE ({left}{closest})")
+    } else {
+        format!("verdict: NOT SAFE: {} ({left}{closest})", s.failures.join("; "))
+    }
+}
+
+/// The stroke budget's inputs, for [`explain`].
+#[derive(Debug, Clone, Copy)]
+pub struct Budget {
+    /// Total stroke C, m.
+    pub stroke: f64,
+    /// Switch travel d_sw, m.
+    pub switch_travel: f64,
+    /// v DT + v^2/2d, m.
+    pub stopping_distance: f64,
+}
+
+impl Budget {
+    /// The budget holds.
+    pub fn fits(&self) -> bool {
+        self.stopping_distance <= self.stroke - self.switch_travel
+    }
+}
+
+/// Why the budget and the simulation of the same scene say different things, for people (empty
+/// when they agree and there is nothing the user should know).
+pub fn explain(scene: &Scene, b: &Budget, s: &Summary) -> Vec<String> {
+    let mut out = Vec::new();
+    let fits = b.fits();
+    let predicted = b.switch_travel + b.stopping_distance;
+    if let TargetKind::Object { mass, .. } = scene.target.kind {
+        out.push(format!(
+            "the target is a free object (m_p = {mass} kg): the budget assumes a fixed obstacle and counts the robot's whole stopping distance ({}) as travel, but the object was pushed away (up to {}), so the tool travelled only {}; the simulation's stroke left ({}) is what applies",
+            mm(b.stopping_distance),
+            mps(s.object_peak_velocity.unwrap_or(0.0)),
+            mm(s.max_travel),
+            s.stroke_left_min_m.map_or("-".into(), mm_signed)
+        ));
+    }
+    if s.max_travel > b.stroke + 1e-6 {
+        let over = s.max_travel - b.stroke;
+        if s.stroke_exhausted {
+            out.push(format!("the travel {} exceeds the stroke {} by {}: the tool was pushed into the compliant back end-stop while touching the target", mm(s.max_travel), mm(b.stroke), mm(over)));
+        } else {
+            out.push(format!(
+                "the travel {} exceeds the stroke {} by {}: the tool rode into the compliant back end-stop while NOT touching the target (it had bounced off it; {} contact{}), which does not bring the flange to the target",
+                mm(s.max_travel),
+                mm(b.stroke),
+                mm(over),
+                s.contacts,
+                if s.contacts == 1 { "" } else { "s" }
+            ));
+        }
+    }
+    if let (Some(d), Some(c), Some(l)) = (s.target_deformation_max_m, s.closest_approach_m, s.stroke_left_min_m) {
+        if d > 0.05e-3 && (c < 0.0) != (l < 0.0) {
+            out.push(format!(
+                "the target deformed by up to {}: counting it, the flange came within {} of the target's undeformed face, while the tool kept {} of stroke; safe is judged on the stroke left (the force on the target is what the deformation costs)",
+                mm(d),
+                mm_signed(c),
+                mm_signed(l)
+            ));
+        }
+    }
+    let obstacle = matches!(scene.target.kind, TargetKind::Obstacle);
+    if fits && s.stroke_exhausted {
+        out.push(format!(
+            "the budget fits but the simulation exhausts the stroke: the budget assumes the flange stops on its command ({} of travel at most) and a rigid target; the simulated robot's compliance and the tool's own dynamics carry it further. The simulation decides: NOT SAFE",
+            mm(predicted)
+        ));
+    } else if !fits && !s.stroke_exhausted && obstacle && s.t_contact.is_some() {
+        out.push(format!(
+            "the budget does not fit but the simulated tool kept stroke while touching the target: the budget counts the whole stopping distance as travel ({} needed, {} available); in the simulation the tool {}. Fail-safe: the budget's verdict stands",
+            mm(predicted),
+            mm(b.stroke),
+            if s.contacts > 1 { "bounced off the target and the flange's motion was not all travel" } else { "travel was less than the flange's motion" }
+        ));
+    }
+    if s.t_contact.is_none() {
+        out.push("the tool never touched the target in the simulated duration: nothing was confirmed".into());
+    }
+    out
+}

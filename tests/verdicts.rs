@@ -1,0 +1,132 @@
+//! One definition of "safe" (host-harness/src/verdict.rs, docs/verdicts.md): the contradictions of
+//! issue 17 as tests. Each would fail on the code before the verdict module: `check` said FITS
+//! beside a travel beyond the stroke with no reason, `design` called a speed safe next to a
+//! negative "closest approach", and printed raw floats among mm values.
+
+use flinch_harness::check::check;
+use flinch_harness::design::{design, human};
+use flinch_harness::sim;
+use flinch_harness::sweep::Template;
+use flinch_harness::verdict;
+use flinch_tests::scene_path;
+
+fn scene(name: &str) -> flinch_harness::scene::Scene {
+    flinch_harness::shipped::load(&scene_path(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn shipped() -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(scene_path("")).unwrap().filter_map(|e| e.ok()).map(|e| e.file_name().to_string_lossy().into_owned()).filter(|n| n.ends_with(".toml") && !n.starts_with("avoid_")).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn one_definition_on_every_shipped_scene() {
+    for name in shipped() {
+        let sc = scene(&name);
+        let (s, _) = sim::run(&sc, false).unwrap_or_else(|e| panic!("{name}: {e}"));
+        // safe <=> no failure <=> the stroke is not exhausted.
+        assert_eq!(s.safe, s.failures.is_empty(), "{name}");
+        assert_eq!(s.safe, !s.stroke_exhausted, "{name}: {:?}", s.failures);
+        // The stroke left while touching is negative exactly when the stroke is exhausted (0 for a
+        // rigid tool, which is exhausted on contact).
+        match s.stroke_left_min_m {
+            Some(l) => assert_eq!(s.stroke_exhausted, l < 0.0 || (l == 0.0 && s.t_contact.is_some()), "{name}: {l}"),
+            None => assert!(s.stroke_left_min_m_null_reason.is_some() && !s.stroke_exhausted, "{name}"),
+        }
+        // Closest approach = stroke left - deformation, so never above the stroke left.
+        if let (Some(c), Some(l)) = (s.closest_approach_m, s.stroke_left_min_m) {
+            assert!(c <= l + 1e-12, "{name}: {c} > {l}");
+        }
+        // check agrees with the run and with its own budget.
+        if let Ok(c) = check(&sc) {
+            assert_eq!(c.simulated.safe, s.safe, "{name}");
+            assert_eq!(c.safe, c.fits && s.safe, "{name}");
+            assert_eq!(c.safe, c.failures.is_empty(), "{name}");
+        }
+    }
+}
+
+#[test]
+fn a_rigid_tool_is_not_safe() {
+    let (s, _) = sim::run(&scene("tables5-7_rigid.toml"), false).unwrap();
+    assert!(!s.safe && s.stroke_exhausted);
+    assert_eq!(s.stroke_left_min_m, Some(0.0));
+    assert!(s.failures[0].contains("rigid tool"), "{:?}", s.failures);
+}
+
+#[test]
+fn travel_beyond_the_stroke_is_explained() {
+    // Issue 17: "budget fits by 5.37 mm while the simulated travel is 31.39 mm on a 30 mm stroke".
+    // The tool bounced off the hard surface and rode into the compliant back end-stop while not
+    // touching it: safe, and the output says why.
+    let c = check(&scene("tables5-7_bistable_v025.toml")).unwrap();
+    assert!(c.fits && c.simulated.max_travel > c.stroke + 1e-3);
+    assert!(c.safe && c.simulated.stroke_left_min_m.unwrap() > 1e-3);
+    assert!(c.explanations.iter().any(|e| e.contains("NOT touching") && e.contains("back end-stop")), "{:?}", c.explanations);
+    assert!(flinch_harness::check::human(&c).contains("why: the travel 31.39 mm exceeds the stroke 30.00 mm"));
+}
+
+#[test]
+fn a_free_object_pushed_away_is_explained_and_the_budget_still_fails_safe() {
+    // Issue 17: "DOES NOT FIT by 148.50 mm while the simulation shows the free object is pushed away".
+    let c = check(&scene("table12_hydraulic_object.toml")).unwrap();
+    assert!(!c.fits && c.simulated.safe);
+    assert!(!c.safe, "the budget's verdict stands: fail safe");
+    assert!(c.explanations.iter().any(|e| e.contains("free object") && e.contains("pushed away")), "{:?}", c.explanations);
+}
+
+#[test]
+fn budget_fits_but_stroke_exhausted_is_not_safe() {
+    // The worst case: a budget that fits must never hide an exhausted simulated stroke.
+    let sc = scene("tables5-7_bistable.toml");
+    let (mut s, _) = sim::run(&sc, false).unwrap();
+    s.stroke_exhausted = true;
+    s.stroke_left_min_m = Some(-1e-4);
+    let f = verdict::failures(&s);
+    assert_eq!(f.len(), 1);
+    assert!(f[0].contains("stroke exhausted") && f[0].contains("0.10 mm"), "{f:?}");
+    let b = verdict::Budget { stroke: 0.03, switch_travel: 0.005, stopping_distance: 0.001 };
+    assert!(b.fits());
+    assert!(verdict::explain(&sc, &b, &s).iter().any(|e| e.contains("NOT SAFE")));
+}
+
+#[test]
+fn design_safe_means_what_check_means_and_the_curve_agrees() {
+    // Issue 17: design called 0.182 m/s safe beside "stops -1.89 mm short of the target". Now the
+    // speed limit is where the stroke left while touching crosses zero; the closest approach to
+    // the undeformed (soft) target may be negative there and is printed as such, with its reason.
+    let t = Template::load(&scene_path("table14_hydraulic_surface.toml")).unwrap();
+    let r = design(&t, None, None, None).unwrap();
+    let c = check(&t.base).unwrap();
+    assert_eq!(r.safe, c.safe);
+    assert_eq!(r.failures, c.failures);
+    let at = r.at_limit.as_ref().expect("limit found");
+    assert!(at.summary.safe);
+    let left = at.summary.stroke_left_min_m.unwrap();
+    assert!((0.0..0.3e-3).contains(&left), "stroke left at the limit {left}");
+    // Just past the limit the stroke is exhausted.
+    let v = r.speed_limit_simulated.unwrap();
+    let past = design(&t, None, Some(v * 1.02), None).unwrap();
+    assert!(!past.design.summary.safe && past.design.summary.stroke_left_min_m.unwrap() < 0.0);
+    assert!(r.speed_limit_mps.unwrap() <= r.speed_limit_formula);
+    let text = human(&r);
+    assert!(text.contains("closest approach to the undeformed target -"), "{text}");
+}
+
+#[test]
+fn design_prints_no_raw_floats() {
+    // Issue 17: "smallest candidate 0.005268500000000001" among mm values. No number a person
+    // reads has more than three decimals.
+    let t = Template::load(&scene_path("tables5-7_bistable.toml")).unwrap();
+    for dt in [None, Some(0.07)] {
+        let text = human(&design(&t, None, None, dt).unwrap());
+        let b = text.as_bytes();
+        for i in 1..b.len() {
+            if b[i] == b'.' && b[i - 1].is_ascii_digit() {
+                let decimals = b[i + 1..].iter().take_while(|c| c.is_ascii_digit()).count();
+                assert!(decimals <= 3, "{} in\n{text}", &text[i.saturating_sub(8)..(i + 1 + decimals).min(text.len())]);
+            }
+        }
+    }
+}
