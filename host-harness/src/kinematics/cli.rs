@@ -51,24 +51,20 @@ pub fn describe(name: &str, robot: &UrdfRobot, r: &Reduced) -> String {
     let _ = writeln!(t, "{name}");
     let _ = writeln!(t, "  robot: {} from \"{}\" to \"{}\": {} moving joints, {:.3} kg of links moving", robot.urdf, c.base_link, c.tip_link, c.dof(), r.moving_mass_kg);
     let _ = writeln!(t, "  flange at [{:.4}, {:.4}, {:.4}] m, approach u = [{:.4}, {:.4}, {:.4}] (base frame)", r.tip_m[0], r.tip_m[1], r.tip_m[2], r.direction[0], r.direction[1], r.direction[2]);
-    let _ = writeln!(t, "  {:<16} {:>12} {:>14} {:>14} {:>16} {:>12}", "joint", "q", "K_q", "D_q", "J^T u", "compliance");
+    let w = c.joint_names.iter().map(String::len).max().unwrap_or(5).max(5);
+    let _ = writeln!(t, "  {:<w$}  {:>14}  {:>18}  {:>20}  {:>15}  {:>10}", "joint", "q", "K_q", "D_q", "J^T u", "compliance");
     for (i, s) in r.joints.iter().enumerate() {
         let u = unit(robot, i);
         let (ku, du, lu) = if u == "rad" { ("N m/rad", "N m s/rad", "m/rad") } else { ("N/m", "N s/m", "m/m") };
-        let _ = writeln!(
-            t,
-            "  {:<16} {:>8.4} {u:<3} {:>10.4e} {ku:<9} {:>8.3e} {du:<9} {:>9.5} {lu:<5} {:>10.1} %",
-            s.name,
-            robot.joints[i],
-            robot.joint_stiffness[i],
-            robot.joint_damping[i],
-            s.lever,
-            100.0 * s.compliance_share
-        );
+        let q = format!("{:.4} {u}", robot.joints[i]);
+        let k = format!("{:.4e} {ku}", robot.joint_stiffness[i]);
+        let d = format!("{:.4} {du}", robot.joint_damping[i]);
+        let l = format!("{:.5} {lu}", s.lever);
+        let _ = writeln!(t, "  {:<w$}  {q:>14}  {k:>18}  {d:>20}  {l:>15}  {:>8.1} %", s.name, 100.0 * s.compliance_share);
     }
-    let _ = writeln!(t, "  m_r = {:.4} kg      operational-space mass along u, 1/(u^T J M_q^-1 J^T u) (thesis eq 12, flange free across u)", r.mass_kg);
-    let _ = writeln!(t, "  k_r = {:.4e} N/m  1/(u^T J K_q^-1 J^T u), the Cartesian compliance along u (eq 14)", r.stiffness_npm);
-    let _ = writeln!(t, "  c_r = {:.4} N s/m   the joint dampers on the deflection K_q^-1 J^T u (eq 13)", r.damping_nspm);
+    let _ = writeln!(t, "  m_r = {:.4} kg: operational-space mass along u, 1/(u^T J M_q^-1 J^T u) (thesis eq 12, flange free across u)", r.mass_kg);
+    let _ = writeln!(t, "  k_r = {:.4e} N/m: 1/(u^T J K_q^-1 J^T u), the Cartesian compliance along u (eq 14)", r.stiffness_npm);
+    let _ = writeln!(t, "  c_r = {:.4} N s/m: the joint dampers on the deflection K_q^-1 J^T u (eq 13)", r.damping_nspm);
     let _ = writeln!(t, "  mobility |J^T u|/|J| = {:.4} (a configuration below {MIN_MOBILITY:.0e} is refused as singular)", r.mobility);
     match r.held {
         Some((m, k, d)) => {
