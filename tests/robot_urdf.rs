@@ -466,3 +466,49 @@ fn robot_report_says_where_each_value_comes_from() {
     assert!(t.contains("shoulder") && t.contains("elbow") && t.contains("%"), "{t}");
     assert!(t.contains("not defined (needs six joints"), "{t}");
 }
+
+// ---- six joints: the Viper s650 stand-in ----------------------------------------------------
+
+fn viper() -> Chain {
+    Chain::load(&scene_path("robots/viper_s650_standin.urdf"), "base", "flange").unwrap()
+}
+
+/// The URDF's frames are the standard Denavit-Hartenberg ones it says: the flange position is the
+/// product of `Rz(θ) Tz(d) Tx(a) Rx(α)`.
+#[test]
+fn viper_standin_frames_follow_its_dh_table() {
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+    let dh = [(0.075, 0.335, -PI / 2.0), (0.270, 0.0, 0.0), (0.090, 0.0, PI / 2.0), (0.0, 0.295, -PI / 2.0), (0.0, 0.0, PI / 2.0), (0.0, 0.080, 0.0)];
+    let chain = viper();
+    assert_eq!(chain.dof(), 6);
+    assert_close!(chain.moving_mass(), 20.8, 1e-12);
+    for q in [[0.0; 6], [0.1, -0.5, 0.7, 0.3, -0.9, 0.2], [1.0, 0.4, -1.2, 2.0, 0.5, -1.0]] {
+        let mut t = Isometry3::identity();
+        for (i, (a, d, al)) in dh.iter().enumerate() {
+            t = t * Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[i]))
+                * Isometry3::from_parts(Translation3::new(*a, 0.0, *d), UnitQuaternion::from_axis_angle(&Vector3::x_axis(), *al));
+        }
+        let at = chain.place(&q);
+        assert!((at.tip - t.translation.vector).norm() < 1e-12, "{q:?}: {} vs {}", at.tip, t.translation.vector);
+    }
+}
+
+/// The thesis's eq 12-14 element (flange held in the other five directions) is never below the
+/// free-flange value Flinch uses (Cauchy-Schwarz); both are given for a six-joint arm.
+#[test]
+fn viper_held_element_is_never_below_the_free_value() {
+    let chain = viper();
+    let k = [1.5e5, 1.5e5, 8.0e4, 2.0e4, 2.0e4, 1.0e4];
+    let d = [60.0, 60.0, 30.0, 8.0, 8.0, 4.0];
+    let mut compared = 0;
+    for q in [[0.1, -0.5, 0.7, 0.3, -0.9, 0.2], [1.0, 0.4, -1.2, 2.0, 0.5, -1.0], [0.0, -1.0, 1.5, 0.0, 1.0, 0.0]] {
+        for u in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.3, -0.5, 0.8]] {
+            let r = reduce(&chain, &q, u, &k, &d).unwrap();
+            let (m, ks, _) = r.held.expect("six joints away from a singularity");
+            assert!(m >= r.mass_kg * (1.0 - 1e-9), "held {m} < free {}", r.mass_kg);
+            assert!(ks >= r.stiffness_npm * (1.0 - 1e-9), "held {ks} < free {}", r.stiffness_npm);
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 12);
+}
