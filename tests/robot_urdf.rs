@@ -512,3 +512,38 @@ fn viper_held_element_is_never_below_the_free_value() {
     }
     assert_eq!(compared, 12);
 }
+
+/// Links off the chain ride as payload: a 1 kg point mass hung at the tip on a side branch (a fixed
+/// joint, or a revolute joint off the chain, held at zero) adds `m Jᵀ J` to the mass matrix.
+#[test]
+fn side_branch_links_count_as_payload_at_their_place() {
+    let t = two_link_text();
+    let payload = |ty: &str| {
+        t.replace(
+            "<link name=\"tip\"/>",
+            &format!(
+                "<link name=\"tip\"/><link name=\"camera\"><inertial><origin xyz=\"0 0 0\" rpy=\"0 0 0\"/><mass value=\"1\"/>\
+                 <inertia ixx=\"0\" ixy=\"0\" ixz=\"0\" iyy=\"0\" iyz=\"0\" izz=\"0\"/></inertial></link>\
+                 <joint name=\"cam\" type=\"{ty}\"><parent link=\"link2\"/><child link=\"camera\"/><origin xyz=\"0.4 0 0\" rpy=\"0.3 0.2 0.1\"/>\
+                 <axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>"
+            ),
+        )
+    };
+    let plain = two_link();
+    for ty in ["fixed", "revolute"] {
+        let branched = Chain::from_urdf_str(&payload(ty), "branched.urdf", "base", "tip").unwrap();
+        assert_eq!(branched.joint_names, ["shoulder", "elbow"], "{ty}: the side joint is not in the chain");
+        assert_close!(branched.moving_mass(), 6.0, 1e-12);
+        for q in [[0.3, 1.2], [-1.0, 2.5]] {
+            let (_, j) = two_link_closed_form(q);
+            let a = flinch_harness::kinematics::dynamics::mass_matrix(&plain, &plain.place(&q));
+            let b = flinch_harness::kinematics::dynamics::mass_matrix(&branched, &branched.place(&q));
+            for r in 0..2 {
+                for c in 0..2 {
+                    let add = j[0][r] * j[0][c] + j[1][r] * j[1][c];
+                    assert_close!(b[(r, c)], a[(r, c)] + add, 1e-9);
+                }
+            }
+        }
+    }
+}
