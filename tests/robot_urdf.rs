@@ -547,3 +547,25 @@ fn side_branch_links_count_as_payload_at_their_place() {
         }
     }
 }
+
+/// End to end beyond `run`: the stroke check and the firmware in the loop take the URDF scene, and
+/// a sweep over a joint refuses the singular pose (the stretched arm) instead of running it.
+#[test]
+fn check_hil_and_a_joint_sweep_take_the_urdf_scene() {
+    use flinch_harness::sweep::{Axis, Progress, Status, Sweep, Template};
+    let s = flinch_harness::scene::load(&scene_path("robot_two_link.toml")).unwrap();
+    let c = flinch_harness::check::check(&s).unwrap();
+    assert!(c.fits, "the example module's stroke absorbs the stop");
+    let ctl = flinch_harness::scene::Controller { scan_cycle: 0.016, phase: 0.0, firmware_tick: 1e-4 };
+    let (rep, _) = flinch_harness::hil::run(&s, &ctl, flinch_harness::hil::DEFAULT_STEP, false).unwrap();
+    assert!(rep.firmware.switch_time.is_some(), "the switch fires and the firmware sees it");
+
+    let text = scene_text().replace("shoulder = 0.3, elbow = 1.2", "shoulder = 0.0, elbow = 1.2");
+    let t = Template::from_text(&text, &scene_path("robot_two_link.toml").display().to_string()).unwrap();
+    let r = Sweep::keep_going(&t, vec![Axis::parse("robot.joints.elbow=0:1.2:3", false).unwrap()]).unwrap().run(Progress::Hidden);
+    assert_eq!(r.points.len(), 3);
+    assert_eq!(r.points[0].status, Status::Refused, "elbow = 0 is the stretched arm pushed along itself");
+    assert!(r.points[0].outcome.as_ref().unwrap_err().contains("singular configuration"));
+    let f: Vec<f64> = r.points[1..].iter().map(|p| p.outcome.as_ref().unwrap().peak_contact_force).collect();
+    assert!(f[0] != f[1], "a different pose is a different robot: {f:?}");
+}
