@@ -14,7 +14,7 @@ fn run(name: &str) -> (Avoid, PathResult) {
 
 fn thesis(name: &str) -> (Avoid, PathResult) {
     let mut scene = Avoid::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
-    scene.safety.mode = "off".into();
+    scene.thesis_mode();
     run_scene(scene)
 }
 
@@ -70,8 +70,9 @@ fn crossings_are_reported_as_collisions() {
     }
 }
 
-const ADVERSARIAL: [&str; 9] = [
+const ADVERSARIAL: [&str; 10] = [
     "avoid_operator_hand.toml",
+    "avoid_hand_at_tool.toml",
     "avoid_head_on.toml",
     "avoid_forearm_across.toml",
     "avoid_goal_covered.toml",
@@ -112,6 +113,31 @@ fn every_adversarial_scene_is_safe_with_the_monitor() {
         assert!(scene.safety.on(), "{name}: shipped with the monitor on");
         safe(name, &scene, &r);
     }
+}
+
+/// An empty workspace is flat once the raised plane's own weights are removed before eq 71: a
+/// diagonal move from 50 mm off one corner to 50 mm off the other arrives, at the cap speed. As the
+/// thesis wrote it (`--thesis`), the border walls stop it short.
+#[test]
+fn empty_workspace_reaches_the_goal_near_the_borders() {
+    let (scene, r) = run("avoid_empty_diagonal.toml");
+    safe("avoid_empty_diagonal.toml", &scene, &r);
+    assert_eq!(r.status, Status::Reached);
+    let straight = 0.95 * 2f64.sqrt();
+    assert!(r.path_length_m < straight * 1.02, "{} m", r.path_length_m);
+    let (_, t) = thesis("avoid_empty_diagonal.toml");
+    assert_ne!(t.status, Status::Reached, "the thesis's phantom walls: {:?}", t.status);
+}
+
+/// A hand beside the tool from the first frame (40 mm from its centre): the model-based robot
+/// removal keeps it, the monitor never moves; the thesis's masks erase it and the tool runs into it.
+#[test]
+fn hand_beside_the_tool_is_not_erased() {
+    let (scene, r) = run("avoid_hand_at_tool.toml");
+    safe("avoid_hand_at_tool.toml", &scene, &r);
+    assert!(r.max_speed_mps < 1e-9, "{}", r.max_speed_mps);
+    let (_, t) = thesis("avoid_hand_at_tool.toml");
+    assert!(matches!(t.status, Status::Collision(_)), "{:?}", t.status);
 }
 
 /// The thesis's law on every scene: whatever it does, the report is honest.

@@ -123,8 +123,8 @@ mod tests {
         scene.camera.m_per_px = 0.01;
         scene.robot.calibration_step_m = 0.06;
         scene.robot.calibration_dilate_m = 0.045;
-        // The field law's numbers, on the thesis's loop (monitor off, no latency).
-        scene.safety.mode = "off".into();
+        // The field law's numbers, on the thesis's loop (as the thesis wrote it, no latency).
+        scene.thesis_mode();
         scene.latency_s = 0.0;
         let setup = Setup::new(&scene, None).unwrap();
         let reference = simulate_with(&scene, &setup, &mut RefEngine::new(&scene).unwrap()).unwrap();

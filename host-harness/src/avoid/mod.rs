@@ -108,7 +108,7 @@ pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> 
 pub fn run(args: &AvoidArgs) -> Result<bool, String> {
     let mut scene = scene::Avoid::load(&args.scene)?;
     if args.thesis {
-        scene.safety.mode = "off".into();
+        scene.thesis_mode();
     }
     let cal = match &args.calibration {
         Some(p) => Some(calib::Calibration::load(p)?),
@@ -116,6 +116,9 @@ pub fn run(args: &AvoidArgs) -> Result<bool, String> {
     };
     let setup = Setup::new(&scene, cal).map_err(|e| format!("{}: {e}", args.scene.display()))?;
     if let Some(p) = &args.save_calibration {
+        if scene.robot.removal != "calibration" {
+            return Err("--save-calibration: this scene removes the robot by its height model (robot.removal = \"model\"), no calibration is run; use --thesis or robot.removal = \"calibration\"".into());
+        }
         setup.calibration.save(p)?;
     }
     if let Some(p) = &args.save_depth {
@@ -158,6 +161,11 @@ pub fn run(args: &AvoidArgs) -> Result<bool, String> {
         } else {
             println!("  monitor           OFF (the thesis's law alone; latency {} s)", scene.latency_s);
         }
+        println!(
+            "  robot removal     {}; raised plane {}",
+            if scene.robot.removal == "model" { "by the robot's height model" } else { "by calibration masks (thesis 5.2.1)" },
+            if scene.fit.remove_plane { "subtracted before eq 71" } else { "kept (thesis)" }
+        );
         println!(
             "  grid {} x {}, fit sigma = {:.3} x spacing/2, eval sigma x {:.2}; {} frames, {} steps of {} s",
             setup.fitter.grid.nx,

@@ -163,12 +163,16 @@ impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
     }
 }
 
-/// What is computed once per scene: the pseudo-inverses and the calibration.
+/// What is computed once per scene: the pseudo-inverses, the calibration (only with
+/// `robot.removal = "calibration"`) and the weights of the raised empty plane.
 pub struct Setup {
     /// Separable fitter.
     pub fitter: Fitter,
-    /// Robot masks.
+    /// Robot masks (empty with `robot.removal = "model"`).
     pub calibration: Calibration,
+    /// Weights of the empty plane raised by `fit.offset_m`, subtracted before eq 71 when
+    /// `fit.remove_plane` (the plane's own weights are larger at the borders: phantom walls).
+    pub plane_weights: Vec<f64>,
 }
 
 impl Setup {
@@ -177,7 +181,10 @@ impl Setup {
         let cam = scene.camera();
         let grid = RbfGrid::new(cam.width_px, cam.height_px, scene.fit.grid, cam.m_per_px, scene.fit.sigma_factor)?;
         let fitter = Fitter::new(grid)?;
+        let plane = super::depth::HeightMap { width: cam.width_px, height: cam.height_px, m: vec![scene.fit.offset_m; cam.width_px * cam.height_px] };
+        let plane_weights = fitter.weights(&plane);
         let calibration = match calibration {
+            _ if scene.robot.removal == "model" => Calibration { width: cam.width_px, height: cam.height_px, threshold_m: 0.0, positions: Vec::new(), masks: Vec::new() },
             Some(c) => {
                 if (c.width, c.height) != (cam.width_px, cam.height_px) {
                     return Err(format!(
@@ -204,7 +211,7 @@ impl Setup {
                 )
             }
         };
-        Ok(Setup { fitter, calibration })
+        Ok(Setup { fitter, calibration, plane_weights })
     }
 }
 
@@ -362,12 +369,73 @@ pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2
     let robot = scene.robot_shape();
     let op = scene.operator_shape();
     let img = render(&cam, Some((&robot, tool)), Some((&op, hand)), rng);
-    let mut map = preprocess(&img, &cam, 0.0, Some((&setup.calibration, tool)));
-    let sep = nearest_obstacle(&map, cam.m_per_px, tool, scene.safety.sense_height_m);
+    let mut map = if scene.robot.removal == "model" {
+        let mut m = preprocess(&img, &cam, 0.0, None);
+        remove_robot_by_model(&mut m, cam.m_per_px, &robot, tool, scene.robot.removal_margin_m);
+        m
+    } else {
+        preprocess(&img, &cam, 0.0, Some((&setup.calibration, tool)))
+    };
+    let sep = if scene.robot.removal == "model" {
+        sensed_separation(&img, &cam, &robot, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
+    } else {
+        nearest_obstacle(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
+    };
     super::depth::raise(&mut map, scene.fit.offset_m);
     let mut w = setup.fitter.weights(&map);
+    if scene.fit.remove_plane {
+        for (v, p) in w.iter_mut().zip(&setup.plane_weights) {
+            *v -= p;
+        }
+    }
     filter_weights(&mut w);
     (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep)
+}
+
+/// Robot removal by the robot-only height model: a pixel is cleared only when the robot, at the
+/// position it reports, stands there and the measured height is no more than the robot's own height
+/// there plus `margin_m` (it is explained by the robot). Everything else is kept: a hand beside the
+/// wrist or the link stays in the image. The model is grown by nothing: the robot's position
+/// uncertainty belongs in the monitor's `Z_r`. What stays hidden is only what the robot itself
+/// occludes from the camera (under the wrist and the link). Returns the pixels cleared.
+pub fn remove_robot_by_model(map: &mut super::depth::HeightMap, m_per_px: f64, robot: &super::depth::RobotShape, tool: [f64; 2], margin_m: f64) -> usize {
+    let mut n = 0;
+    let w = map.width;
+    for (k, v) in map.m.iter_mut().enumerate() {
+        let p = [((k % w) as f64 + 0.5) * m_per_px, ((k / w) as f64 + 0.5) * m_per_px];
+        let hr = robot.height_at(tool, p);
+        if hr > 0.0 && *v <= hr + margin_m {
+            *v = 0.0;
+            n += 1;
+        }
+    }
+    n
+}
+
+/// The separation the monitor uses, from the raw depth image: the distance from the tool to the
+/// nearest valid pixel higher than `sense_m` that the robot's height model does not explain (see
+/// [`remove_robot_by_model`]), less half a pixel, m. Null pixels are not filled here: a filled pixel
+/// beside the robot would borrow the robot's height and read as an obstacle.
+pub fn sensed_separation(img: &super::depth::DepthImage, cam: &super::depth::Camera, robot: &super::depth::RobotShape, tool: [f64; 2], margin_m: f64, sense_m: f64) -> f64 {
+    let mut best = f64::INFINITY;
+    let w = img.width;
+    for (k, &d) in img.mm.iter().enumerate() {
+        if d == 0 {
+            continue;
+        }
+        let p = [((k % w) as f64 + 0.5) * cam.m_per_px, ((k / w) as f64 + 0.5) * cam.m_per_px];
+        let h = cam.camera_height_m - d as f64 * 1e-3;
+        let hr = robot.height_at(tool, p);
+        if h <= sense_m || (hr > 0.0 && h <= hr + margin_m) {
+            continue;
+        }
+        best = best.min((p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2));
+    }
+    if best.is_finite() {
+        (best.sqrt() - 0.5 * cam.m_per_px).max(0.0)
+    } else {
+        NOTHING_SENSED_M
+    }
 }
 
 /// Distance from `p` to the nearest pixel above `height_m`, less half a pixel, m.
@@ -598,8 +666,8 @@ mod tests {
         s.robot.calibration_dilate_m = 0.045;
         s.repulsion = repulsion.into();
         s.max_time_s = 8.0;
-        // These tests are about the thesis's field law itself: the monitor off, no latency.
-        s.safety.mode = "off".into();
+        // These tests are about the thesis's field law itself: as the thesis wrote it, no latency.
+        s.thesis_mode();
         s.latency_s = 0.0;
         s.operator.keyframes = vec![super::super::scene::Keyframe { t_s: 0.0, hand_m: hand }];
         s
@@ -657,5 +725,60 @@ mod tests {
         pts.extend((0..10).map(|k| [0.1 + k as f64 * 0.01, 0.0]));
         pts.extend(std::iter::repeat([0.5, 0.0]).take(10));
         assert_eq!(count_stalls(&pts, [0.5, 0.0], 3, 0.005, 0.01), 1);
+    }
+}
+
+#[cfg(test)]
+mod blind_zone {
+    use super::*;
+
+    /// The sensed separation never exceeds the true one by more than a pixel: a hand beside the
+    /// tool, 5 to 60 mm from the wrist's edge, all round it, must be seen.
+    #[test]
+    fn a_hand_beside_the_tool_is_seen() {
+        let mut scene = tests::small_scene("vortex", [0.5, 0.5]);
+        scene.robot.removal = "model".into();
+        scene.camera.noise_mm = 0.0;
+        scene.camera.null_fraction = 0.0;
+        let setup = Setup::new(&scene, None).unwrap();
+        let mut thesis = scene.clone();
+        thesis.thesis_mode();
+        let thesis_setup = Setup::new(&thesis, None).unwrap();
+        let (mut worst, mut thesis_worst): (f64, f64) = (0.0, 0.0);
+        let mut rng = Rng::new(1);
+        for tool in [[0.40, 0.50], [0.43, 0.47], [0.6, 0.3]] {
+            for k in 0..8 {
+                let a = k as f64 * std::f64::consts::PI / 4.0;
+                for gap in [0.005, 0.02, 0.04, 0.06] {
+                    let r = scene.robot.wrist_radius_m + scene.operator.hand_radius_m + gap;
+                    let hand = [tool[0] + r * a.cos(), tool[1] + r * a.sin()];
+                    // A hand alone (the forearm ends at the hand).
+                    let mut s = scene.clone();
+                    s.operator.entry_m = hand;
+                    let (_, sep) = fit_and_sense(&s, &setup, tool, hand, &mut rng);
+                    let mut t = s.clone();
+                    t.thesis_mode();
+                    let (_, thesis_sep) = fit_and_sense(&t, &thesis_setup, tool, hand, &mut rng);
+                    // The visible operator: pixels where it stands above the robot (what the robot
+                    // occludes, under the wrist and the link, no overhead camera can see).
+                    let (op, robot) = (s.operator_shape(), s.robot_shape());
+                    let px = s.camera.m_per_px;
+                    let mut truth = f64::INFINITY;
+                    for k in 0..s.camera.width_px * s.camera.height_px {
+                        let q = [((k % s.camera.width_px) as f64 + 0.5) * px, ((k / s.camera.width_px) as f64 + 0.5) * px];
+                        let ho = op.height_at(hand, q);
+                        if ho > s.safety.sense_height_m && ho > robot.height_at(tool, q) {
+                            truth = truth.min(((q[0] - tool[0]).powi(2) + (q[1] - tool[1]).powi(2)).sqrt() - 0.5 * px);
+                        }
+                    }
+                    worst = worst.max(sep - truth);
+                    thesis_worst = thesis_worst.max(thesis_sep - truth);
+                    assert!(sep <= truth + scene.camera.m_per_px, "tool {tool:?}, hand at {a:.2} rad, {gap} m from the wrist: sensed {sep} m, true {truth} m");
+                }
+            }
+        }
+        // The thesis's masks overstate the separation by centimetres (the test can tell them apart).
+        assert!(thesis_worst > 0.03, "thesis removal overstates by {thesis_worst} m");
+        assert!(worst <= scene.camera.m_per_px, "{worst}");
     }
 }

@@ -168,6 +168,14 @@ pub struct FitCfg {
     pub eval_sigma_factor: f64,
     /// Raise before fitting, m (about 0.065 in the thesis).
     pub offset_m: f64,
+    /// Subtract the raised empty plane's own weights before eq 71 (default true): without it the
+    /// plane's larger border weights survive the threshold as walls up to ~0.1 m high.
+    #[serde(default = "yes")]
+    pub remove_plane: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// `[avoid.robot]`.
@@ -191,6 +199,21 @@ pub struct RobotCfg {
     /// Growth of each mask, m (0 = the thesis's plain cut).
     #[serde(default)]
     pub calibration_dilate_m: f64,
+    /// `"model"` (default): clear only the pixels the robot's own height model explains;
+    /// `"calibration"`: the thesis's masks (5.2.1), which also clear whatever is near the robot.
+    #[serde(default = "default_removal")]
+    pub removal: String,
+    /// With `removal = "model"`: a pixel on the robot is cleared when it is no higher than the
+    /// robot there plus this, m.
+    #[serde(default = "default_removal_margin")]
+    pub removal_margin_m: f64,
+}
+
+fn default_removal() -> String {
+    "model".into()
+}
+fn default_removal_margin() -> f64 {
+    0.02
 }
 
 /// `[avoid.operator]`.
@@ -279,6 +302,10 @@ impl Avoid {
             }
         };
         range("latency_s", self.latency_s, 0.0, 10.0)?;
+        if !matches!(self.robot.removal.as_str(), "model" | "calibration") {
+            return Err(format!("avoid.robot.removal = {:?}: expected \"model\" or \"calibration\"", self.robot.removal));
+        }
+        range("robot.removal_margin_m", self.robot.removal_margin_m, 0.0, 1.0)?;
         let sf = &self.safety;
         if !matches!(sf.mode.as_str(), "ssm" | "off") {
             return Err(format!("avoid.safety.mode = {:?}: expected \"ssm\" or \"off\"", sf.mode));
@@ -333,6 +360,14 @@ impl Avoid {
             return Err("avoid.operator.keyframes: t_s must increase".into());
         }
         Ok(())
+    }
+
+    /// Everything as the thesis wrote it, for comparison: no monitor, calibration masks, no plane
+    /// removal (`flinch avoid --thesis`).
+    pub fn thesis_mode(&mut self) {
+        self.safety.mode = "off".into();
+        self.robot.removal = "calibration".into();
+        self.fit.remove_plane = false;
     }
 
     /// Image extent on the plane, m.
