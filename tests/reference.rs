@@ -264,6 +264,7 @@ scenes! {
     tables5_7_bistable_v025 => "tables5-7_bistable_v025.toml";
     tables5_7_rigid => "tables5-7_rigid.toml";
     robot_two_link => "robot_two_link.toml";
+    robot_viper_standin => "robot_viper_standin.toml";
 }
 
 #[test]

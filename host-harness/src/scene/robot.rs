@@ -63,7 +63,10 @@ pub const KEYS: &[Key] = &[MASS, STIFFNESS, DAMPING, URDF, BASE_LINK, TIP_LINK, 
 const URDF_KEYS: [&Key; 7] = [&URDF, &BASE_LINK, &TIP_LINK, &JOINTS, &DIRECTION, &JOINT_STIFFNESS, &JOINT_DAMPING];
 
 /// The URDFs shipped in `scenes/robots/`, embedded so the shipped scenes run from any directory.
-const SHIPPED_URDFS: &[(&str, &str)] = &[("robots/two_link.urdf", include_str!("../../../scenes/robots/two_link.urdf"))];
+const SHIPPED_URDFS: &[(&str, &str)] = &[
+    ("robots/two_link.urdf", include_str!("../../../scenes/robots/two_link.urdf")),
+    ("robots/viper_s650_standin.urdf", include_str!("../../../scenes/robots/viper_s650_standin.urdf")),
+];
 
 /// A `[robot]` given by its URDF: what `flinch robot` prints and sweeps.
 #[derive(Debug, Clone)]
