@@ -88,3 +88,53 @@ fn a_rigid_tool_is_refused_with_a_reason() {
     let e = hil::run(&sc, &ctl, hil::DEFAULT_STEP, false).unwrap_err();
     assert!(e.contains("sensor.kind") && e.contains("travel"), "{e}");
 }
+
+// ---- Single faults in the loop (issue 10): each ends in stop until a person resets ---------------
+
+fn with_faults(scene: &Scene, two_channels: bool, faults: Vec<hil::Injection>) -> hil::HilReport {
+    let ctl = Controller { scan_cycle: SCAN, phase: 0.3, firmware_tick: 1e-3 };
+    let opts = hil::HilOptions { faults, two_channels };
+    hil::run_with(scene, &ctl, hil::DEFAULT_STEP, false, &opts).unwrap_or_else(|e| panic!("{e}")).0
+}
+
+#[test]
+fn every_single_fault_at_the_worst_instants_ends_in_stop_with_two_channels() {
+    let sc = bistable();
+    let t_sw = sim::run(&sc, false).unwrap().0.t_detect.unwrap();
+    // Right after the start, just before the switch fires (during detection), at the switch instant,
+    // half a scan cycle later (the controller has not sampled yet), and once the trip has latched.
+    let instants = [0.0, t_sw - 1e-4, t_sw, t_sw + SCAN / 2.0, t_sw + 3.0 * SCAN];
+    for &(name, kind, _) in hil::FAULTS {
+        for &at_s in &instants {
+            let h = with_faults(&sc, true, vec![hil::Injection { kind, at_s }]);
+            let o = &h.firmware.faults[0];
+            assert!(!o.ended_in_go, "{name}@{at_s}: ended in go ({})", o.reason);
+            assert!(o.stopped_s.is_some(), "{name}@{at_s}: never stopped");
+            assert!(o.reason.starts_with("stopped"), "{name}@{at_s}: {}", o.reason);
+        }
+    }
+}
+
+#[test]
+fn one_channel_stuck_at_rest_is_the_fault_it_cannot_see_and_the_report_says_go() {
+    let sc = bistable();
+    let h = with_faults(&sc, false, vec![hil::Injection { kind: hil::FaultKind::StuckRest, at_s: 0.1 }]);
+    let o = &h.firmware.faults[0];
+    assert!(o.ended_in_go && o.stopped_s.is_none(), "{o:?}");
+    assert!(h.summary.t_brake.is_none(), "the robot never braked: the collision went unnoticed");
+    // The same fault with the second channel: stopped by channel B at the demand, latched.
+    let h = with_faults(&sc, true, vec![hil::Injection { kind: hil::FaultKind::StuckRest, at_s: 0.1 }]);
+    assert!(h.summary.t_brake.is_some());
+    assert_eq!(h.firmware.faults[0].reason, "stopped: fault latched (discrepancy)");
+}
+
+#[test]
+fn fault_specs_parse_and_bad_ones_say_what_is_allowed() {
+    let f = hil::parse_faults("welded-output@0.3, stuck-rest@0.2,reset@0.25").unwrap();
+    let kinds: Vec<_> = f.iter().map(|i| (i.kind, i.at_s)).collect();
+    assert_eq!(kinds, [(hil::FaultKind::StuckRest, 0.2), (hil::FaultKind::Reset, 0.25), (hil::FaultKind::WeldedOutput, 0.3)]);
+    assert!(hil::parse_faults("nope@1").unwrap_err().contains("stuck-rest"));
+    assert!(hil::parse_faults("reset@-1").unwrap_err().contains(">= 0"));
+    assert!(hil::parse_faults("reset").unwrap_err().contains("NAME@SECONDS"));
+    assert!(hil::parse_faults("").unwrap().is_empty());
+}

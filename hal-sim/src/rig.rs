@@ -13,7 +13,7 @@
 
 use super::{PinFault, SimAdc, SimClock, SimPin};
 use flinch_firmware::{
-    AnalogConfig, AnalogTravel, Boot, Cause, Config, ConfigError, DigitalSwitch, DualSwitch, Edm, Firmware, Micros, Mm, Sensor, State, SwitchKind,
+    AnalogConfig, AnalogTravel, Boot, Cause, ResetCause, Config, ConfigError, DigitalSwitch, DualSwitch, Edm, Firmware, Micros, Mm, Sensor, State, SwitchKind,
     TripEvent,
 };
 
@@ -75,6 +75,16 @@ impl SimRig<DigitalSwitch<SimPin, SimPin>> {
         Ok(rig)
     }
 
+    /// The MCU resets (`cause`, e.g. the watchdog) at the current instant: the firmware starts again
+    /// from the retained record it left, with the same pins and clock (the board's `.uninit` latch).
+    pub fn mcu_reset(&mut self, cause: ResetCause) {
+        if let PlantInput::Switch { pin, kind, switch_travel_um } = &self.input {
+            let supply = self.supply.clone().unwrap_or_else(|| SimPin::new(true));
+            let sensor = DigitalSwitch::with_supply(pin.clone(), supply, *kind, *switch_travel_um);
+            self.restart(cause, sensor);
+        }
+    }
+
     /// The switch input's pin handle (inject faults with [`SimRig::inject_switch_fault`]).
     pub fn switch_pin(&self) -> Option<&SimPin> {
         match &self.input {
@@ -105,6 +115,17 @@ impl SimRig<DualSwitch<SimPin, SimPin, SimPin>> {
         let mut rig = SimRig::with_sensor(cfg, boot, sensor, input)?;
         rig.supply = Some(supply);
         Ok(rig)
+    }
+
+    /// The MCU resets: as [`SimRig::mcu_reset`] for the single switch.
+    pub fn mcu_reset(&mut self, cause: ResetCause) {
+        if let PlantInput::Dual { a, kind_a, b, kind_b, switch_travel_um } = &self.input {
+            let supply = self.supply.clone().unwrap_or_else(|| SimPin::new(true));
+            let disc = self.fw.sensor().discrepancy_us();
+            let sensor =
+                DualSwitch::new(a.clone(), *kind_a, b.clone(), *kind_b, *switch_travel_um, disc).with_supply(supply);
+            self.restart(cause, sensor);
+        }
     }
 
     /// Channel A's and channel B's pin handles (inject faults with [`SimRig::inject_pin_fault`]).
@@ -160,6 +181,17 @@ impl<S: Sensor> SimRig<S> {
             phase_us: 0,
             edge_irq: true,
         })
+    }
+
+    fn restart(&mut self, cause: ResetCause, sensor: S) {
+        let boot = Boot { cause, retained: self.fw.retained() };
+        let cfg = *self.fw.config();
+        let (stop, esc, reset) = (self.stop.clone(), self.escalation.clone(), self.reset.clone());
+        // The configuration was valid when the rig was built, so this cannot fail; if it did, the
+        // old firmware would keep running, which the caller sees in the state.
+        if let Ok(fw) = Firmware::after_reset(cfg, boot, self.clock.clone(), sensor, stop, esc, reset) {
+            self.fw = fw.with_feedback(Edm::new(self.k1.clone(), self.k2.clone()));
+        }
     }
 
     /// Start the firmware's clock at `start` (before [`SimRig::boot`]); e.g. just before the u32 wrap.

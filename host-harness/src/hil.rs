@@ -11,8 +11,8 @@
 use crate::check::{um_down, um_up};
 use crate::scene::{Controller, Decoupler, Scene, Sensor};
 use crate::sim::{Run, Sample, Summary};
-use flinch_firmware::{BudgetConfig, Config, ResetPolicy, SwitchKind};
-use flinch_hal_sim::SimRig;
+use flinch_firmware::{Boot, BudgetConfig, Config, DigitalSwitch, DualSwitch, ResetCause, ResetPolicy, State, SwitchKind};
+use flinch_hal_sim::{PinFault, SimPin, SimRig};
 use serde::Serialize;
 
 /// Default lockstep interval between plant and firmware, s.
@@ -66,6 +66,8 @@ pub struct FirmwareFigures {
     pub category0: bool,
     /// The firmware's event log.
     pub event_log: Vec<LoggedEvent>,
+    /// The injected faults (`--fault`) and whether each ended in a stop.
+    pub faults: Vec<FaultOutcome>,
 }
 
 /// The `flinch hil --json` object: the run's summary plus the firmware's figures.
@@ -92,9 +94,120 @@ fn um(x: f64) -> u32 {
 }
 
 
+/// A fault `flinch hil --fault` can inject, and what it does to the simulated hardware.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultKind {
+    /// The switch input (channel A of a two-channel switch) sticks at its "tool at rest" level.
+    StuckRest,
+    /// The switch input (channel A) sticks at its "tripped" level.
+    StuckTrip,
+    /// The switch input's wire (channel A) is cut: it reads its pull-down level.
+    CutWire,
+    /// Channel B of a two-channel switch sticks at rest (refused with one channel).
+    StuckRestB,
+    /// Stop relay K1's contacts weld: its mirror contact never reads "released" again.
+    WeldedOutput,
+    /// K1's feedback wire breaks towards "released" (reads released while pulled in).
+    EdmWireCut,
+    /// The firmware's clock stops.
+    ClockStall,
+    /// The MCU resets (as the watchdog does); the firmware restarts from its retained latch.
+    Reset,
+}
+
+/// Every fault name `--fault` accepts, with what it does.
+pub const FAULTS: &[(&str, FaultKind, &str)] = &[
+    ("stuck-rest", FaultKind::StuckRest, "switch (channel A) stuck at the at-rest level"),
+    ("stuck-trip", FaultKind::StuckTrip, "switch (channel A) stuck at the tripped level"),
+    ("cut-wire", FaultKind::CutWire, "switch wire (channel A) cut"),
+    ("stuck-rest-b", FaultKind::StuckRestB, "channel B of a two-channel switch stuck at rest (--channels 2)"),
+    ("welded-output", FaultKind::WeldedOutput, "stop relay K1 welded (EDM never reads released)"),
+    ("edm-wire-cut", FaultKind::EdmWireCut, "K1's feedback wire reads released while pulled in"),
+    ("clock-stall", FaultKind::ClockStall, "the firmware's clock stops"),
+    ("reset", FaultKind::Reset, "the MCU resets (watchdog); restart from the retained latch"),
+];
+
+/// One fault to inject at `at_s` seconds of simulation time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Injection {
+    /// What.
+    pub kind: FaultKind,
+    /// When, s.
+    pub at_s: f64,
+}
+
+/// Parse `--fault NAME@T[,NAME@T...]`; the error says what is allowed.
+pub fn parse_faults(spec: &str) -> Result<Vec<Injection>, String> {
+    let names = FAULTS.iter().map(|(n, _, _)| *n).collect::<Vec<_>>().join(", ");
+    let mut out = Vec::new();
+    for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
+        let (name, at) = item.split_once('@').ok_or_else(|| format!("--fault: NAME@SECONDS (names: {names}), got {item:?}"))?;
+        let kind = FAULTS.iter().find(|(n, _, _)| *n == name).map(|(_, k, _)| *k).ok_or_else(|| format!("--fault: one of {names}, got {name:?}"))?;
+        let at_s: f64 = at.parse().map_err(|_| format!("--fault {name}: a time in seconds >= 0 after @, got {at:?}"))?;
+        if !(at_s.is_finite() && at_s >= 0.0) {
+            return Err(format!("--fault {name}: a time in seconds >= 0 after @, got {at:?}"));
+        }
+        out.push(Injection { kind, at_s });
+    }
+    out.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+    Ok(out)
+}
+
+/// Options of a firmware-in-the-loop run beyond the controller.
+#[derive(Debug, Clone, Default)]
+pub struct HilOptions {
+    /// Faults to inject.
+    pub faults: Vec<Injection>,
+    /// Two-channel (antivalent) travel switch instead of one channel.
+    pub two_channels: bool,
+}
+
+/// What became of one injected fault. JSON names carry their unit.
+#[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
+pub struct FaultOutcome {
+    /// The fault's name (`--fault` spelling).
+    pub fault: String,
+    /// When it was injected, s.
+    pub at_s: f64,
+    /// First lockstep instant at or after the injection with the stop output de-energised, s.
+    pub stopped_s: Option<f64>,
+    /// The stop output was energised ("go") at the end of the run: the fault was not made safe.
+    pub ended_in_go: bool,
+    /// Why the firmware was stopped at the end (its state), or why it was not.
+    pub reason: String,
+}
+
+/// Discrepancy time of the two-channel switch in `flinch hil --channels 2`, us: 20 ms.
+pub const DISCREPANCY_US: u32 = 20_000;
+
 /// Runs `scene` with the firmware in the loop and the controller `ctl`; `step` is the lockstep
 /// interval in seconds. `record` keeps the time history.
 pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(HilReport, Vec<Sample>), String> {
+    run_with(scene, ctl, step, record, &HilOptions::default())
+}
+
+fn apply_common<S: flinch_firmware::Sensor>(rig: &mut SimRig<S>, kind: FaultKind) {
+    match kind {
+        FaultKind::WeldedOutput => rig.k1.set_fault(PinFault::StuckLow),
+        FaultKind::EdmWireCut => rig.k1.set_fault(PinFault::StuckHigh),
+        FaultKind::ClockStall => rig.clock.set_stalled(true),
+        _ => {}
+    }
+}
+
+fn channel_fault(kind: FaultKind, sw: SwitchKind) -> Option<PinFault> {
+    let level = |tripped: bool| if sw.level_for(tripped) { PinFault::StuckHigh } else { PinFault::StuckLow };
+    match kind {
+        FaultKind::StuckRest | FaultKind::StuckRestB => Some(level(false)),
+        FaultKind::StuckTrip => Some(level(true)),
+        FaultKind::CutWire => Some(PinFault::CutWire),
+        _ => None,
+    }
+}
+
+/// [`run`] with faults injected and the sensor's channel count chosen. A fault list that the
+/// configuration cannot take (channel B of a one-channel switch) is refused.
+pub fn run_with(scene: &Scene, ctl: &Controller, step: f64, record: bool, opts: &HilOptions) -> Result<(HilReport, Vec<Sample>), String> {
     let threshold = match (&scene.sensor, &scene.decoupler) {
         (Some(Sensor::Travel { threshold }), Decoupler::Bistable(_) | Decoupler::Hydraulic(_) | Decoupler::Linear(_)) => *threshold,
         (Some(Sensor::Force { .. }), _) | (_, Decoupler::Rigid) => {
@@ -113,8 +226,47 @@ pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(
     };
     let mut cfg = Config::new(um(ctl.firmware_tick).max(1), budget);
     cfg.reset = ResetPolicy::Input; // latched for the whole run
-    let mut rig = SimRig::digital(cfg, kind, um(threshold) as i32).map_err(|e| format!("[controller]: the firmware refused its configuration: {e:?}"))?;
+    let refused = |e| format!("[controller]: the firmware refused its configuration: {e:?}");
+    if opts.two_channels {
+        // Antivalent pair: channel A as the single switch, channel B its complement (NO).
+        let kind_b = SwitchKind::Magnetic { trip_high: !kind.trip_level_high() };
+        let mut rig = SimRig::dual_after(cfg, Boot::UNKNOWN, kind, kind_b, um(threshold) as i32, DISCREPANCY_US).map_err(refused)?;
+        let (a, b) = rig.channel_pins().ok_or("no channels")?;
+        let apply = move |rig: &mut SimRig<DualSwitch<SimPin, SimPin, SimPin>>, f: FaultKind| match (f, channel_fault(f, if f == FaultKind::StuckRestB { kind_b } else { kind })) {
+            (FaultKind::Reset, _) => rig.mcu_reset(ResetCause::Watchdog),
+            (FaultKind::StuckRestB, Some(pf)) => rig.inject_pin_fault(&b, pf),
+            (_, Some(pf)) => rig.inject_pin_fault(&a, pf),
+            (_, None) => apply_common(rig, f),
+        };
+        run_loop(scene, ctl, step, record, threshold, &mut rig, opts, apply)
+    } else {
+        if opts.faults.iter().any(|f| f.kind == FaultKind::StuckRestB) {
+            return Err("--fault stuck-rest-b: needs a two-channel switch (--channels 2); this run has one channel".into());
+        }
+        let mut rig = SimRig::digital(cfg, kind, um(threshold) as i32).map_err(refused)?;
+        let apply = move |rig: &mut SimRig<DigitalSwitch<SimPin, SimPin>>, f: FaultKind| match (f, channel_fault(f, kind)) {
+            (FaultKind::Reset, _) => rig.mcu_reset(ResetCause::Watchdog),
+            (_, Some(pf)) => rig.inject_switch_fault(pf),
+            (_, None) => apply_common(rig, f),
+        };
+        run_loop(scene, ctl, step, record, threshold, &mut rig, opts, apply)
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_loop<S: flinch_firmware::Sensor>(
+    scene: &Scene,
+    ctl: &Controller,
+    step: f64,
+    record: bool,
+    threshold: f64,
+    rig: &mut SimRig<S>,
+    opts: &HilOptions,
+    mut apply: impl FnMut(&mut SimRig<S>, FaultKind),
+) -> Result<(HilReport, Vec<Sample>), String> {
     rig.boot(1_000_000).map_err(|s| format!("the firmware did not arm after 1 s of self-test (stuck in {s:?})"))?;
+    let mut pending: std::collections::VecDeque<Injection> = opts.faults.iter().copied().collect();
+    let mut outcomes: Vec<FaultOutcome> = Vec::new();
 
     let mut plant = Run::new(scene, true, record);
     let scan = ctl.scan_cycle;
@@ -128,7 +280,8 @@ pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(
     let mut t = 0.0_f64;
     // Lockstep: every `step`, and exactly at each controller sample.
     while t < scene.duration_s {
-        let t_next = (t + step).min(next_sample).min(scene.duration_s);
+        let next_fault = pending.front().map_or(f64::INFINITY, |f| f.at_s);
+        let t_next = (t + step).min(next_sample).min(scene.duration_s).min(next_fault.max(t));
         plant.advance_to(t_next).map_err(|e| e.to_string())?;
         // The plant located the threshold crossing inside this step: give the firmware its edge at
         // that instant, not at the end of the step.
@@ -139,6 +292,17 @@ pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(
         }
         rig.advance_to(t_next);
         rig.set_travel_um(travel_um(plant.travel()));
+        while let Some(f) = pending.front().copied().filter(|f| f.at_s <= t_next) {
+            pending.pop_front();
+            apply(rig, f.kind);
+            let name = FAULTS.iter().find(|(_, k, _)| *k == f.kind).map_or("?", |(n, _, _)| *n);
+            outcomes.push(FaultOutcome { fault: name.into(), at_s: f.at_s, stopped_s: None, ended_in_go: false, reason: String::new() });
+        }
+        for o in outcomes.iter_mut().filter(|o| o.stopped_s.is_none()) {
+            if rig.stop_requested() {
+                o.stopped_s = Some(t_next);
+            }
+        }
         if t_next >= next_sample {
             if stop_seen.is_none() && rig.stop_requested() {
                 stop_seen = Some(next_sample);
@@ -164,6 +328,17 @@ pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(
             travel_m: e.travel_um as f64 * 1e-6,
         })
         .collect();
+    let go = !rig.stop_requested();
+    let reason = match rig.fw.state() {
+        State::Fault(c) => format!("stopped: fault latched ({})", c.name()),
+        State::Tripped => "stopped: trip latched".to_string(),
+        State::SelfTest(_) => "stopped: in the self-test".to_string(),
+        State::Armed => "GO: the firmware is armed with the fault present (not detected)".to_string(),
+    };
+    for o in &mut outcomes {
+        o.ended_in_go = go;
+        o.reason = reason.clone();
+    }
     let firmware = FirmwareFigures {
         scan_cycle: scan,
         phase: ctl.phase,
@@ -175,6 +350,7 @@ pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(
         observed_dead_time: summary.t_brake.zip(switch_time).map(|(b, s)| b - s),
         category0,
         event_log,
+        faults: outcomes,
     };
     let history = std::mem::take(&mut plant.sim.history);
     Ok((HilReport { summary, firmware }, history))

@@ -108,6 +108,13 @@ struct HilArgs {
     /// Lockstep interval between plant and firmware, s.
     #[arg(long, value_name = "S", default_value_t = hil::DEFAULT_STEP)]
     step: f64,
+    /// Faults to inject, NAME@SECONDS, comma-separated: stuck-rest, stuck-trip, cut-wire,
+    /// stuck-rest-b, welded-output, edm-wire-cut, clock-stall, reset. Exit 1 if one ends in "go".
+    #[arg(long, value_name = "NAME@S,...")]
+    fault: Option<String>,
+    /// Channels of the travel switch: 1, or 2 (antivalent pair, cross-monitored, 20 ms discrepancy).
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2))]
+    channels: u8,
     #[command(flatten)]
     out: Output,
 }
@@ -236,7 +243,13 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
     let sc = load(&args.scene)?;
     let ctl = controller(args, &sc, &args.scene).map_err(Failure::bad_input)?;
     let record = args.out.csv.is_some() || args.out.plot.is_some();
-    let (rep, history) = hil::run(&sc, &ctl, args.step, record).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
+    let faults = hil::parse_faults(args.fault.as_deref().unwrap_or("")).map_err(Failure::bad_input)?;
+    if args.channels == 1 && faults.iter().any(|f| f.kind == hil::FaultKind::StuckRestB) {
+        return Err(Failure::bad_input("--fault stuck-rest-b: needs --channels 2 (this run has one channel)"));
+    }
+    let opts = hil::HilOptions { faults, two_channels: args.channels == 2 };
+    let (rep, history) = hil::run_with(&sc, &ctl, args.step, record, &opts).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
+    let safe = rep.firmware.faults.iter().all(|f| !f.ended_in_go);
     let trace = Trace::new(&sc).with_hil(HilSignals::new(&sc, &rep));
     if let Some(p) = &args.out.csv {
         let mut w = output::create(p)?;
@@ -257,10 +270,13 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
         t.push_str(&format!("  firmware in the loop: scan cycle {:.3} ms, phase {:.2}, tick {:.3} ms\n", f.scan_cycle * 1e3, f.phase, f.firmware_tick * 1e3));
         t.push_str(&format!("    switch {}   firmware timestamp {}   latency {}   controller saw the stop {}\n", ms(f.switch_time), ms(f.firmware_detect), ms(f.firmware_latency), ms(f.stop_seen)));
         t.push_str(&format!("    observed dead time {}{}   event log: {} entr{}\n", ms(f.observed_dead_time), if f.category0 { "   CATEGORY 0 requested (stroke budget exceeded)" } else { "" }, f.event_log.len(), if f.event_log.len() == 1 { "y" } else { "ies" }));
+        for o in &f.faults {
+            t.push_str(&format!("    fault {} at {:.3} s: stop {}; {}\n", o.fault, o.at_s, o.stopped_s.map_or("never".to_string(), |s| format!("from {s:.4} s")), o.reason));
+        }
         t
     };
     print_result(&args.out, &text)?;
-    Ok(true)
+    Ok(safe)
 }
 
 fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
