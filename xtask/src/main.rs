@@ -19,6 +19,8 @@
 //!   there a missing target, QEMU or tool is a failure, never a quiet pass.
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
+//! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stage
+//!   "board ELF in QEMU" of `cargo xtask test`).
 
 use std::env;
 use std::fs;
@@ -42,6 +44,12 @@ fn main() -> ExitCode {
             let out = run_qemu()?;
             print!("{}", out.stdout);
             check_qemu_output(&out).and_then(|_| check_icount(&out.stdout).map(|_| ()))
+        }),
+        Some("board-qemu") => single(|| {
+            build_firmware()?;
+            let log = run_board_qemu()?;
+            println!("{}", check_board_log(&log)?);
+            Ok(())
         }),
         Some("size") => single(|| {
             build_firmware()?;
@@ -131,6 +139,17 @@ fn test() -> ExitCode {
                 }
             }
         }
+        results.push((
+            "board ELF in QEMU",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match run_board_qemu().and_then(|log| check_board_log(&log)) {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
         results.push((
             "size",
             match elf_size(&elf_path("board")).and_then(|s| check_size(&s).map(|_| s)) {
@@ -225,6 +244,66 @@ fn firmware_clippy() -> Outcome {
         Ok(s) => Outcome::Fail(format!("{cmd} exited with {s}")),
         Err(e) => Outcome::Fail(format!("could not run {cmd}: {e}")),
     }
+}
+
+/// How long the board ELF runs in QEMU (wall time; SysTick runs on QEMU's virtual clock).
+const BOARD_RUN: Duration = Duration::from_secs(3);
+
+/// Run the real board ELF (`board`, built for the STM32F407) on QEMU's `netduinoplus2`, an STM32F405
+/// with the same core, RCC, GPIO, EXTI, TIM2 and IWDG addresses. QEMU 7.2 does not model the F405's
+/// RCC, GPIO or IWDG: it logs every access to them (`-d unimp`), so the log is the board's register
+/// trace. GPIO inputs read 0, i.e. the switch reads "tripped", the reset button is not pressed and
+/// both EDM relays read "not released": the firmware must stay stopped for the whole run.
+fn run_board_qemu() -> Result<String, String> {
+    let log = target_dir().join("board-qemu.log");
+    let _ = fs::remove_file(&log);
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none", "-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(elf_path("board"))
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
+    sleep(BOARD_RUN);
+    if let Ok(Some(status)) = child.try_wait() {
+        return Err(format!("qemu-system-arm -M netduinoplus2 exited early with {status} (see {})", log.display()));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))
+}
+
+/// Check the board's register trace (`-d unimp`): the boot sequence against
+/// `firmware/qemu/board-boot.txt`, then that "go" is never written and the tick keeps running.
+fn check_board_log(log: &str) -> Result<String, String> {
+    // GPIOD BSRR (offset 0x18): bits 12/13 set PD12 (stop) / PD13 (escalation) high = "go".
+    let writes: Vec<&str> = log.lines().filter(|l| l.contains("unimplemented device write")).collect();
+    let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+    let go = writes.iter().filter(|l| l.starts_with("GPIOD:") && l.contains("offset 0x018")).filter(|l| value(l).is_some_and(|v| v & 0x3000 != 0)).count();
+    if go != 0 {
+        return Err(format!("the board wrote 'go' (BSRR set PD12/PD13) {go} times with the reset never pressed"));
+    }
+    // The IWDG (QEMU names its page I2S2ext) is fed with 0xAAAA once per tick.
+    let ticks = writes.iter().filter(|l| value(l) == Some(0xAAAA)).count();
+    if ticks < 100 {
+        return Err(format!("only {ticks} ticks (IWDG feeds) in {} s: the board is not running", BOARD_RUN.as_secs()));
+    }
+    // The boot: every access up to the first tick's first read of the switch (GPIOA IDR).
+    let boot: Vec<&str> = log.lines().take_while(|l| !(l.starts_with("GPIOA:") && l.contains("offset 0x010"))).collect();
+    let expected_path = repo_root().join("firmware/qemu/board-boot.txt");
+    let expected = fs::read_to_string(&expected_path).map_err(|e| format!("reading {}: {e}", expected_path.display()))?;
+    let want: Vec<&str> = expected.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()).collect();
+    if boot != want {
+        return Err(format!(
+            "the board's boot register trace differs from firmware/qemu/board-boot.txt:\n--- got\n{}\n--- expected\n{}",
+            boot.join("\n"),
+            want.join("\n")
+        ));
+    }
+    Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
 }
 
 fn target_installed() -> bool {
