@@ -43,7 +43,7 @@ fn main() -> ExitCode {
             build_firmware()?;
             let out = run_qemu()?;
             print!("{}", out.stdout);
-            check_qemu_output(&out).and_then(|_| check_icount(&out.stdout).map(|_| ()))
+            check_qemu_output(&out).and_then(|_| check_icount(&out.stdout)).and_then(|_| check_stack(&out.stdout).map(|_| ()))
         }),
         Some("board-qemu") => single(|| {
             build_firmware()?;
@@ -122,6 +122,13 @@ fn test() -> ExitCode {
                         "qemu self-test",
                         match check_qemu_output(&out) {
                             Ok(()) => Outcome::Pass("output matches firmware/qemu/expected.txt".into()),
+                            Err(e) => Outcome::Fail(e),
+                        },
+                    ));
+                    results.push((
+                        "stack",
+                        match check_stack(&out.stdout) {
+                            Ok(n) => Outcome::Pass(format!("{n} B <= {STACK_LIMIT} B (painted, qemu self-test)")),
                             Err(e) => Outcome::Fail(e),
                         },
                     ));
@@ -441,7 +448,7 @@ fn check_qemu_output(out: &QemuRun) -> Result<(), String> {
     let expected_path = repo_root().join("firmware/qemu/expected.txt");
     let expected = fs::read_to_string(&expected_path).map_err(|e| format!("{}: {e}", expected_path.display()))?;
     // The icount line carries measured numbers and is checked by value in its own stage.
-    let got: Vec<&str> = out.stdout.lines().filter(|l| !l.starts_with("icount:")).collect();
+    let got: Vec<&str> = out.stdout.lines().filter(|l| !l.starts_with("icount:") && !l.starts_with("stack:")).collect();
     let want: Vec<&str> = expected.lines().collect();
     if got != want {
         let first = got
@@ -460,6 +467,22 @@ fn check_qemu_output(out: &QemuRun) -> Result<(), String> {
         return Err("qemu exited with a failure status".into());
     }
     Ok(())
+}
+
+/// Stack bound asserted on the QEMU self-test's painted measurement, bytes.
+const STACK_LIMIT: u32 = 3072;
+
+fn check_stack(stdout: &str) -> Result<u32, String> {
+    let line = stdout.lines().find(|l| l.starts_with("stack:")).ok_or("no stack line in the qemu output")?;
+    let n = line
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("used="))
+        .and_then(|v| v.parse::<u32>().ok())
+        .ok_or_else(|| format!("no used= in {line:?}"))?;
+    if n == 0 || n > STACK_LIMIT {
+        return Err(format!("stack used {n} B: want 0 < used <= {STACK_LIMIT} B ({line})"));
+    }
+    Ok(n)
 }
 
 fn check_icount(stdout: &str) -> Result<u32, String> {
