@@ -138,3 +138,19 @@ fn fault_specs_parse_and_bad_ones_say_what_is_allowed() {
     assert!(hil::parse_faults("reset").unwrap_err().contains("NAME@SECONDS"));
     assert!(hil::parse_faults("").unwrap().is_empty());
 }
+
+#[test]
+fn with_one_channel_every_fault_but_stuck_at_rest_ends_in_stop() {
+    let sc = bistable();
+    let t_sw = sim::run(&sc, false).unwrap().0.t_detect.unwrap();
+    for &(name, kind, _) in hil::FAULTS {
+        if matches!(kind, hil::FaultKind::StuckRest | hil::FaultKind::StuckRestB) {
+            continue; // the first is the documented blind spot (test above), the second needs 2 channels
+        }
+        for at_s in [0.0, t_sw - 1e-4, t_sw, t_sw + SCAN / 2.0] {
+            let h = with_faults(&sc, false, vec![hil::Injection { kind, at_s }]);
+            let o = &h.firmware.faults[0];
+            assert!(!o.ended_in_go && o.stopped_s.is_some(), "{name}@{at_s}: {o:?}");
+        }
+    }
+}
