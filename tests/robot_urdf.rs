@@ -569,3 +569,24 @@ fn check_hil_and_a_joint_sweep_take_the_urdf_scene() {
     let f: Vec<f64> = r.points[1..].iter().map(|p| p.outcome.as_ref().unwrap().peak_contact_force).collect();
     assert!(f[0] != f[1], "a different pose is a different robot: {f:?}");
 }
+
+/// Joints written as a list: `robot.joints.1` is the second joint and changes the robot; a name or
+/// an index past the end is refused before anything runs, never swept as the unchanged scene.
+#[test]
+fn a_joint_list_is_swept_by_index_and_a_bad_path_is_refused() {
+    use flinch_harness::sweep::{Axis, Progress, Sweep, Template};
+    let text = scene_text().replace("joints = { shoulder = 0.3, elbow = 1.2 }", "joints = [0.3, 1.2]");
+    assert!(text.contains("joints = [0.3, 1.2]"));
+    let t = Template::from_text(&text, "list.toml").unwrap();
+    assert!(t.numeric_keys().iter().any(|k| k == "robot.joints.1"), "{:?}", t.numeric_keys());
+    let r = Sweep::keep_going(&t, vec![Axis::parse("robot.joints.1=0.6:1.2:2", false).unwrap()]).unwrap().run(Progress::Hidden);
+    let f: Vec<f64> = r.points.iter().map(|p| p.outcome.as_ref().unwrap().peak_contact_force).collect();
+    assert!(f[0] != f[1], "the elbow moved, so the robot changed: {f:?}");
+    for bad in ["robot.joints.elbow=0.6:1.2:2", "robot.joints.2=0.6:1.2:2", "robot.joints.foo=0.6:1.2:2"] {
+        let e = match Sweep::keep_going(&t, vec![Axis::parse(bad, false).unwrap()]) {
+            Ok(_) => panic!("{bad}: accepted, so the sweep would run the unchanged robot"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("cannot be set") && e.contains("robot.joints.1"), "{bad}: {e}");
+    }
+}

@@ -158,7 +158,17 @@ enum Found<'a> {
 
 fn lookup<'a>(doc: &'a DocumentMut, key: &str) -> Found<'a> {
     let mut item: &Item = doc.as_item();
-    for seg in key.split('.') {
+    let segs: Vec<&str> = key.split('.').collect();
+    for (i, seg) in segs.iter().enumerate() {
+        // An element of an array of numbers (`robot.joints.1`, `robot.direction.2`): the last
+        // segment is its index, counted from 0.
+        if let Some(Value::Array(a)) = item.as_value() {
+            let last = i + 1 == segs.len();
+            return match seg.parse::<usize>().ok().and_then(|n| a.get(n)) {
+                Some(v @ (Value::Integer(_) | Value::Float(_))) if last => Found::Number(v),
+                _ => Found::Missing,
+            };
+        }
         let Some(next) = item.as_table_like().and_then(|t| t.get(seg)) else {
             return Found::Missing;
         };
@@ -170,28 +180,45 @@ fn lookup<'a>(doc: &'a DocumentMut, key: &str) -> Found<'a> {
     }
 }
 
+/// A number as TOML, an integer when the key held one and `x` is whole, keeping the old decoration.
+fn number_like(old: Option<&Value>, x: f64) -> Value {
+    let was_int = matches!(old, Some(Value::Integer(_)));
+    let mut v = if was_int && x.fract() == 0.0 && x.abs() < 9.0e15 { Value::from(x as i64) } else { Value::from(x) };
+    if let Some(o) = old {
+        *v.decor_mut() = o.decor().clone();
+    }
+    v
+}
+
 /// Sets `key` to `x` in `doc`, creating missing tables (the validator then judges them). Integer
-/// keys stay integers when `x` is whole.
-fn set(doc: &mut DocumentMut, key: &str, x: f64) {
+/// keys stay integers when `x` is whole. An array element is addressed by its index
+/// (`robot.joints.1`). Returns false when the path cannot be set (it runs into a number, a string
+/// or past an array's end): the caller must not run the unchanged scene as if it were the point.
+fn set(doc: &mut DocumentMut, key: &str, x: f64) -> bool {
     let segs: Vec<&str> = key.split('.').collect();
     let mut item: &mut Item = doc.as_item_mut();
     for (i, seg) in segs.iter().enumerate() {
         let last = i + 1 == segs.len();
+        if let Some(Value::Array(a)) = item.as_value_mut() {
+            let Some(n) = seg.parse::<usize>().ok().filter(|&n| last && n < a.len()) else {
+                return false;
+            };
+            let old = a.get(n).cloned();
+            if !matches!(old, Some(Value::Integer(_) | Value::Float(_))) {
+                return false;
+            }
+            a.replace(n, number_like(old.as_ref(), x));
+            return true;
+        }
         let inline = item.is_inline_table();
         let Some(table) = item.as_table_like_mut() else {
-            // A number or string where the path needs a table: replace nothing, the validator
-            // will be shown a table it refuses. Build the path by overwriting is worse; stop here.
-            return;
+            // A number or string where the path needs a table: nothing can be set.
+            return false;
         };
         if last {
-            let was_int = matches!(table.get(seg).and_then(Item::as_value), Some(Value::Integer(_)));
-            let decor = table.get(seg).and_then(Item::as_value).map(|v| v.decor().clone());
-            let mut v = if was_int && x.fract() == 0.0 && x.abs() < 9.0e15 { Value::from(x as i64) } else { Value::from(x) };
-            if let Some(d) = decor {
-                *v.decor_mut() = d;
-            }
-            table.insert(seg, Item::Value(v));
-            return;
+            let old = table.get(seg).and_then(Item::as_value).cloned();
+            table.insert(seg, Item::Value(number_like(old.as_ref(), x)));
+            return true;
         }
         if table.get(seg).is_none() {
             let fresh = if inline { Item::Value(Value::InlineTable(Default::default())) } else { Item::Table(Default::default()) };
@@ -199,6 +226,7 @@ fn set(doc: &mut DocumentMut, key: &str, x: f64) {
         }
         item = table.get_mut(seg).expect("inserted above");
     }
+    false
 }
 
 fn numeric_keys_of(item: &Item, prefix: &str, out: &mut Vec<String>) {
@@ -207,6 +235,13 @@ fn numeric_keys_of(item: &Item, prefix: &str, out: &mut Vec<String>) {
             let path = if prefix.is_empty() { k.to_string() } else { format!("{prefix}.{k}") };
             match v.as_value() {
                 Some(Value::Integer(_) | Value::Float(_)) => out.push(path),
+                Some(Value::Array(a)) => {
+                    for (i, e) in a.iter().enumerate() {
+                        if matches!(e, Value::Integer(_) | Value::Float(_)) {
+                            out.push(format!("{path}.{i}"));
+                        }
+                    }
+                }
                 _ => numeric_keys_of(v, &path, out),
             }
         }
@@ -292,7 +327,11 @@ impl Template {
             }
             Found::Missing => {
                 let mut doc = self.doc.clone();
-                set(&mut doc, key, probe);
+                if !set(&mut doc, key, probe) {
+                    let near = close_matches(key, &self.numeric_keys());
+                    let hint = if near.is_empty() { format!("the numeric keys this scene sets: {}", self.numeric_keys().join(", ")) } else { format!("close matches: {}", near.join(", ")) };
+                    return err(format!("{}: {key} cannot be set: the path runs into a value that is not a table (an array element is addressed by its index from 0, within the array's length); {hint}", self.file));
+                }
                 match scene::parse(&doc.to_string(), &self.file) {
                     Ok(_) => Ok(()),
                     Err(e) => {
@@ -317,6 +356,7 @@ impl Template {
         for &(k, x) in sets {
             set(&mut doc, k, x);
         }
+        // `with` above refused any key that cannot be set.
         Ok(Self { doc, file: self.file.clone(), base })
     }
 
@@ -325,7 +365,9 @@ impl Template {
     pub fn with(&self, sets: &[(&str, f64)]) -> Result<Scene, SweepError> {
         let mut doc = self.doc.clone();
         for &(k, x) in sets {
-            set(&mut doc, k, x);
+            if !set(&mut doc, k, x) {
+                return Err(SweepError(format!("{}: {k} cannot be set to {x}: the path runs into a value that is not a table", self.file)));
+            }
         }
         scene::parse(&doc.to_string(), &self.file).map_err(|e| {
             let what: Vec<String> = sets.iter().map(|(k, x)| format!("{k} = {x}")).collect();
