@@ -577,7 +577,7 @@ fn a_joint_list_is_swept_by_index_and_a_bad_path_is_refused() {
     use flinch_harness::sweep::{Axis, Progress, Sweep, Template};
     let text = scene_text().replace("joints = { shoulder = 0.3, elbow = 1.2 }", "joints = [0.3, 1.2]");
     assert!(text.contains("joints = [0.3, 1.2]"));
-    let t = Template::from_text(&text, "list.toml").unwrap();
+    let t = Template::from_text(&text, &scene_path("robot_two_link.toml").display().to_string()).unwrap();
     assert!(t.numeric_keys().iter().any(|k| k == "robot.joints.1"), "{:?}", t.numeric_keys());
     let r = Sweep::keep_going(&t, vec![Axis::parse("robot.joints.1=0.6:1.2:2", false).unwrap()]).unwrap().run(Progress::Hidden);
     let f: Vec<f64> = r.points.iter().map(|p| p.outcome.as_ref().unwrap().peak_contact_force).collect();
@@ -589,4 +589,19 @@ fn a_joint_list_is_swept_by_index_and_a_bad_path_is_refused() {
         };
         assert!(e.contains("cannot be set") && e.contains("robot.joints.1"), "{bad}: {e}");
     }
+}
+
+/// A user's scene elsewhere whose `urdf` is missing is refused with the path: the project's own
+/// stand-in robot of the same relative name is used only for the shipped scene run by name.
+#[test]
+fn a_missing_urdf_is_never_replaced_by_the_shipped_stand_in() {
+    let dir = std::env::temp_dir().join(format!("flinch-urdf-missing-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("mine.toml");
+    std::fs::write(&file, scene_text()).unwrap();
+    let e = flinch_harness::scene::load(&file).unwrap_err().to_string();
+    assert!(e.contains("cannot read the URDF") && e.contains("two_link.urdf"), "{e}");
+    let by_name = flinch_harness::shipped::read(std::path::Path::new("robot_two_link")).unwrap();
+    assert!(flinch_harness::scene::parse(&by_name.1, &by_name.0).is_ok(), "the shipped scene by name still runs");
+    let _ = std::fs::remove_dir_all(&dir);
 }

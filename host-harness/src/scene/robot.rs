@@ -119,8 +119,10 @@ pub fn urdf_robot(text: &str, file: &str) -> Result<Option<UrdfRobot>, SceneErro
     }
 }
 
-/// Where `urdf` points: relative to the scene file's folder, else (a shipped scene run by name)
-/// a shipped URDF. Returns the name for messages and the text.
+/// Where `urdf` points: relative to the scene file's folder, else, for a shipped scene run by name
+/// only (its file name ends in " (shipped)"), the shipped URDF. A user's scene whose URDF is
+/// missing is refused, never given the project's stand-in robot in its place. Returns the name for
+/// messages and the text.
 fn read_urdf(scene_file: &str, rel: &str) -> Result<(String, String), String> {
     let p = Path::new(rel);
     let path: PathBuf = if p.is_absolute() || scene_file == "<stdin>" {
@@ -133,7 +135,7 @@ fn read_urdf(scene_file: &str, rel: &str) -> Result<(String, String), String> {
         Err(e) => {
             let key = rel.trim_start_matches("./");
             match SHIPPED_URDFS.iter().find(|(k, _)| *k == key) {
-                Some((k, text)) if !path.exists() => Ok((format!("scenes/{k}"), text.to_string())),
+                Some((k, text)) if !path.exists() && scene_file.ends_with(" (shipped)") => Ok((format!("scenes/{k}"), text.to_string())),
                 _ => Err(format!("cannot read the URDF {}: {e}", path.display())),
             }
         }
