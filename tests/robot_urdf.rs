@@ -605,3 +605,17 @@ fn a_missing_urdf_is_never_replaced_by_the_shipped_stand_in() {
     assert!(flinch_harness::scene::parse(&by_name.1, &by_name.0).is_ok(), "the shipped scene by name still runs");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `flinch design` on the URDF scene: the budget's answer and its simulated confirmation, with the
+/// robot reduced from its URDF; the limit's run is safe by the one definition.
+#[test]
+fn design_takes_the_urdf_scene() {
+    use flinch_harness::design::design;
+    use flinch_harness::sweep::Template;
+    let t = Template::load(&scene_path("robot_two_link.toml")).unwrap();
+    let r = design(&t, None, None, Some(0.07)).unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.speed_limit_formula > 0.0);
+    let v = r.speed_limit_simulated.unwrap_or_else(|| panic!("no simulated limit: {:?}", r.speed_search_note));
+    assert!(r.at_limit.as_ref().is_some_and(|a| a.summary.safe && !a.summary.stroke_exhausted));
+    assert!((v / r.speed_limit_formula - 1.0).abs() < 0.25, "simulated {v} against the budget's {}", r.speed_limit_formula);
+}
