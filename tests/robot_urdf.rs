@@ -329,8 +329,17 @@ fn unparseable_urdf_is_refused_with_the_file() {
     let e = err("<robot name=\"x\"><link name=\"a\"></robot>", "a", "a");
     assert_eq!((e.file.as_str(), e.element.as_str()), ("bad.urdf", "<robot>"));
     assert!(e.what.contains("is not a URDF that parses"), "{e}");
-    let e = err(&two_link_text().replace("<mass value=\"3\"/>", "<mass value=\"three\"/>"), "base", "tip");
-    assert!(e.what.contains("parses"), "{e}");
+    assert!(e.what.contains("line 1") && e.what.contains("not well-formed XML"), "{e}");
+    // A number that is not one names the link, the line and the attribute.
+    let text = two_link_text();
+    let (first, _) = text.split_once("<mass value=").unwrap();
+    let line = first.lines().count();
+    let e = err(&text.replacen("<mass value=\"", "<mass value=\"three", 1), "base", "tip");
+    assert!(e.what.contains("parses") && e.what.contains("<mass value=\"three"), "{e}");
+    assert!(e.element.starts_with("link \"") && e.element.ends_with(&format!("(line {line})")), "{e}");
+    // A joint without a type names the joint.
+    let e = err(&text.replacen("type=\"revolute\"", "", 1), "base", "tip");
+    assert!(e.element.starts_with("joint \"") && e.what.contains("has no type"), "{e}");
     let e = Chain::load(std::path::Path::new("/nonexistent/robot.urdf"), "a", "b").unwrap_err();
     assert!(e.to_string().starts_with("/nonexistent/robot.urdf: urdf: cannot be read"), "{e}");
 }

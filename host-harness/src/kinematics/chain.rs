@@ -101,7 +101,10 @@ impl Chain {
     /// Builds the chain from URDF text; `file` names it in messages.
     pub fn from_urdf_str(text: &str, file: &str, base_link: &str, tip_link: &str) -> Result<Chain, KinError> {
         let robot = urdf_rs::read_from_string(text)
-            .map_err(|e| KinError::new(file, "<robot>", format!("is not a URDF that parses: {e}")))?;
+            .map_err(|e| match super::urdf_diag::diagnose(text) {
+                Some((element, what)) => KinError::new(file, element, format!("is not a URDF that parses: {what}")),
+                None => KinError::new(file, "<robot>", format!("is not a URDF that parses: {e}")),
+            })?;
         let err = |el: String, what: String| KinError::new(file, el, what);
 
         // Links by name, once each.

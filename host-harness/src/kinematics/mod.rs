@@ -19,6 +19,7 @@ pub mod chain;
 pub mod cli;
 pub mod dynamics;
 pub mod reduce;
+pub mod urdf_diag;
 
 pub use chain::{Chain, JointKind};
 pub use reduce::{reduce, Reduced, MIN_MOBILITY};
