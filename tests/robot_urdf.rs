@@ -456,6 +456,13 @@ fn robot_sweep_through_a_singularity_marks_it_refused() {
     assert!(at_zero.contains(",,,,,refused,") && at_zero.contains("singular configuration"), "{at_zero}");
     let ok = rows.iter().filter(|r| r.contains(",ok,")).count();
     assert!(ok >= 170, "only {ok} points reduced");
+    // Near the singularity m_r grows past what the plant accepts (500 kg): those poses are refused
+    // with the range, never listed as ok, since `flinch run` would refuse them.
+    assert!(rows.iter().any(|r| r.contains("outside the plant's range for robot.mass")), "{out}");
+    for r in rows.iter().filter(|r| r.contains(",ok,")) {
+        let m: f64 = r.split(',').nth(1).unwrap().parse().unwrap();
+        assert!((0.1..=500.0).contains(&m), "{r}");
+    }
     // the unswept joint named, a joint that is not there, and a scene without a URDF: bad input (2)
     let e = flinch_harness::kinematics::cli::run(&robot_args(scene.clone(), Some("wrist"), None)).unwrap_err();
     assert_eq!(e.code, 2);

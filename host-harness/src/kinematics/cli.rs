@@ -121,7 +121,7 @@ pub fn run(a: &RobotArgs) -> Result<bool, Failure> {
             let q = lo + (hi - lo) * k as f64 / (a.points - 1) as f64;
             let mut qs = robot.joints.clone();
             qs[i] = q;
-            rows.push((q, robot.reduce_at(&qs).map_err(|e| e.what)));
+            rows.push((q, robot.reduce_at(&qs).map_err(|e| e.what).and_then(within_plant_range)));
         }
         let refused = rows.iter().filter(|r| r.1.is_err()).count();
         let ok: Vec<&Reduced> = rows.iter().filter_map(|r| r.1.as_ref().ok()).collect();
@@ -137,7 +137,7 @@ pub fn run(a: &RobotArgs) -> Result<bool, Failure> {
         }
         if refused > 0 {
             let first = rows.iter().find(|r| r.1.is_err()).map(|r| r.0).unwrap_or(f64::NAN);
-            let _ = writeln!(text, "    {refused} point(s) refused as singular (the first at {name} = {first:.4} {u}); they are left out of the plot and marked in the CSV");
+            let _ = writeln!(text, "    {refused} point(s) refused, as singular or outside the plant's ranges (the first at {name} = {first:.4} {u}); they are left out of the plot and marked in the CSV with the reason");
         }
         if let Some(p) = &a.csv {
             let mut w = output::create(p)?;
@@ -182,4 +182,18 @@ pub fn run(a: &RobotArgs) -> Result<bool, Failure> {
     } else {
         output::print(&text).map(|_| true)
     }
+}
+
+/// A pose whose reduced values the plant would refuse (`[robot]` mass, stiffness, damping ranges of
+/// scene/robot.rs) is refused here too, with the range: `flinch run` at that pose would not run.
+fn within_plant_range(r: Reduced) -> Result<Reduced, String> {
+    use crate::scene::{Ty, ROBOT_DAMPING, ROBOT_MASS, ROBOT_STIFFNESS};
+    for (key, x) in [(&ROBOT_MASS, r.mass_kg), (&ROBOT_STIFFNESS, r.stiffness_npm), (&ROBOT_DAMPING, r.damping_nspm)] {
+        if let Ty::Number(span) = &key.ty {
+            if !span.contains(x) {
+                return Err(format!("{} = {x:.4e} {} is outside the plant's range for robot.{} ({}): `flinch run` refuses this pose", key.name, span.unit, key.name, span.source));
+            }
+        }
+    }
+    Ok(r)
 }
