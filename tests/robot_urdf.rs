@@ -635,3 +635,51 @@ fn design_takes_the_urdf_scene() {
     assert!(r.at_limit.as_ref().is_some_and(|a| a.summary.safe && !a.summary.stroke_exhausted));
     assert!((v / r.speed_limit_formula - 1.0).abs() < 0.25, "simulated {v} against the budget's {}", r.speed_limit_formula);
 }
+
+/// A spatial arm (a yaw joint, then a pitch joint off the axis) whose second link's inertia is given
+/// two ways: principal moments in an inertial frame turned by `rpy`, and the same tensor written in
+/// the link frame with its products of inertia (R I R^T). Both must reduce to the same m_r for
+/// every pose and direction: a reader that ignored the inertial frame's rotation, or the products
+/// of inertia, fails here (the two-link and pendulum closed forms are planar and diagonal).
+#[test]
+fn a_rotated_inertial_frame_equals_its_products_of_inertia() {
+    use nalgebra::{Matrix3, Rotation3};
+    let (r, p, y) = (0.3, -0.5, 0.9);
+    let principal = Matrix3::from_diagonal(&nalgebra::Vector3::new(0.03, 0.05, 0.07));
+    let rot = Rotation3::from_euler_angles(r, p, y); // URDF rpy: Rz(y) Ry(p) Rx(r)
+    let full = rot.matrix() * principal * rot.matrix().transpose();
+    let arm2 = |inertial: String| {
+        robot(&[
+            "<link name=\"base\"/>".into(),
+            link("arm1", 3.0, 0.1, 0.01, 0.02, 0.02),
+            inertial,
+            "<link name=\"tip\"/>".into(),
+            joint("yaw", "revolute", "base", "arm1", "0 0 0.2", "0 0 0", "0 0 1"),
+            joint("pitch", "revolute", "arm1", "arm2", "0.25 0 0", "0 0 0", "0 1 0"),
+            joint("flange", "fixed", "arm2", "tip", "0.4 0.05 0", "0 0 0", "1 0 0"),
+        ])
+    };
+    let rotated = format!(
+        r#"<link name="arm2"><inertial><origin xyz="0.2 0.02 0.01" rpy="{r} {p} {y}"/><mass value="2"/>
+        <inertia ixx="0.03" ixy="0" ixz="0" iyy="0.05" iyz="0" izz="0.07"/></inertial></link>"#
+    );
+    let products = format!(
+        r#"<link name="arm2"><inertial><origin xyz="0.2 0.02 0.01" rpy="0 0 0"/><mass value="2"/>
+        <inertia ixx="{}" ixy="{}" ixz="{}" iyy="{}" iyz="{}" izz="{}"/></inertial></link>"#,
+        full[(0, 0)], full[(0, 1)], full[(0, 2)], full[(1, 1)], full[(1, 2)], full[(2, 2)]
+    );
+    let a = Chain::from_urdf_str(&arm2(rotated), "rotated.urdf", "base", "tip").unwrap();
+    let b = Chain::from_urdf_str(&arm2(products), "products.urdf", "base", "tip").unwrap();
+    let diagonal = Chain::from_urdf_str(&arm2(link("arm2", 2.0, 0.2, 0.03, 0.05, 0.07).replace("xyz=\"0.2 0 0\"", "xyz=\"0.2 0.02 0.01\"")), "diag.urdf", "base", "tip").unwrap();
+    let mut differs = false;
+    for q in [[0.0, 0.5], [1.0, -0.8], [-2.0, 1.3]] {
+        for u in [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.3, -0.5, 0.8]] {
+            let ra = reduce(&a, &q, u, &[1e5, 1e5], &[10.0, 10.0]).unwrap();
+            let rb = reduce(&b, &q, u, &[1e5, 1e5], &[10.0, 10.0]).unwrap();
+            let rd = reduce(&diagonal, &q, u, &[1e5, 1e5], &[10.0, 10.0]).unwrap();
+            assert_close!(ra.mass_kg, rb.mass_kg, 1e-9);
+            differs |= !close(ra.mass_kg, rd.mass_kg, 1e-6);
+        }
+    }
+    assert!(differs, "the rotation changes m_r somewhere, so the test can tell the frames apart");
+}
