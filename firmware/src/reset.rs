@@ -135,10 +135,21 @@ impl ResetPress {
 }
 
 /// Tracks the reset button: presses start while latched, resets act on release.
-#[derive(Copy, Clone, Debug, Default)]
+///
+/// A new tracker (after every MCU reset) takes the button as *pressed*: only a released-to-pressed
+/// edge it has itself observed starts a press. A button found held at boot (a press begun before a
+/// watchdog reset, a jammed contact) must first be seen released, so its release never counts.
+#[derive(Copy, Clone, Debug)]
 pub struct ResetButton {
     prev: bool,
     pressed_since: Option<Micros>,
+}
+
+impl Default for ResetButton {
+    fn default() -> ResetButton {
+        // `prev = true`: until a released level is seen, no rising edge can be observed.
+        ResetButton { prev: true, pressed_since: None }
+    }
 }
 
 impl ResetButton {
@@ -292,6 +303,28 @@ mod tests {
         assert!(!b.released(p, Micros(100_000), true));
         assert!(!b.released(p, Micros(150_000), true), "held: still nothing");
         assert!(b.released(p, Micros(150_001), false), "released after 50 ms: reset");
+    }
+
+    #[test]
+    fn a_button_held_at_boot_must_be_seen_released_before_a_press_counts() {
+        let p = ResetPress { min_us: 50_000, max_us: 5_000_000 };
+        for release_us in [100_000, 1_000_000, 3_000_000] {
+            let mut b = ResetButton::default(); // a fresh boot, button already held
+            let mut t = 0;
+            while t < release_us {
+                assert!(!b.released(p, Micros(t), true));
+                t += 1_000;
+            }
+            assert!(!b.released(p, Micros(t), false), "held through the reset, released at {release_us} us");
+            // A press that begins after boot does count.
+            assert!(!b.released(p, Micros(t + 10_000), true));
+            assert!(b.released(p, Micros(t + 70_000), false));
+        }
+        // Released at boot: the first press counts.
+        let mut b = ResetButton::default();
+        assert!(!b.released(p, Micros(0), false));
+        assert!(!b.released(p, Micros(1_000), true));
+        assert!(b.released(p, Micros(61_000), false));
     }
 
     #[test]

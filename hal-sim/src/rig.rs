@@ -219,7 +219,7 @@ impl<S: Sensor> SimRig<S> {
     /// Power the firmware up and tick it from the clock's current value until it arms, at most
     /// `max_us` after the operator's reset. The firmware starts latched (`flinch_firmware::reset`),
     /// so the rig first does what the operator does: presses the reset button for
-    /// `Config::reset_press.min_us` (rounded up to whole ticks) and releases it. Returns the time
+    /// `Config::reset_press.min_us` (rounded up to whole ticks, after one tick released) and releases it. Returns the time
     /// from the release to arming in microseconds, or the state it got stuck in. Sim time 0 is one
     /// tick after the last boot tick, so the firmware's tick cadence carries on into the plant run.
     pub fn boot(&mut self, max_us: u32) -> Result<u32, State> {
@@ -227,11 +227,18 @@ impl<S: Sensor> SimRig<S> {
         if self.fw.state() == State::Fault(Cause::Reset) {
             let tick = self.tick_us.max(1) as u32;
             let press_ticks = self.fw.config().reset_press.min_us.div_ceil(tick);
+            // The firmware must see the button released before a press counts (a button held
+            // through a reset is not a press): one tick released, then the press.
+            self.reset.set(false);
+            self.clock.set(t);
+            self.relays_follow();
+            self.fw.tick();
+            t = t.plus(tick);
             self.reset.set(true);
             for _ in 0..press_ticks {
                 self.clock.set(t);
                 self.relays_follow();
-            self.fw.tick();
+                self.fw.tick();
                 t = t.plus(tick);
             }
             self.reset.set(false);

@@ -495,6 +495,39 @@ fn a_stuck_or_too_short_reset_press_never_arms() {
 }
 
 #[test]
+fn a_reset_button_held_through_a_watchdog_reset_never_re_arms_on_its_release() {
+    // The operator (or a jammed contact) holds the button while the part is armed; the watchdog
+    // resets the MCU; the button is let go 0.1 s, 1 s or 3 s later, inside the 50 ms..5 s press
+    // window. The press began before the reset, so its release is no reset: stay stopped.
+    for release_s in [0.1, 1.0, 3.0] {
+        let mut rig = booted(cfg());
+        rig.advance_to(0.05);
+        rig.set_reset(true);
+        rig.advance_to(0.2);
+        assert!(rig.fw.is_armed(), "pressing while armed does nothing");
+        let t_reset = 0.2005;
+        rig.advance_to(t_reset);
+        rig.mcu_reset(ResetCause::Watchdog);
+        assert_eq!(rig.fw.state(), State::Fault(Cause::Reset));
+        rig.advance_to(t_reset + release_s);
+        rig.set_reset(false);
+        let mut t = t_reset + release_s;
+        while t < t_reset + release_s + 2.0 {
+            rig.advance_to(t);
+            assert!(rig.stop_requested() && rig.category0_requested(), "released {release_s} s after the reset: \"go\" at {t} s");
+            t += 1e-3;
+        }
+        assert_eq!(rig.fw.state(), State::Fault(Cause::Reset), "released {release_s} s after the reset");
+        // A deliberate press that begins after the reset does re-arm.
+        rig.set_reset(true);
+        rig.advance_to(t + 0.1);
+        rig.set_reset(false);
+        rig.advance_to(t + 0.11);
+        assert!(rig.fw.is_armed(), "a fresh press after the reset: {:?}", rig.fw.state());
+    }
+}
+
+#[test]
 fn a_fault_right_after_the_reset_replaces_the_start_latch() {
     let boot = Boot { cause: ResetCause::Watchdog, retained: Retained::default() };
     let mut rig = SimRig::digital_after(cfg(), boot, SwitchKind::Inductive, 5_000).unwrap();
