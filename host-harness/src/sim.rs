@@ -286,7 +286,7 @@ impl Hybrid<N, E> for Simulation {
         // Sign of the unclamped force per unit d^1.5 (or per metre for the linear front stop).
         g[EV_CONTACT_PUSH] = self.plant.contact.stiffness + self.plant.target_chi * k.delta_dot;
         if let Some(f) = self.plant.decoupler.front_stop() {
-            g[EV_FRONT_PUSH] = f.stiffness * (k.s - f.at) + f.damping * k.s_dot;
+            g[EV_FRONT_PUSH] = f.push(k.s, k.s_dot, self.plant.front_chi);
         }
         if let Some(b) = self.plant.decoupler.back_stop() {
             g[EV_BACK_PUSH] = b.contact.stiffness - self.plant.back_chi * k.s_dot;
@@ -336,7 +336,14 @@ impl Hybrid<N, E> for Simulation {
                     self.plant.motion.brake_at(due);
                 }
             }
-            EV_FRONT => self.on_front = !self.on_front,
+            EV_FRONT => {
+                self.on_front = !self.on_front;
+                if self.on_front {
+                    if let Some(f) = self.plant.decoupler.front_stop() {
+                        self.plant.front_chi = f.chi(k.s_dot);
+                    }
+                }
+            }
             EV_CONTACT_PUSH => self.contact_push = !self.contact_push,
             EV_FRONT_PUSH => self.front_push = !self.front_push,
             EV_BACK_PUSH => self.back_push = !self.back_push,
