@@ -66,6 +66,74 @@ pub fn achieved_restitution(alpha: f64) -> f64 {
     0.0
 }
 
+/// One isolated impact of a pushing-only contact law, dimensionless: u'' = -g(u, u'), u(0) = 0,
+/// u'(0) = 1, RK4 at step `h`; returns the exit speed -u' when u returns to 0 or the force has
+/// vanished on the way out (the clamp: the bodies then separate at constant speed).
+fn impact(g: impl Fn(f64, f64) -> f64, h: f64) -> f64 {
+    let f = |u: f64, w: f64| -g(u.max(0.0), w).max(0.0);
+    let (mut u, mut w, mut t) = (0.0_f64, 1.0_f64, 0.0);
+    // Bounded: an undamped impact lasts about pi time units; heavy damping stretches it.
+    while t < 1e3 {
+        let (k1u, k1w) = (w, f(u, w));
+        let (k2u, k2w) = (w + 0.5 * h * k1w, f(u + 0.5 * h * k1u, w + 0.5 * h * k1w));
+        let (k3u, k3w) = (w + 0.5 * h * k2w, f(u + 0.5 * h * k2u, w + 0.5 * h * k2w));
+        let (k4u, k4w) = (w + h * k3w, f(u + h * k3u, w + h * k3w));
+        let un = u + h / 6.0 * (k1u + 2.0 * k2u + 2.0 * k3u + k4u);
+        let wn = w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+        t += h;
+        if un <= 0.0 {
+            let frac = u / (u - un);
+            return -(w + frac * (wn - w));
+        }
+        if wn < 0.0 && g(un, wn) <= 0.0 {
+            return -wn;
+        }
+        u = un;
+        w = wn;
+    }
+    0.0
+}
+
+/// Restitution of an isolated impact on eq 28's linear spring-damper `F = k d + c d'` clamped so it
+/// never pulls (as `plant/decoupler/end_stop.rs` models it), damping ratio `zeta = c / (2 sqrt(k m))`.
+/// Scaled by the undamped natural frequency it is u'' = -(u + 2 zeta u'): e depends on zeta alone.
+/// The clamp lets go before u returns to 0 (where the damper would pull the leaving body back), so
+/// e is above the textbook exp(-zeta pi / sqrt(1 - zeta^2)).
+pub fn linear_restitution(zeta: f64) -> f64 {
+    let z = zeta.max(0.0);
+    impact(|u, w| u + 2.0 * z * w, 1e-4 / (1.0 + z))
+}
+
+/// Restitution of an isolated impact on the Hunt-Crossley law `F = k d^n (1 + alpha d' / v_in)`:
+/// scaled so the undamped peak is u = 1, u'' = -((n + 1) / 2) u^n (1 + alpha u'), so e depends on
+/// alpha and n alone (whatever k, the mass and v_in).
+pub fn hunt_crossley_restitution(alpha: f64, n: f64) -> f64 {
+    let c = 0.5 * (n + 1.0);
+    impact(|u, w| c * u.powf(n) * (1.0 + alpha * w), 1e-4 / (1.0 + alpha).sqrt())
+}
+
+/// alpha of the Hunt-Crossley law with exponent `n` whose isolated impact achieves restitution `e`
+/// (bisection on the monotone e(alpha), to 1e-6 in e), capped at [`ALPHA_MAX`].
+pub fn hunt_crossley_alpha(e: f64, n: f64) -> f64 {
+    let e = e.clamp(0.0, 1.0);
+    if e >= 1.0 {
+        return 0.0;
+    }
+    let (mut lo, mut hi) = (0.0, ALPHA_MAX);
+    if hunt_crossley_restitution(hi, n) >= e {
+        return hi;
+    }
+    for _ in 0..60 {
+        let m = 0.5 * (lo + hi);
+        let em = hunt_crossley_restitution(m, n);
+        if (em - e).abs() < 1e-6 {
+            return m;
+        }
+        if em > e { lo = m } else { hi = m }
+    }
+    0.5 * (lo + hi)
+}
+
 /// (alpha, e) pairs on a log grid of alpha, e decreasing; built once.
 fn table() -> &'static [(f64, f64)] {
     static TABLE: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
@@ -110,6 +178,31 @@ fn exact_alpha(e: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn linear_restitution_matches_the_textbook_when_undamped_and_exceeds_it_when_clamped() {
+        assert!((linear_restitution(0.0) - 1.0).abs() < 1e-6);
+        // Unclamped Kelvin-Voigt: exp(-zeta pi / sqrt(1 - zeta^2)); the clamp lets go before the
+        // damper would pull the leaving body back, so a little less is lost.
+        for z in [0.05, 0.1, 0.2] {
+            let textbook = (-z * std::f64::consts::PI / (1.0 - z * z).sqrt()).exp();
+            let e = linear_restitution(z);
+            assert!(e > textbook && e < textbook + 0.1, "zeta {z}: {e} vs {textbook}");
+        }
+    }
+
+    #[test]
+    fn hunt_crossley_alpha_achieves_the_asked_restitution_for_any_exponent() {
+        for n in [1.0, 1.5, 2.0] {
+            for e in [0.2, 0.5, 0.8, 0.95] {
+                let a = hunt_crossley_alpha(e, n);
+                let got = hunt_crossley_restitution(a, n);
+                assert!((got - e).abs() < 1e-4, "n {n}, e {e}: alpha {a} gives {got}");
+            }
+        }
+        // n = 1.5 is the contact law's: the same function as `achieved_restitution`.
+        assert!((hunt_crossley_restitution(0.7, 1.5) - achieved_restitution(0.7)).abs() < 1e-6);
+    }
 
     #[test]
     fn undamped_impact_is_elastic() {

@@ -108,6 +108,8 @@ pub struct Plant {
     pub target_chi: f64,
     /// chi of the current (or last) back-stop contact.
     pub back_chi: f64,
+    /// chi of the current (or last) landing on a Hunt-Crossley front stop (0 for eq 28's).
+    pub front_chi: f64,
     /// Stroke coordinate at rest (static equilibrium), m.
     pub s_rest: f64,
     /// True between a located contact onset and its separation: the decoupler impulse (eq 21)
@@ -133,10 +135,13 @@ impl Plant {
             detector: None,
             target_chi: 0.0,
             back_chi: 0.0,
+            front_chi: 0.0,
             s_rest: 0.0,
             in_contact: false,
         };
         plant.s_rest = plant.rest_stroke();
+        // A tool resting on a Hunt-Crossley front stop at t = 0: a landing at (the floor of) zero speed.
+        plant.front_chi = plant.decoupler.front_stop().map_or(0.0, |f| f.chi(0.0));
         let x_r0 = plant.robot.map_or(0.0, |r| r.static_offset(plant.tool_mass * plant.gravity));
         let face0 = x_r0 + plant.s_rest;
         plant.target = Target::new(&scene.target.kind, face0, scene.target.gap);
@@ -149,7 +154,7 @@ impl Plant {
     /// nearest the front (scan from the front down, then bisect), or the front stop if none.
     fn rest_stroke(&self) -> f64 {
         let w = self.tool_mass * self.gravity;
-        let net = |s: f64| self.decoupler.force(s, 0.0, 0.0).total + w;
+        let net = |s: f64| self.decoupler.force(s, 0.0, 0.0, 0.0).total + w;
         match (&self.decoupler, self.decoupler.front_stop(), self.decoupler.back_stop()) {
             (Decoupler::Rigid, ..) => 0.0,
             (Decoupler::Linear(l), ..) => if l.stiffness > 0.0 { w / l.stiffness } else { 0.0 },
@@ -210,7 +215,7 @@ impl Plant {
     /// Forces at one instant.
     pub fn forces(&self, k: &Kinematics) -> Forces {
         let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
-        let decoupler = self.decoupler.force(k.s, k.s_dot, self.back_chi);
+        let decoupler = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi);
         let robot = if self.decoupler.is_rigid() { -contact } else { -decoupler.total };
         Forces { contact, decoupler, robot }
     }

@@ -57,6 +57,10 @@
 //! - `decoupler.front_stop = { stiffness, restitution }` as an alternative to `{ stiffness, damping }`
 //!   (Table 11 gives e_fe): converted with the linear-oscillator relation
 //!   `zeta = -ln(e) / sqrt(pi^2 + ln(e)^2)`, `c = 2 zeta sqrt(k m_t)` (e = 0 gives zeta = 1).
+//! - `decoupler.front_stop.law` ("linear" | "hunt-crossley", default "linear", eq 28/38) and, with
+//!   "hunt-crossley", `exponent` (n in [1, 2], default 1): `F = k d^n (1 + alpha d' / v_in)`, no
+//!   force jump at landing; alpha matches the restitution the linear law achieves with the same
+//!   `stiffness` and `damping` for the tool mass (or the `restitution` given).
 //! - `decoupler.back_stop = { stiffness, restitution, damping_law }` where `damping_law` defaults to
 //!   [`DEFAULT_BACK_STOP_LAW`] (Hunt-Crossley, as the thesis, eq 29/37), or `{ stiffness, chi }`.
 //! - hydraulic `adiabatic_exponent` (default [`DEFAULT_ADIABATIC_EXPONENT`], air, fixed by eq 47) and

@@ -147,13 +147,35 @@ pub struct Hydraulic {
     pub back_stop: NonlinearStop,
 }
 
-/// Linear end-stop law `F = -k (s - C1) - c s'`, pushing only (eq 28/38).
+/// Front end-stop: eq 28/38's linear law `F = -k (s - C1) - c s'`, pushing only, or (`law =
+/// "hunt-crossley"`) the nonlinear law of [`FrontStopLaw::HuntCrossley`] with the same k and the
+/// same energy loss per impact (`scene/decoupler/end_stop.rs`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LinearStop {
-    /// k_fe, N/m, > 0.
+    /// k_fe, N/m (N/m^n with the Hunt-Crossley law's exponent n), > 0.
     pub stiffness: f64,
-    /// c_fe, N s/m, >= 0.
+    /// c_fe, N s/m, >= 0: eq 28's damping (with the Hunt-Crossley law, the linear damping whose
+    /// restitution the nonlinear law matches).
     pub damping: f64,
+    /// Which law the stop follows.
+    pub law: FrontStopLaw,
+}
+
+/// The front end-stop's contact law.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrontStopLaw {
+    /// Eq 28/38: `F = -k d - c d'`, d = s - C1; jumps to `c d'` at contact onset.
+    Linear,
+    /// Hunt-Crossley: `F = -k d^n (1 + alpha d' / v_in)`, v_in the approach speed at onset; zero
+    /// at contact onset, no jump.
+    HuntCrossley {
+        /// n, the exponent of d (1: the same static stiffness as eq 28).
+        exponent: f64,
+        /// alpha, chosen so an isolated impact has the linear law's restitution.
+        alpha: f64,
+        /// That restitution, the linear law's (clamped, as modelled) for c_fe and the tool mass.
+        restitution: f64,
+    },
 }
 
 /// Nonlinear end-stop law `F = k d^1.5 + chi d^1.5 d'`, pushing only (eq 29/37).

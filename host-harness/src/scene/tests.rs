@@ -797,6 +797,67 @@ case!(
     "allowed keys: stiffness, damping, restitution"
 );
 case!(
+    front_stop_law_unknown,
+    BASE,
+    "damping = 278.0 }",
+    "damping = 278.0, law = \"hertz\" }",
+    "decoupler.front_stop.law",
+    "front_stop",
+    "must be one of \"linear\" | \"hunt-crossley\", got \"hertz\""
+);
+case!(
+    front_stop_exponent_without_hunt_crossley,
+    BASE,
+    "damping = 278.0 }",
+    "damping = 278.0, exponent = 1.5 }",
+    "decoupler.front_stop.exponent",
+    "front_stop",
+    "only with law = \"hunt-crossley\""
+);
+case!(
+    front_stop_exponent_out_of_range,
+    BASE,
+    "damping = 278.0 }",
+    "restitution = 0.5, law = \"hunt-crossley\", exponent = 3 }",
+    "decoupler.front_stop.exponent",
+    "front_stop",
+    "allowed range [1, 2]"
+);
+case!(
+    front_stop_exponent_with_damping,
+    BASE,
+    "damping = 278.0 }",
+    "damping = 278.0, law = \"hunt-crossley\", exponent = 1.5 }",
+    "decoupler.front_stop.damping",
+    "front_stop",
+    "give restitution instead"
+);
+
+#[test]
+fn front_stop_hunt_crossley_keeps_k_and_matches_the_linear_restitution() {
+    use crate::plant::damping_law::{hunt_crossley_restitution, linear_restitution};
+    let stop = |text: &str| {
+        let s = parse(&mutate(BASE, "damping = 278.0 }", text), "hc.toml").unwrap();
+        let Decoupler::Bistable(b) = s.decoupler else { panic!("not bistable") };
+        b.front_stop
+    };
+    let lin = stop("damping = 278.0 }");
+    assert_eq!(lin.law, FrontStopLaw::Linear);
+    let hc = stop("damping = 278.0, law = \"hunt-crossley\" }");
+    assert_eq!((hc.stiffness, hc.damping), (lin.stiffness, lin.damping));
+    let FrontStopLaw::HuntCrossley { exponent, alpha, restitution } = hc.law else { panic!("{:?}", hc.law) };
+    assert_eq!(exponent, 1.0);
+    // BASE's tool is 0.75 kg: zeta = 278 / (2 sqrt(1e6 x 0.75)).
+    let e = linear_restitution(278.0 / (2.0 * (1e6_f64 * 0.75).sqrt()));
+    assert!((restitution - e).abs() < 1e-12 && (0.5..0.95).contains(&e), "{restitution} {e}");
+    assert!((hunt_crossley_restitution(alpha, 1.0) - e).abs() < 1e-4);
+    // A restitution given is matched as asked, at any exponent.
+    let h15 = stop("restitution = 0.4, law = \"hunt-crossley\", exponent = 1.5 }");
+    let FrontStopLaw::HuntCrossley { exponent, alpha, .. } = h15.law else { panic!() };
+    assert_eq!(exponent, 1.5);
+    assert!((hunt_crossley_restitution(alpha, 1.5) - 0.4).abs() < 1e-4);
+}
+case!(
     back_stop_stiffness_negative,
     BASE,
     "back_stop = { stiffness = 1e6",

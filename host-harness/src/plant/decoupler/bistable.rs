@@ -75,7 +75,7 @@ mod tests {
         Bistable {
             springs: 1, spring_rate: 490.0, free_length: 0.062, height: 0.053,
             front_stroke: 0.0235, back_stroke: 0.0235,
-            front_stop: LinearStop { stiffness: 2.25e6, damping: 235.0 },
+            front_stop: LinearStop { stiffness: 2.25e6, damping: 235.0, law: crate::scene::FrontStopLaw::Linear },
             back_stop: NonlinearStop { stiffness: 2.25e6, damping: ContactDamping::Restitution { restitution: 0.3, law: DampingLaw::HuntCrossley } },
             friction: None,
         }

@@ -102,7 +102,7 @@ mod tests {
             stroke: 0.023, piston_radius: 0.020, orifice_radius: 0.008, gas_pressure: 1000.0,
             gas_volume: 7.63e-5, discharge_coefficient: 3.0, liquid_density: 900.0,
             dry_friction: 0.0, viscous_friction: 0.5, adiabatic_exponent: 1.4, friction_v0: 1e-3,
-            front_stop: LinearStop { stiffness: 1e6, damping: 235.0 },
+            front_stop: LinearStop { stiffness: 1e6, damping: 235.0, law: crate::scene::FrontStopLaw::Linear },
             back_stop: NonlinearStop { stiffness: 1e6, damping: ContactDamping::Restitution { restitution: 0.3, law: DampingLaw::HuntCrossley } },
         }
     }

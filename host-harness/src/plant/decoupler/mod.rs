@@ -77,15 +77,16 @@ impl Decoupler {
         }
     }
 
-    /// Force on the tool at s, s'; `back_chi` is the back stop's damping fixed at its contact onset.
-    pub fn force(&self, s: f64, s_dot: f64, back_chi: f64) -> DecouplerForce {
+    /// Force on the tool at s, s'; `front_chi` and `back_chi` are the stops' dampings fixed at
+    /// their contact onsets (`front_chi` only for a Hunt-Crossley front stop).
+    pub fn force(&self, s: f64, s_dot: f64, front_chi: f64, back_chi: f64) -> DecouplerForce {
         let mut f = DecouplerForce::default();
         match self {
             Self::Rigid => {}
             Self::Linear(l) => f.spring = l.force(s, s_dot),
             Self::Bistable(b) => {
                 f.spring = b.spring_force(s);
-                f.front_stop = b.front.force(s, s_dot);
+                f.front_stop = b.front.force(s, s_dot, front_chi);
                 f.back_stop = b.back.force(s, s_dot, back_chi);
                 f.friction = b.friction_force(s, s_dot);
             }
@@ -94,7 +95,7 @@ impl Decoupler {
                 f.spring = hf.hydraulic;
                 f.friction = hf.friction;
                 f.gas_pressure = Some(hf.gas_pressure);
-                f.front_stop = h.front.force(s, s_dot);
+                f.front_stop = h.front.force(s, s_dot, front_chi);
                 f.back_stop = h.back.force(s, s_dot, back_chi);
             }
         }

@@ -3,7 +3,8 @@
 //! (the flange) a nonlinear contact whose damping keys are those of `scene/contact.rs`.
 use super::super::check::{Bound::*, Ctx, Key, Tab, Ty};
 use super::super::contact::{self, contact_damping};
-use super::super::model::{DampingLaw, LinearStop, NonlinearStop};
+use super::super::model::{DampingLaw, FrontStopLaw, LinearStop, NonlinearStop};
+use crate::plant::damping_law;
 
 /// Damping law of the back end-stop when only a restitution is given (the thesis, eq 29/37).
 pub const DEFAULT_BACK_STOP_LAW: DampingLaw = DampingLaw::HuntCrossley;
@@ -12,7 +13,7 @@ pub const DEFAULT_BACK_STOP_LAW: DampingLaw = DampingLaw::HuntCrossley;
 pub const FRONT: Key = Key::of(
     "front_stop",
     Ty::Table("{ stiffness, damping } or { stiffness, restitution }"),
-    "the linear front end-stop where the tool rests (eq 28/38)",
+    "the front end-stop where the tool rests: eq 28/38's linear law, or Hunt-Crossley with law and exponent",
 );
 /// The `back_stop` table of a decoupler.
 pub const BACK: Key = Key::of(
@@ -34,8 +35,19 @@ pub const BACK_STIFFNESS: Key = Key::number("stiffness", "N/m^1.5", Incl(1e3), I
 /// The back stop's damping law (defaults to the thesis's).
 pub const BACK_DAMPING_LAW: Key = contact::DAMPING_LAW.optional("hunt-crossley, as the thesis (eq 29/37)");
 
+/// The front stop's law.
+pub const FRONT_LAW: Key = Key::of(
+    "law",
+    Ty::Choice(&["linear", "hunt-crossley"]),
+    "\"linear\": eq 28/38, F = k d + c d' (jumps to c d' the instant the tool lands); \"hunt-crossley\": F = k d^n (1 + alpha d' / v_in), zero at landing, with the same k (n = 1) and alpha chosen so an isolated impact loses the same energy as the linear law with these keys (restitution matched, for the tool mass)",
+)
+.optional("linear, as the thesis (eq 28/38)");
+/// The Hunt-Crossley front stop's exponent n.
+pub const FRONT_EXPONENT: Key = Key::number("exponent", "", Incl(1.0), Incl(2.0), "1 (the same static stiffness as eq 28) to 2; 1.5 is Hertz's, the back stop's", "n of the Hunt-Crossley front stop (stiffness then in N/m^n); only with law = \"hunt-crossley\"")
+    .default(1.0);
+
 /// The keys of `front_stop`.
-pub const FRONT_KEYS: &[Key] = &[FRONT_STIFFNESS, FRONT_DAMPING, FRONT_RESTITUTION];
+pub const FRONT_KEYS: &[Key] = &[FRONT_STIFFNESS, FRONT_DAMPING, FRONT_RESTITUTION, FRONT_LAW, FRONT_EXPONENT];
 /// The keys of `back_stop`.
 pub const BACK_KEYS: &[Key] = &[BACK_STIFFNESS, contact::RESTITUTION, BACK_DAMPING_LAW, contact::CHI];
 
@@ -48,7 +60,7 @@ pub(in super::super) fn zeta_from_restitution(e: f64) -> f64 {
     -l / (std::f64::consts::PI.powi(2) + l * l).sqrt()
 }
 
-/// The `front_stop` (linear) and `back_stop` (nonlinear) tables, both required.
+/// The `front_stop` (linear, or Hunt-Crossley) and `back_stop` (nonlinear) tables, both required.
 pub(super) fn end_stops(
     cx: &mut Ctx,
     t: &Tab,
@@ -64,14 +76,24 @@ pub(super) fn end_stops(
 fn linear_stop(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<LinearStop> {
     cx.check_keys(t, FRONT_KEYS, "");
     let stiffness = cx.number(t, &FRONT_STIFFNESS);
-    match (t.has(FRONT_DAMPING.name), t.has(FRONT_RESTITUTION.name)) {
+    let hunt_crossley = cx.maybe_choice(t, &FRONT_LAW, &[false, true])?.unwrap_or(false);
+    let exponent = if hunt_crossley {
+        cx.number(t, &FRONT_EXPONENT)?
+    } else {
+        if t.has(FRONT_EXPONENT.name) {
+            cx.bad(t, FRONT_EXPONENT.name, "only with law = \"hunt-crossley\" (eq 28's linear law has no exponent)".into());
+            return None;
+        }
+        1.0
+    };
+    let (k, damping, asked_e) = match (t.has(FRONT_DAMPING.name), t.has(FRONT_RESTITUTION.name)) {
         (true, true) => {
             cx.bad(
                 t,
                 FRONT_RESTITUTION.name,
                 "give either damping (N s/m) or restitution, not both".into(),
             );
-            None
+            return None;
         }
         (false, false) => {
             cx.missing(
@@ -79,25 +101,34 @@ fn linear_stop(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<LinearSt
                 FRONT_DAMPING.name,
                 "damping (N s/m >= 0), or restitution in [0, 1] converted with the tool mass",
             );
-            None
+            return None;
         }
         (true, false) => {
             let damping = cx.number(t, &FRONT_DAMPING);
-            Some(LinearStop {
-                stiffness: stiffness?,
-                damping: damping?,
-            })
+            if hunt_crossley && exponent != 1.0 {
+                cx.bad(t, FRONT_DAMPING.name, format!("with exponent = {exponent} give restitution instead: c_fe's restitution is defined for eq 28's linear spring, exponent 1"));
+                return None;
+            }
+            (stiffness?, damping?, None)
         }
         (false, true) => {
             let e = cx.number(t, &FRONT_RESTITUTION)?;
             let (k, m) = (stiffness?, tool_mass?);
-            let damping = 2.0 * zeta_from_restitution(e) * (k * m).sqrt();
-            Some(LinearStop {
-                stiffness: k,
-                damping,
-            })
+            (k, 2.0 * zeta_from_restitution(e) * (k * m).sqrt(), Some(e))
         }
-    }
+    };
+    let law = if hunt_crossley {
+        // The restitution to match: the one asked, or the one eq 28 achieves with c_fe and the
+        // tool mass (clamped so it never pulls, as the plant models it).
+        let e = match asked_e {
+            Some(e) => e,
+            None => damping_law::linear_restitution(damping / (2.0 * (k * tool_mass?).sqrt())),
+        };
+        FrontStopLaw::HuntCrossley { exponent, alpha: damping_law::hunt_crossley_alpha(e, exponent), restitution: e }
+    } else {
+        FrontStopLaw::Linear
+    };
+    Some(LinearStop { stiffness: k, damping, law })
 }
 
 fn nonlinear_stop(cx: &mut Ctx, t: &Tab) -> Option<NonlinearStop> {
