@@ -249,3 +249,34 @@ fn measured_traces_give_errors_and_the_time_shift() {
     assert!(text(&o.stderr).contains("m.csv:3: v_t_mps"), "{}", text(&o.stderr));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Column `name` of a CSV's rows, parsed as f64 (empty cells as NaN).
+fn csv_column(csv: &str, name: &str) -> Vec<f64> {
+    let mut lines = csv.lines();
+    let i = lines.next().unwrap().split(',').position(|c| c == name).unwrap_or_else(|| panic!("no column {name}"));
+    lines.map(|l| l.split(',').nth(i).unwrap().parse().unwrap_or(f64::NAN)).collect()
+}
+
+#[test]
+fn hil_stop_output_is_go_after_arming_and_drops_at_the_detection() {
+    // The firmware logs its boot "Reset" before t = 0 (during the self-test); after arming the
+    // output is go, and it drops at the firmware's detection, latched to the end.
+    let d = tmp("hil-stop");
+    let csv = d.join("hil.csv");
+    let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--phase", "0.3", "--json", "--csv"]).arg(&csv).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let fw = &v["firmware"];
+    assert!(fw["event_log"][0]["at_s"].as_f64().unwrap() < 0.0, "the boot event is logged before t = 0: {fw}");
+    let detect = fw["firmware_detect_s"].as_f64().unwrap();
+    let seen = fw["stop_seen_s"].as_f64().unwrap();
+    let c = std::fs::read_to_string(&csv).unwrap();
+    let (t, stop, sampled) = (csv_column(&c, "t_s"), csv_column(&c, "stop_requested"), csv_column(&c, "stop_seen_by_controller"));
+    let before = t.iter().zip(&stop).filter(|(&t, _)| t < detect).collect::<Vec<_>>();
+    let after = t.iter().zip(&stop).filter(|(&t, _)| t >= detect).collect::<Vec<_>>();
+    assert!(before.len() > 1000 && after.len() > 100, "{} rows before, {} after", before.len(), after.len());
+    assert!(before.iter().all(|(_, &s)| s == 0.0), "go (0) from t = 0 until the detection at {detect} s");
+    assert!(after.iter().all(|(_, &s)| s == 1.0), "stop (1) from the detection at {detect} s on, latched");
+    assert!(t.iter().zip(&sampled).all(|(&t, &s)| (s == 1.0) == (t >= seen)), "the controller sees it from {seen} s");
+    let _ = std::fs::remove_dir_all(&d);
+}
