@@ -283,11 +283,7 @@ fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
     let sc = load(&args.scene)?;
     let c = check::check(&sc).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
     let text = if args.json {
-        let mut v = serde_json::to_value(&c).map_err(|e| Failure::runtime(e.to_string()))?;
-        if let Some(o) = v.as_object_mut() {
-            o.insert("schema_version".into(), report::SCHEMA_VERSION.into());
-        }
-        report::to_json(&v)
+        report::to_json(&report::Versioned::new(&c))
     } else {
         check::human(&c)
     };

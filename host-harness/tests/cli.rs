@@ -280,3 +280,22 @@ fn hil_stop_output_is_go_after_arming_and_drops_at_the_detection() {
     assert!(t.iter().zip(&sampled).all(|(&t, &s)| (s == 1.0) == (t >= seen)), "the controller sees it from {seen} s");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn every_json_output_carries_its_schema_version() {
+    let runs: [&[&str]; 5] = [
+        &["run", "tables5-7_bistable", "--json"],
+        &["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--json"],
+        &["check", "tables5-7_bistable", "--json"],
+        &["design", "tables5-7_bistable", "--json"],
+        &["avoid", "scenes/avoid_wall.toml", "--json"],
+    ];
+    for args in runs {
+        let o = flinch().args(args).output().unwrap();
+        no_panic(&o);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}): {}", text(&o.stdout)));
+        assert_eq!(v["schema_version"], 1, "{args:?}: {}", text(&o.stdout));
+        // Written first, so a reader can branch on it before the rest.
+        assert!(text(&o.stdout).trim_start().starts_with("{\n  \"schema_version\""), "{args:?}");
+    }
+}
