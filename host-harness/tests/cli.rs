@@ -299,3 +299,25 @@ fn every_json_output_carries_its_schema_version() {
         assert!(text(&o.stdout).trim_start().starts_with("{\n  \"schema_version\""), "{args:?}");
     }
 }
+
+#[test]
+fn avoid_and_bench_take_shipped_names_from_any_directory() {
+    let d = tmp("names");
+    let o = flinch().current_dir(&d).args(["avoid", "avoid_wall", "--json"]).output().unwrap();
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["min_signed_distance_m"].is_number());
+    let o = flinch().current_dir(&d).args(["avoid", "avoid_wal"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("avoid_wall"), "a close name is suggested: {}", text(&o.stderr));
+    let o = flinch().current_dir(&d).args(["bench", "tables5-7_bistable", "--quick", "--repeats", "1", "--out", "b"]).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(d.join("b/runs.csv").is_file() && d.join("b/fixed_point.csv").is_file());
+    // Bad input is exit 2, before anything runs.
+    for args in [&["bench", "no_such_scene"][..], &["bench", "--repeats", "0"], &["bench", "--scenes-dir", "/no/such/dir"]] {
+        let o = flinch().current_dir(&d).args(args).output().unwrap();
+        no_panic(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o.stderr));
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -181,7 +181,12 @@ pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> 
 /// Entry point of `flinch avoid`: `Ok(true)` when the tool reached the goal without ever entering
 /// the operator, `Ok(false)` otherwise (exit 1: a collision, or a stop before the goal).
 pub fn run(args: &AvoidArgs) -> Result<bool, String> {
-    let mut scene = scene::Avoid::load(&args.scene)?;
+    run_scene(args, scene::Avoid::load(&args.scene)?)
+}
+
+/// [`run`] on a scene already read (`args.scene` names it in messages; it is not read again, so
+/// `-` works).
+pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, String> {
     if args.thesis {
         scene.thesis_mode();
     }
