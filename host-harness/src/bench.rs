@@ -26,11 +26,12 @@ use std::time::Instant;
 /// What to run and where to write it.
 #[derive(Debug, Clone)]
 pub struct Options {
-    /// Scene files; empty means every `*.toml` of `scenes_dir` and `scenes_dir/extremes` except
-    /// `avoid_*`.
+    /// Scenes: files, or shipped scenes' names; empty means every shipped scene (top level and
+    /// `extremes/`) except `avoid_*`, or those of `scenes_dir` when given.
     pub scenes: Vec<PathBuf>,
-    /// Where the shipped scenes are.
-    pub scenes_dir: PathBuf,
+    /// Read the default scenes from this directory (and its `extremes/`) instead of the ones built
+    /// into the binary.
+    pub scenes_dir: Option<PathBuf>,
     /// Output directory (created).
     pub out: PathBuf,
     /// Timed repetitions per configuration and scene (the median is reported).
@@ -468,27 +469,46 @@ pub fn pareto_svg(path: &Path, aggs: &[Aggregate]) -> Result<(), String> {
     Ok(())
 }
 
-/// The whole study: every scene, the CSVs, the plot, the fixed-point table. Prints a summary.
-pub fn run(o: &Options) -> Result<(), String> {
-    let files = if o.scenes.is_empty() {
-        // The thesis scenes, and the study scenes of docs/accuracy.md under extremes/.
-        let mut v = shipped_scenes(&o.scenes_dir)?;
-        let extra = o.scenes_dir.join("extremes");
-        if extra.is_dir() {
-            v.extend(shipped_scenes(&extra)?);
+/// The shipped scenes `flinch bench` uses by default, as built into the binary: the top level and
+/// `extremes/` (the study scenes of docs/accuracy.md), except `avoid_*`.
+pub fn default_scene_names() -> Vec<&'static str> {
+    crate::shipped::names()
+        .filter(|n| {
+            let top = n.strip_prefix("extremes/").unwrap_or(n);
+            !top.contains('/') && !top.starts_with("avoid_")
+        })
+        .collect()
+}
+
+/// Reads and validates every scene of the study (bad input: the message names the scene).
+pub fn load_scenes(o: &Options) -> Result<Vec<(String, Scene)>, String> {
+    let stem = |f: &Path| f.file_stem().map_or("?".into(), |s| s.to_string_lossy().into_owned());
+    if !o.scenes.is_empty() {
+        return o.scenes.iter().map(|f| crate::shipped::load(f).map(|sc| (stem(f), sc))).collect();
+    }
+    match &o.scenes_dir {
+        Some(dir) => {
+            // The thesis scenes, and the study scenes of docs/accuracy.md under extremes/.
+            let mut v = shipped_scenes(dir)?;
+            let extra = dir.join("extremes");
+            if extra.is_dir() {
+                v.extend(shipped_scenes(&extra)?);
+            }
+            v.iter().map(|f| scene::load(f).map(|sc| (stem(f), sc)).map_err(|e| e.to_string())).collect()
         }
-        v
-    } else {
-        o.scenes.clone()
-    };
+        None => default_scene_names().into_iter().map(|n| crate::shipped::load(Path::new(n)).map(|sc| (stem(Path::new(n)), sc))).collect(),
+    }
+}
+
+/// The whole study over `scenes` ([`load_scenes`]): the CSVs, the plot, the fixed-point table.
+/// Prints a summary.
+pub fn run(o: &Options, scenes: &[(String, Scene)]) -> Result<(), String> {
     std::fs::create_dir_all(&o.out).map_err(|e| format!("{}: {e}", o.out.display()))?;
     let configs = sweep(o.quick);
     let mut rows = Vec::new();
-    for f in &files {
-        let sc = scene::load(f).map_err(|e| e.to_string())?;
-        let name = f.file_stem().map_or("?".into(), |s| s.to_string_lossy().into_owned());
+    for (name, sc) in scenes {
         eprintln!("{name}: reference and {} configurations, {} repetitions", configs.len(), o.repeats);
-        rows.extend(study_scene(&name, &sc, &configs, o.repeats)?);
+        rows.extend(study_scene(name, sc, &configs, o.repeats)?);
     }
     let write = |name: &str, text: &str| std::fs::write(o.out.join(name), text).map_err(|e| format!("{}: {e}", o.out.join(name).display()));
     write("runs.csv", &runs_csv(&rows))?;
@@ -505,4 +525,28 @@ pub fn run(o: &Options) -> Result<(), String> {
     }
     println!("wrote runs.csv, summary.csv, pareto.svg, fixed_point.csv under {}", o.out.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_scenes_are_the_embedded_ones_from_any_directory() {
+        let names = default_scene_names();
+        assert!(names.contains(&"tables5-7_bistable") && names.contains(&"extremes/tables5-7_bistable_object"), "{names:?}");
+        assert!(!names.iter().any(|n| n.contains("avoid_") || n.starts_with("figures/")), "{names:?}");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        let on_disk = shipped_scenes(&dir).unwrap().len() + shipped_scenes(&dir.join("extremes")).unwrap().len();
+        assert_eq!(names.len(), on_disk, "the same scenes as --scenes-dir scenes");
+        let o = Options { scenes: vec![], scenes_dir: None, out: PathBuf::new(), repeats: 1, quick: true };
+        assert_eq!(load_scenes(&o).unwrap().len(), on_disk);
+    }
+
+    #[test]
+    fn the_fixed_point_table_does_not_overflow_in_a_debug_build() {
+        // 2 d in I16F16 above 16.4 m/s^2 once panicked here ("attempt to multiply with overflow").
+        let t = fixed_point::table();
+        assert!(t.contains("I16F16 mm"), "{t}");
+    }
 }

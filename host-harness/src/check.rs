@@ -23,7 +23,7 @@ pub(crate) fn um_down(x: f64) -> u32 {
 }
 
 /// The budget and its confirmation.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct BudgetCheck {
     /// Stopping distance after detection, m (firmware formula, rounded up to the micrometre).
     pub stopping_distance: f64,

@@ -46,7 +46,7 @@ pub struct DesignArgs {
 }
 
 /// One simulated candidate.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct Trial {
     /// Speed, m/s.
     pub speed: f64,
@@ -58,7 +58,7 @@ pub struct Trial {
 }
 
 /// The answers.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct DesignReport {
     /// Scene name.
     pub scene: String,
@@ -414,7 +414,7 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
     let t = Template::load(&a.scene).map_err(|e| e.to_string())?;
     let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?);
+        print!("{}", crate::report::to_json(&crate::report::Versioned::new(&r)));
     } else {
         print!("{}", human(&r));
     }

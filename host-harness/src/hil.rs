@@ -68,6 +68,13 @@ pub struct FirmwareFigures {
     pub event_log: Vec<LoggedEvent>,
     /// The injected faults (`--fault`) and whether each ended in a stop.
     pub faults: Vec<FaultOutcome>,
+    /// The stop output's level over the run as the firmware drove it: `(t_s, stop_requested)` at
+    /// t = 0 (the end of the self-test, armed: go) and at every change after (a change inside a
+    /// lockstep step is placed at the firmware's logged time when it logged one). For the CSV and
+    /// the plot; not part of the JSON.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub stop_output: Vec<(f64, bool)>,
 }
 
 /// The `flinch hil --json` object: the run's summary plus the firmware's figures.
@@ -278,6 +285,17 @@ fn run_loop<S: flinch_firmware::Sensor>(
     let travel_um = |m: f64| (m * 1e6).floor().clamp(i32::MIN as f64, i32::MAX as f64) as i32;
     let mut edge_given = false;
     let mut t = 0.0_f64;
+    // The stop output's level as the firmware drives it, recorded at each change.
+    let mut stop_output = vec![(0.0, rig.stop_requested())];
+    let mut note_level = |rig: &SimRig<S>, at: f64| {
+        let level = rig.stop_requested();
+        let (since, last) = stop_output.last().copied().unwrap_or((0.0, !level));
+        if level != last {
+            // The firmware's own timestamp of the change, when it logged one inside this step.
+            let logged = rig.events().last().map(|e| rig.seconds_at(e.at)).filter(|&l| l > since && l <= at + 1e-9);
+            stop_output.push((logged.unwrap_or(at).max(since), level));
+        }
+    };
     // Lockstep: every `step`, and exactly at each controller sample.
     while t < scene.duration_s {
         let next_fault = pending.front().map_or(f64::INFINITY, |f| f.at_s);
@@ -289,12 +307,15 @@ fn run_loop<S: flinch_firmware::Sensor>(
             edge_given = true;
             rig.advance_to(t_sw);
             rig.set_travel_um(threshold_um.max(travel_um(plant.travel())));
+            note_level(rig, t_sw);
         }
         rig.advance_to(t_next);
         rig.set_travel_um(travel_um(plant.travel()));
+        note_level(rig, t_next);
         while let Some(f) = pending.front().copied().filter(|f| f.at_s <= t_next) {
             pending.pop_front();
             apply(rig, f.kind);
+            note_level(rig, t_next);
             let name = FAULTS.iter().find(|(_, k, _)| *k == f.kind).map_or("?", |(n, _, _)| *n);
             outcomes.push(FaultOutcome { fault: name.into(), at_s: f.at_s, stopped_s: None, ended_in_go: false, reason: String::new() });
         }
@@ -351,6 +372,7 @@ fn run_loop<S: flinch_firmware::Sensor>(
         category0,
         event_log,
         faults: outcomes,
+        stop_output,
     };
     let history = std::mem::take(&mut plant.sim.history);
     Ok((HilReport { summary, firmware }, history))

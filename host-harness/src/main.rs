@@ -130,11 +130,12 @@ struct CheckArgs {
 
 #[derive(clap::Args)]
 struct BenchArgs {
-    /// Scene files (default: every scenes/*.toml except avoid_*).
+    /// Scenes: files or shipped scenes' names (default: every shipped scene, top level and
+    /// extremes/, except avoid_*; built into the binary).
     scenes: Vec<PathBuf>,
-    /// Directory the shipped scenes are read from when none is given.
-    #[arg(long, value_name = "DIR", default_value = "scenes")]
-    scenes_dir: PathBuf,
+    /// Read the default scenes from this directory (and its extremes/) instead.
+    #[arg(long, value_name = "DIR")]
+    scenes_dir: Option<PathBuf>,
     /// Output directory for runs.csv, summary.csv, pareto.svg and fixed_point.csv.
     #[arg(long, value_name = "DIR", default_value = "target/bench")]
     out: PathBuf,
@@ -283,11 +284,7 @@ fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
     let sc = load(&args.scene)?;
     let c = check::check(&sc).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
     let text = if args.json {
-        let mut v = serde_json::to_value(&c).map_err(|e| Failure::runtime(e.to_string()))?;
-        if let Some(o) = v.as_object_mut() {
-            o.insert("schema_version".into(), report::SCHEMA_VERSION.into());
-        }
-        report::to_json(&v)
+        report::to_json(&report::Versioned::new(&c))
     } else {
         check::human(&c)
     };
@@ -320,6 +317,16 @@ fn scenes_cmd(what: &ScenesCmd) -> Result<bool, Failure> {
     Ok(true)
 }
 
+fn bench_cmd(a: &BenchArgs) -> Result<bool, Failure> {
+    use flinch_harness::bench;
+    let o = bench::Options { scenes: a.scenes.clone(), scenes_dir: a.scenes_dir.clone(), out: a.out.clone(), repeats: a.repeats, quick: a.quick };
+    if a.repeats == 0 {
+        return Err(Failure::bad_input("--repeats: at least 1 timed repetition, got 0"));
+    }
+    let scenes = bench::load_scenes(&o).map_err(Failure::bad_input)?;
+    bench::run(&o, &scenes).map(|_| true).map_err(Failure::runtime)
+}
+
 /// A module outside this file returns its errors as text: a scene it cannot read is bad input,
 /// anything after that a runtime failure.
 fn classify(scene_ok: Result<(), String>, r: Result<bool, String>) -> Result<bool, Failure> {
@@ -337,8 +344,8 @@ fn main() -> ExitCode {
         Command::Check(a) => check_cmd(a),
         Command::Scenes { what } => scenes_cmd(what),
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
-        Command::Bench(a) => flinch_harness::bench::run(&flinch_harness::bench::Options { scenes: a.scenes.clone(), scenes_dir: a.scenes_dir.clone(), out: a.out.clone(), repeats: a.repeats, quick: a.quick }).map(|_| true).map_err(Failure::runtime),
-        Command::Avoid(a) => classify(flinch_harness::avoid::scene::Avoid::load(&a.scene).map(|_| ()), flinch_harness::avoid::run(a)),
+        Command::Bench(a) => bench_cmd(a),
+        Command::Avoid(a) => flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input).and_then(|sc| flinch_harness::avoid::run_scene(a, sc).map_err(Failure::runtime)),
         Command::Robot(a) => flinch_harness::kinematics::cli::run(a),
         Command::Design(a) => classify(shipped::load(&a.scene).map(|_| ()), flinch_harness::design::run(a)),
         Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),

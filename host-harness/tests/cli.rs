@@ -249,3 +249,75 @@ fn measured_traces_give_errors_and_the_time_shift() {
     assert!(text(&o.stderr).contains("m.csv:3: v_t_mps"), "{}", text(&o.stderr));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Column `name` of a CSV's rows, parsed as f64 (empty cells as NaN).
+fn csv_column(csv: &str, name: &str) -> Vec<f64> {
+    let mut lines = csv.lines();
+    let i = lines.next().unwrap().split(',').position(|c| c == name).unwrap_or_else(|| panic!("no column {name}"));
+    lines.map(|l| l.split(',').nth(i).unwrap().parse().unwrap_or(f64::NAN)).collect()
+}
+
+#[test]
+fn hil_stop_output_is_go_after_arming_and_drops_at_the_detection() {
+    // The firmware logs its boot "Reset" before t = 0 (during the self-test); after arming the
+    // output is go, and it drops at the firmware's detection, latched to the end.
+    let d = tmp("hil-stop");
+    let csv = d.join("hil.csv");
+    let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--phase", "0.3", "--json", "--csv"]).arg(&csv).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let fw = &v["firmware"];
+    assert!(fw["event_log"][0]["at_s"].as_f64().unwrap() < 0.0, "the boot event is logged before t = 0: {fw}");
+    let detect = fw["firmware_detect_s"].as_f64().unwrap();
+    let seen = fw["stop_seen_s"].as_f64().unwrap();
+    let c = std::fs::read_to_string(&csv).unwrap();
+    let (t, stop, sampled) = (csv_column(&c, "t_s"), csv_column(&c, "stop_requested"), csv_column(&c, "stop_seen_by_controller"));
+    let before = t.iter().zip(&stop).filter(|(&t, _)| t < detect).collect::<Vec<_>>();
+    let after = t.iter().zip(&stop).filter(|(&t, _)| t >= detect).collect::<Vec<_>>();
+    assert!(before.len() > 1000 && after.len() > 100, "{} rows before, {} after", before.len(), after.len());
+    assert!(before.iter().all(|(_, &s)| s == 0.0), "go (0) from t = 0 until the detection at {detect} s");
+    assert!(after.iter().all(|(_, &s)| s == 1.0), "stop (1) from the detection at {detect} s on, latched");
+    assert!(t.iter().zip(&sampled).all(|(&t, &s)| (s == 1.0) == (t >= seen)), "the controller sees it from {seen} s");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn every_json_output_carries_its_schema_version() {
+    let runs: [&[&str]; 5] = [
+        &["run", "tables5-7_bistable", "--json"],
+        &["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--json"],
+        &["check", "tables5-7_bistable", "--json"],
+        &["design", "tables5-7_bistable", "--json"],
+        &["avoid", "scenes/avoid_wall.toml", "--json"],
+    ];
+    for args in runs {
+        let o = flinch().args(args).output().unwrap();
+        no_panic(&o);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}): {}", text(&o.stdout)));
+        assert_eq!(v["schema_version"], 1, "{args:?}: {}", text(&o.stdout));
+        // Written first, so a reader can branch on it before the rest.
+        assert!(text(&o.stdout).trim_start().starts_with("{\n  \"schema_version\""), "{args:?}");
+    }
+}
+
+#[test]
+fn avoid_and_bench_take_shipped_names_from_any_directory() {
+    let d = tmp("names");
+    let o = flinch().current_dir(&d).args(["avoid", "avoid_wall", "--json"]).output().unwrap();
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["min_signed_distance_m"].is_number());
+    let o = flinch().current_dir(&d).args(["avoid", "avoid_wal"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("avoid_wall"), "a close name is suggested: {}", text(&o.stderr));
+    let o = flinch().current_dir(&d).args(["bench", "tables5-7_bistable", "--quick", "--repeats", "1", "--out", "b"]).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(d.join("b/runs.csv").is_file() && d.join("b/fixed_point.csv").is_file());
+    // Bad input is exit 2, before anything runs.
+    for args in [&["bench", "no_such_scene"][..], &["bench", "--repeats", "0"], &["bench", "--scenes-dir", "/no/such/dir"]] {
+        let o = flinch().current_dir(&d).args(args).output().unwrap();
+        no_panic(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o.stderr));
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

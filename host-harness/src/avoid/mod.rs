@@ -55,35 +55,110 @@ pub struct AvoidArgs {
     pub save_depth: Option<PathBuf>,
 }
 
-/// Metrics of one run, as printed.
+/// The receiver's frame counters (MCU engine), counts.
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct RxCounts {
+    /// Frames applied.
+    pub good: u32,
+    /// Frames with a wrong CRC.
+    pub bad_crc: u32,
+    /// Headers out of range.
+    pub bad_header: u32,
+    /// Frames cut off mid-frame.
+    pub short: u32,
+    /// Whole, correct frames refused as old.
+    pub stale: u32,
+    /// Bytes skipped while looking for a frame start.
+    pub skipped_bytes: u32,
+}
+
+/// `flinch avoid --json`: the metrics of one run (docs/schema/avoid.json). Names carry their unit
+/// (docs/conventions.md).
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct AvoidMetrics {
+    /// Version of this document's schema.
+    pub schema_version: u32,
+    /// "reference-f64" or "mcu-i16f16".
+    pub engine: &'static str,
+    /// The speed and separation monitor: "ssm" or "off".
+    pub monitor: &'static str,
+    /// How the run ended.
+    pub status: &'static str,
+    /// Why it stopped before the goal, if it did.
+    pub reason: Option<&'static str>,
+    /// Why `reason` is null.
+    pub reason_null_reason: Option<&'static str>,
+    /// The tool entered the operator's true footprint.
+    pub collided: bool,
+    /// The goal was reached.
+    pub reached_goal: bool,
+    /// Time at which the goal was reached, s.
+    pub time_to_goal_s: Option<f64>,
+    /// Why `time_to_goal_s` is null.
+    pub time_to_goal_null_reason: Option<&'static str>,
+    /// Smallest signed distance to the operator's true footprint, m (negative inside).
+    pub min_signed_distance_m: f64,
+    /// Time with the tool inside the operator, s.
+    pub time_inside_s: f64,
+    /// Largest commanded speed, m/s.
+    pub max_speed_mps: f64,
+    /// Largest commanded speed within `near_operator_m` of the operator, m/s.
+    pub max_speed_near_operator_mps: f64,
+    /// The distance that counts as near the operator, m.
+    pub near_operator_m: f64,
+    /// Turns of the commanded direction by more than 90 degrees, count.
+    pub heading_reversals: usize,
+    /// Length of the path, m.
+    pub path_length_m: f64,
+    /// Stall episodes (local minima away from the goal), count.
+    pub stalls: usize,
+    /// Control steps, count.
+    pub steps: usize,
+    /// Camera frames fitted, count.
+    pub frames: usize,
+    /// The tool's last position [x, y], m.
+    pub final_m: Option<[f64; 2]>,
+    /// Receiver counters (MCU engine only).
+    pub rx: Option<RxCounts>,
+}
+
+impl AvoidMetrics {
+    /// The metrics of `res`.
+    pub fn new(res: &PathResult, engine: Engine, monitor: bool) -> Self {
+        let reason = res.status.reason().map(|r| r.name());
+        Self {
+            schema_version: crate::report::SCHEMA_VERSION,
+            engine: match engine {
+                Engine::Reference => "reference-f64",
+                Engine::Mcu => "mcu-i16f16",
+            },
+            monitor: if monitor { "ssm" } else { "off" },
+            status: res.status.name(),
+            reason,
+            reason_null_reason: reason.is_none().then_some("reached the goal"),
+            collided: res.min_signed_distance_m < 0.0,
+            reached_goal: res.status.ok(),
+            time_to_goal_s: res.time_to_goal_s,
+            time_to_goal_null_reason: res.time_to_goal_s.is_none().then_some("the goal was not reached"),
+            min_signed_distance_m: res.min_signed_distance_m,
+            time_inside_s: res.time_inside_s,
+            max_speed_mps: res.max_speed_mps,
+            max_speed_near_operator_mps: res.max_speed_near_operator_mps,
+            near_operator_m: path::NEAR_OPERATOR_M,
+            heading_reversals: res.heading_reversals,
+            path_length_m: res.path_length_m,
+            stalls: res.stalls,
+            steps: res.points.len().saturating_sub(1),
+            frames: res.frames,
+            final_m: res.points.last().copied(),
+            rx: res.rx.map(|s| RxCounts { good: s.good, bad_crc: s.bad_crc, bad_header: s.bad_header, short: s.short, stale: s.stale, skipped_bytes: s.skipped_bytes }),
+        }
+    }
+}
+
+/// Metrics of one run, as printed by `--json`.
 pub fn metrics_json(res: &PathResult, engine: Engine, monitor: bool) -> serde_json::Value {
-    let monitor = if monitor { "ssm" } else { "off" };
-    let reason = res.status.reason().map(|r| r.name());
-    serde_json::json!({
-        "engine": match engine { Engine::Reference => "reference-f64", Engine::Mcu => "mcu-i16f16" },
-        "monitor": monitor,
-        "status": res.status.name(),
-        "reason": reason,
-        "reason_null_reason": if reason.is_none() { Some("reached the goal") } else { None },
-        "collided": res.min_signed_distance_m < 0.0,
-        "reached_goal": res.status.ok(),
-        "time_to_goal_s": res.time_to_goal_s,
-        "time_to_goal_null_reason": if res.time_to_goal_s.is_none() { Some("the goal was not reached") } else { None },
-        "min_signed_distance_m": res.min_signed_distance_m,
-        "time_inside_s": res.time_inside_s,
-        "max_speed_mps": res.max_speed_mps,
-        "max_speed_near_operator_mps": res.max_speed_near_operator_mps,
-        "near_operator_m": path::NEAR_OPERATOR_M,
-        "heading_reversals": res.heading_reversals,
-        "path_length_m": res.path_length_m,
-        "stalls": res.stalls,
-        "steps": res.points.len() - 1,
-        "frames": res.frames,
-        "final_m": res.points.last(),
-        "rx": res.rx.map(|s| serde_json::json!({
-            "good": s.good, "bad_crc": s.bad_crc, "bad_header": s.bad_header,
-            "short": s.short, "stale": s.stale, "skipped_bytes": s.skipped_bytes })),
-    })
+    serde_json::to_value(AvoidMetrics::new(res, engine, monitor)).unwrap_or_default()
 }
 
 /// Writes the path, one row per control step: `t_s,x_m,y_m,vx_mps,vy_mps,separation_m,
@@ -106,7 +181,12 @@ pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> 
 /// Entry point of `flinch avoid`: `Ok(true)` when the tool reached the goal without ever entering
 /// the operator, `Ok(false)` otherwise (exit 1: a collision, or a stop before the goal).
 pub fn run(args: &AvoidArgs) -> Result<bool, String> {
-    let mut scene = scene::Avoid::load(&args.scene)?;
+    run_scene(args, scene::Avoid::load(&args.scene)?)
+}
+
+/// [`run`] on a scene already read (`args.scene` names it in messages; it is not read again, so
+/// `-` works).
+pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, String> {
     if args.thesis {
         scene.thesis_mode();
     }
@@ -143,7 +223,7 @@ pub fn run(args: &AvoidArgs) -> Result<bool, String> {
         write_csv(&res, p)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&metrics_json(&res, engine, scene.safety.on())).map_err(|e| e.to_string())?);
+        print!("{}", crate::report::to_json(&AvoidMetrics::new(&res, engine, scene.safety.on())));
     } else {
         let name = args.scene.display();
         println!("avoid {name}: engine {}", if args.mcu { "mcu (I16F16, LUT, serial frames)" } else { "reference (f64)" });

@@ -265,13 +265,14 @@ struct File {
 }
 
 impl Avoid {
-    /// Read and validate a scene file; errors name the file, the line (when the key is written in
-    /// the file) and the key: `file:line: avoid.key = value: what is allowed`.
+    /// Read and validate a scene: a file, `-`, or a shipped scene's name (`avoid_wall`); errors
+    /// name the file, the line (when the key is written in the file) and the key:
+    /// `file:line: avoid.key = value: what is allowed`.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let (file, text) = crate::shipped::read(path).map_err(|e| e.0)?;
         Self::parse(&text).map_err(|e| match e.strip_prefix("line ") {
-            Some(rest) => format!("{}:{rest}", path.display()),
-            None => format!("{}: {e}", path.display()),
+            Some(rest) => format!("{file}:{rest}"),
+            None => format!("{file}: {e}"),
         })
     }
 

@@ -211,7 +211,8 @@ pub fn budget_lines() -> Vec<Line> {
                 under += u64::from(got < exact_um - 1e-6 * exact_um.max(1.0));
                 // I16F16 millimetres: v mm/s, dt s, d mm/s^2.
                 let (v16, dt16, d16) = (I16F16::saturating_from_num(v * 1e3), I16F16::saturating_from_num(dt), I16F16::saturating_from_num(d * 1e3));
-                let r16 = v16.checked_mul(dt16).zip(v16.checked_mul(v16).and_then(|vv| vv.checked_div(d16 * 2)));
+                // 2 d overflows I16F16 above 16.4 m/s^2 (a debug build panicked on `d16 * 2`): counted as overflowed.
+                let r16 = v16.checked_mul(dt16).zip(v16.checked_mul(v16).and_then(|vv| d16.checked_mul_int(2).and_then(|dd| vv.checked_div(dd))));
                 match r16 {
                     Some((a, b)) => match a.checked_add(b) {
                         Some(s) => worst_16 = worst_16.max((s.to_num::<f64>() * 1e3 - exact_um).abs()),
@@ -220,7 +221,7 @@ pub fn budget_lines() -> Vec<Line> {
                     None => sat_16 += 1,
                 }
                 let (v32, dt32, d32) = (I32F32::from_num(v * 1e3), I32F32::from_num(dt), I32F32::from_num(d * 1e3));
-                let r32 = v32.checked_mul(dt32).zip(v32.checked_mul(v32).and_then(|vv| vv.checked_div(d32 * 2)));
+                let r32 = v32.checked_mul(dt32).zip(v32.checked_mul(v32).and_then(|vv| d32.checked_mul_int(2).and_then(|dd| vv.checked_div(dd))));
                 match r32.and_then(|(a, b)| a.checked_add(b)) {
                     Some(s) => worst_32 = worst_32.max((s.to_num::<f64>() * 1e3 - exact_um).abs()),
                     None => sat_32 += 1,
@@ -230,7 +231,7 @@ pub fn budget_lines() -> Vec<Line> {
     }
     let case = format!("v 1e-4..2 m/s x DT 0..0.2 s x d 0.1..50 m/s^2 ({n} points)");
     out.push(Line { quantity: "stopping distance v DT + v^2/2d", format: "u32/u64 integer um (firmware)", case: case.clone(), max_abs_error: worst_int, unit: "um", mismatches: under, evaluations: n, note: "mismatches = under-estimates (must be 0: rounded up)".into() });
-    out.push(Line { quantity: "stopping distance v DT + v^2/2d", format: "I16F16 mm", case: case.clone(), max_abs_error: worst_16, unit: "um", mismatches: sat_16, evaluations: n, note: "mismatches = overflowed (v^2 in mm^2/s^2 exceeds 32767 above 0.18 m/s)".into() });
+    out.push(Line { quantity: "stopping distance v DT + v^2/2d", format: "I16F16 mm", case: case.clone(), max_abs_error: worst_16, unit: "um", mismatches: sat_16, evaluations: n, note: "mismatches = overflowed (v^2 in mm^2/s^2 exceeds 32767 above 0.18 m/s, 2d above 16.4 m/s^2)".into() });
     out.push(Line { quantity: "stopping distance v DT + v^2/2d", format: "I32F32 mm", case, max_abs_error: worst_32, unit: "um", mismatches: sat_32, evaluations: n, note: "mismatches = overflowed".into() });
     // The extremes: the largest inputs saturate, they do not wrap.
     let top = stopping_distance_um(u32::MAX, u32::MAX, 1);

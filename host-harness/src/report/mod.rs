@@ -113,6 +113,24 @@ pub struct HilJson<'a> {
     pub report: &'a HilReport,
 }
 
+/// A JSON document with its schema version in front: `flinch check --json` and `flinch design
+/// --json` (docs/schema/check.json, design.json).
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct Versioned<'a, T: JsonSchema> {
+    /// Version of this document's schema.
+    pub schema_version: u32,
+    /// The document.
+    #[serde(flatten)]
+    pub doc: &'a T,
+}
+
+impl<'a, T: JsonSchema> Versioned<'a, T> {
+    /// `doc` at the current [`SCHEMA_VERSION`].
+    pub fn new(doc: &'a T) -> Self {
+        Self { schema_version: SCHEMA_VERSION, doc }
+    }
+}
+
 /// A JSON document, pretty-printed, with a trailing newline.
 pub fn to_json<T: Serialize>(doc: &T) -> String {
     let mut s = serde_json::to_string_pretty(doc).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));

@@ -14,9 +14,9 @@ use crate::sim::Sample;
 pub struct HilSignals {
     /// The travel switch trips at this travel, m (d_sw).
     pub threshold_m: f64,
-    /// The firmware dropped its stop output (robot-may-run) here, s; it stays dropped (latched
-    /// until a person resets it).
-    pub stop_requested_s: Option<f64>,
+    /// The firmware's stop output over the run, `(t_s, stop_requested)` at t = 0 and at each
+    /// change: armed (go) after the self-test, dropped at the detection and latched until a reset.
+    pub stop_output: Vec<(f64, bool)>,
     /// The controller sample that saw the stop request, s (braking starts there).
     pub stop_seen_s: Option<f64>,
     /// The controller's sampling instants, s: phase * scan_cycle + k * scan_cycle, up to the run's
@@ -25,23 +25,22 @@ pub struct HilSignals {
 }
 
 impl HilSignals {
-    /// From the firmware-in-the-loop report: the stop output drops at the first event the firmware
-    /// logged (its detection, or a fault), and the controller samples every scan cycle.
+    /// From the firmware-in-the-loop report: the stop output as the firmware drove it (its boot
+    /// "Reset" event, logged during the self-test before t = 0, is not a stop in the run), and the
+    /// controller samples every scan cycle.
     pub fn new(scene: &Scene, rep: &HilReport) -> Self {
         let f = &rep.firmware;
         let threshold_m = match scene.sensor {
             Some(Sensor::Travel { threshold }) => threshold,
             _ => f64::NAN,
         };
-        let logged = f.event_log.iter().map(|e| e.at_s).reduce(f64::min);
-        let stop_requested_s = logged.or(f.firmware_detect);
         let mut controller_samples_s = Vec::new();
         if f.scan_cycle > 0.0 {
             // Bounded: a plot or CSV needs no more than a few thousand ticks to be read.
             let n = ((scene.duration_s / f.scan_cycle).ceil() as usize).min(100_000);
             controller_samples_s.extend((0..=n).map(|k| (f.phase + k as f64) * f.scan_cycle).take_while(|&t| t <= scene.duration_s));
         }
-        Self { threshold_m, stop_requested_s, stop_seen_s: f.stop_seen, controller_samples_s }
+        Self { threshold_m, stop_output: f.stop_output.clone(), stop_seen_s: f.stop_seen, controller_samples_s }
     }
 }
 
@@ -93,9 +92,9 @@ impl Trace {
         self.hil.as_ref().map(|h| self.travel(s) >= h.threshold_m)
     }
 
-    /// The firmware's stop request at `t` (latched).
+    /// The firmware's stop output at `t`: true when it asks the robot to stop.
     pub fn stop_requested(&self, t: f64) -> Option<bool> {
-        self.hil.as_ref().map(|h| h.stop_requested_s.is_some_and(|at| t >= at))
+        self.hil.as_ref().map(|h| h.stop_output.iter().take_while(|&&(at, _)| at <= t).last().is_some_and(|&(_, stop)| stop))
     }
 
     /// The stop request as the controller last sampled it at `t`.
