@@ -265,6 +265,7 @@ scenes! {
     tables5_7_rigid => "tables5-7_rigid.toml";
     robot_two_link => "robot_two_link.toml";
     robot_viper_standin => "robot_viper_standin.toml";
+    body_hand => "body_hand.toml";
 }
 
 #[test]

@@ -451,7 +451,7 @@ case!(
     "kind = \"floor\"",
     "target.kind",
     "floor",
-    "must be one of \"obstacle\" | \"object\", got \"floor\""
+    "must be one of \"obstacle\" | \"object\" | \"body_region\", got \"floor\""
 );
 case!(
     target_restitution_negative,

@@ -43,6 +43,14 @@ pub struct DesignArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// A human body region (ISO/TS 15066 Annex A) or "all": the largest speed per region with the
+    /// scene's module and with a rigid tool, beside the Annex A closed form (the scene's target must
+    /// be kind = "body_region"; crate::body_design). --stroke, --speed and --plot do not apply.
+    #[arg(long = "body-region", value_name = "REGION|all")]
+    pub body_region: Option<String>,
+    /// With --body-region: the force threshold of the rigid tool's sensor, N.
+    #[arg(long = "rigid-sensor", value_name = "N", default_value_t = crate::body_design::RIGID_SENSOR_N)]
+    pub rigid_sensor: f64,
 }
 
 /// One simulated candidate.
@@ -202,7 +210,7 @@ pub fn speed_for_budget(room: f64, dead_time: f64, decel: f64) -> f64 {
 /// Scans `xs` (ascending) for the first boundary from `want_low` to its opposite and bisects it;
 /// `f` is None where the candidate is invalid. Returns the last x on the `want_low` side and the
 /// first x past it.
-fn boundary(xs: &[f64], f: &(dyn Fn(f64) -> Option<bool> + Sync), want_low: bool, iters: usize, show: fn(f64) -> String) -> Result<(f64, f64), String> {
+pub(crate) fn boundary(xs: &[f64], f: &(dyn Fn(f64) -> Option<bool> + Sync), want_low: bool, iters: usize, show: fn(f64) -> String) -> Result<(f64, f64), String> {
     let scan: Vec<Option<bool>> = xs.par_iter().map(|&x| f(x)).collect();
     let valid: Vec<(f64, bool)> = xs.iter().copied().zip(scan).filter_map(|(x, s)| s.map(|s| (x, s))).collect();
     if valid.is_empty() {
@@ -411,6 +419,12 @@ pub fn draw(path: &Path, t: &Template, r: &DesignReport) -> Result<(), String> {
 
 /// Runs `flinch design`.
 pub fn run(a: &DesignArgs) -> Result<bool, String> {
+    if let Some(which) = &a.body_region {
+        if a.stroke.is_some() || a.speed.is_some() || a.plot.is_some() {
+            return Err("--body-region: --stroke, --speed and --plot do not apply (the speed is what it searches)".into());
+        }
+        return crate::body_design::run(a, which);
+    }
     let t = Template::load(&a.scene).map_err(|e| e.to_string())?;
     let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     if a.json {

@@ -5,6 +5,8 @@
 //! what a run produced; `avoid` is collision avoidance (Ch. 5); `bench` is the speed/accuracy study (`flinch bench`).
 pub mod avoid;
 pub mod bench;
+pub mod body;
+pub mod body_design;
 pub mod check;
 pub mod design;
 pub mod hil;

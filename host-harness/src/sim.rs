@@ -158,6 +158,33 @@ pub struct Summary {
     pub safe: bool,
     /// Every reason the run is not safe, for people (empty when safe).
     pub failures: Vec<String>,
+    /// The human body region hit (`target.kind = "body_region"`, ISO/TS 15066 Table A.2/A.3 name,
+    /// e.g. "hand"); null for any other target, and then every `body_*` field is null.
+    pub body_region: Option<String>,
+    /// "transient" (free body part, limits 2x Table A.2) or "quasi_static" (clamped, Table A.2).
+    pub body_contact: Option<String>,
+    /// m_H used, kg (Table A.3 unless the scene overrides it).
+    pub body_effective_mass_kg: Option<f64>,
+    /// k used, N/m (Table A.3 unless the scene overrides it).
+    pub body_stiffness_n_per_m: Option<f64>,
+    /// The contact area of the scene, m^2.
+    pub body_contact_area_m2: Option<f64>,
+    /// Peak force on the body over the whole run (= peak_contact_force), N.
+    pub body_peak_force_n: Option<f64>,
+    /// The force limit that applies (transient: 2x Table A.2; quasi-static: Table A.2), N; null
+    /// where the TS does not permit the contact (transient contact with the skull or the face).
+    pub body_force_limit_n: Option<f64>,
+    /// body_force_limit_n - body_peak_force_n, N (negative: exceeded).
+    pub body_force_margin_n: Option<f64>,
+    /// Peak pressure = body_peak_force_n / body_contact_area_m2, Pa.
+    pub body_peak_pressure_pa: Option<f64>,
+    /// The pressure limit that applies (the region's lowest in Table A.2; 2x for transient), Pa.
+    pub body_pressure_limit_pa: Option<f64>,
+    /// body_pressure_limit_pa - body_peak_pressure_pa, Pa (negative: exceeded).
+    pub body_pressure_margin_pa: Option<f64>,
+    /// The force and the pressure are within the limits and the contact is permitted (part of
+    /// `safe`, crate::verdict).
+    pub body_limits_pass: Option<bool>,
 }
 
 /// The scene as the simulator models it: `scene` without the parts its `[solver]` lets it drop,
@@ -261,6 +288,8 @@ pub struct Simulation {
     peak_rtol: f64,
     fidelity: Fidelity,
     simplified: Vec<String>,
+    /// The body region hit, if the target is one (ISO/TS 15066 Annex A, crate::body).
+    body: Option<crate::body::BodyTarget>,
 }
 
 impl System<N> for Simulation {
@@ -589,6 +618,10 @@ impl Simulation {
             fidelity: scene.solver.fidelity,
             simplified,
             peak_rtol: scene.solver.rtol.max(1e-12),
+            body: match scene.target.kind {
+                TargetKind::BodyRegion(b) => Some(b),
+                _ => None,
+            },
         };
         if let Some(TargetKind::Object { floor_friction: Some(_), .. }) = Some(scene.target.kind) {
             sim.warnings.push(format!("target.floor_friction regularised with v0 = {} m/s", plant::friction::V0_MIN));
@@ -833,7 +866,36 @@ impl Run {
             closest_approach_m: s.closest_min,
             safe: false,
             failures: Vec::new(),
+            body_region: None,
+            body_contact: None,
+            body_effective_mass_kg: None,
+            body_stiffness_n_per_m: None,
+            body_contact_area_m2: None,
+            body_peak_force_n: None,
+            body_force_limit_n: None,
+            body_force_margin_n: None,
+            body_peak_pressure_pa: None,
+            body_pressure_limit_pa: None,
+            body_pressure_margin_pa: None,
+            body_limits_pass: None,
         };
+        if let Some(b) = &s.body {
+            let c = crate::body::check(b, s.peak_contact);
+            summary.body_region = Some(b.region.name.to_string());
+            summary.body_contact = Some(b.contact.name().to_string());
+            summary.body_effective_mass_kg = Some(b.mass_kg);
+            summary.body_stiffness_n_per_m = Some(b.stiffness_n_per_m);
+            summary.body_contact_area_m2 = Some(b.area_m2);
+            summary.body_peak_force_n = Some(c.peak_force_n);
+            summary.body_peak_pressure_pa = Some(c.peak_pressure_pa);
+            if let Some((f, p)) = c.limits {
+                summary.body_force_limit_n = Some(f);
+                summary.body_force_margin_n = Some(f - c.peak_force_n);
+                summary.body_pressure_limit_pa = Some(p);
+                summary.body_pressure_margin_pa = Some(p - c.peak_pressure_pa);
+            }
+            summary.body_limits_pass = Some(c.failures.is_empty());
+        }
         summary.failures = crate::verdict::failures(&summary);
         summary.safe = summary.failures.is_empty();
         summary

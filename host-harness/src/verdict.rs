@@ -15,7 +15,9 @@
 //!   be negative while the stroke is not exhausted (a soft target squashed by more than the stroke
 //!   left); the force limits, not this length, say whether that squeeze is acceptable.
 //!
-//! **Safe** means the list of failures is empty. A failure is: the stroke exhausted. The budget of
+//! **Safe** means the list of failures is empty. A failure is: the stroke exhausted, or, for a human
+//! body region target (ISO/TS 15066 Annex A, crate::body), the peak contact force or pressure over
+//! the region's limit, or a transient contact the TS does not permit. The budget of
 //! `flinch check` (`v DT + v^2/2d <= C - d_sw`) is a second, independent verdict; `check` and
 //! `design` are favourable only when both are. Where the budget and the simulation disagree,
 //! [`explain`] says why (a free object pushed away, the tool bouncing into the back end-stop, the
@@ -57,7 +59,48 @@ pub fn failures(s: &Summary) -> Vec<String> {
         };
         f.push(format!("stroke exhausted: {how}, so the flange reached the target"));
     }
+    f.extend(body_failures(s));
     f
+}
+
+/// The body-region part of [`failures`]: the run's peak contact force and pressure against the
+/// limits of ISO/TS 15066 Table A.2 (crate::body), rebuilt from the summary's `body_*` fields so
+/// the verdict depends on the summary alone. Empty for a target that is not a body region.
+pub fn body_failures(s: &Summary) -> Vec<String> {
+    use crate::body::{BodyContact, BodyTarget};
+    let (Some(name), Some(contact), Some(area), Some(m), Some(k), Some(peak)) = (
+        s.body_region.as_deref(),
+        s.body_contact.as_deref(),
+        s.body_contact_area_m2,
+        s.body_effective_mass_kg,
+        s.body_stiffness_n_per_m,
+        s.body_peak_force_n,
+    ) else {
+        return Vec::new();
+    };
+    let Some(region) = crate::body::preset(name) else {
+        return vec![format!("body region {name:?} unknown: no limits to hold the run against")];
+    };
+    let contact = if contact == "transient" { BodyContact::Transient } else { BodyContact::QuasiStatic };
+    let b = BodyTarget { region, contact, area_m2: area, mass_kg: m, stiffness_n_per_m: k };
+    crate::body::check(&b, peak).failures
+}
+
+/// One line stating the body-region check of a run, for people (None: not a body region).
+pub fn body_line(s: &Summary) -> Option<String> {
+    let name = s.body_region.as_deref()?;
+    let label = crate::body::preset(name).map_or(name, |p| p.label);
+    let contact = s.body_contact.as_deref().unwrap_or("-").replace('_', "-");
+    let peak_f = s.body_peak_force_n?;
+    let peak_p = s.body_peak_pressure_pa?;
+    let pass = if s.body_limits_pass == Some(true) { "PASS" } else { "FAIL" };
+    Some(match (s.body_force_limit_n, s.body_pressure_limit_pa) {
+        (Some(f), Some(p)) => format!(
+            "body region {label} ({contact}, ISO/TS 15066 Table A.2): {pass}: peak force {:.1} N of {:.1} N (margin {:+.1} N), peak pressure {:.1} N/cm^2 of {:.1} N/cm^2 (margin {:+.1} N/cm^2) over {:.2} cm^2",
+            peak_f, f, f - peak_f, peak_p * 1e-4, p * 1e-4, (p - peak_p) * 1e-4, s.body_contact_area_m2.unwrap_or(0.0) * 1e4
+        ),
+        _ => format!("body region {label} ({contact}): {pass}: transient contact is not permitted by ISO/TS 15066 (peak force {peak_f:.1} N)"),
+    })
 }
 
 /// One line stating the verdict of a run, for people.

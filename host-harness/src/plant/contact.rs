@@ -2,6 +2,9 @@
 //! `F = k d^1.5 + chi d^1.5 d'`, never negative (a contact pushes, it never pulls), zero for d <= 0.
 //! Units: k in N/m^1.5, chi in N s/m^2.5, d in m, d' in m/s, F in N.
 //!
+//! A human body region (ISO/TS 15066 Annex A, `crate::body`) is a *linear* undamped spring instead:
+//! `F = k d` for d > 0, k in N/m, chi = 0 ([`Contact::linear`]); it never pulls either.
+//!
 //! chi is fixed per contact at its onset from the approach velocity v_in (eq 7 and the other laws
 //! in [`super::damping_law`]), or given directly (Table 12).
 
@@ -16,10 +19,12 @@ pub const V_IN_MIN: f64 = 1e-3;
 /// One contact pair: its stiffness and how its damping is set.
 #[derive(Debug, Clone, Copy)]
 pub struct Contact {
-    /// k, N/m^1.5.
+    /// k, N/m^1.5 (Hertz) or N/m (linear).
     pub stiffness: f64,
     /// alpha (chi = alpha k / v_in) or a fixed chi.
     damping: Damping,
+    /// `F = k d` instead of `k d^1.5` (a body region of ISO/TS 15066 Annex A).
+    pub linear: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -35,7 +40,12 @@ impl Contact {
             ContactDamping::Restitution { restitution, law } => Damping::Alpha(damping_law::alpha(law, restitution)),
             ContactDamping::FixedChi(chi) => Damping::Chi(chi),
         };
-        Self { stiffness, damping }
+        Self { stiffness, damping, linear: false }
+    }
+
+    /// The undamped linear spring of ISO/TS 15066 Annex A's body model: `F = k d`, k in N/m.
+    pub fn linear(stiffness: f64) -> Self {
+        Self { stiffness, damping: Damping::Chi(0.0), linear: true }
     }
 
     /// chi for a contact that began with approach velocity `v_in` (m/s).
@@ -51,8 +61,8 @@ impl Contact {
         if d <= 0.0 {
             return 0.0;
         }
-        let d15 = d * d.sqrt();
-        (self.stiffness * d15 + chi * d15 * d_dot).max(0.0)
+        let dn = if self.linear { d } else { d * d.sqrt() };
+        (self.stiffness * dn + chi * dn * d_dot).max(0.0)
     }
 }
 
@@ -78,6 +88,15 @@ mod tests {
         let chi = cc.chi(0.05);
         assert_eq!(cc.force(1e-6, -100.0, chi), 0.0);
         assert!(cc.force(1e-6, 0.0, chi) > 0.0);
+    }
+
+    #[test]
+    fn linear_law_is_k_d_and_never_pulls() {
+        let l = Contact::linear(75e3);
+        assert_eq!(l.chi(1.0), 0.0);
+        assert_eq!(l.force(2e-3, 0.5, 0.0), 150.0);
+        assert_eq!(l.force(-1e-3, 0.5, 0.0), 0.0);
+        assert_eq!(l.force(1e-3, -100.0, l.chi(1.0)), 75.0);
     }
 
     #[test]

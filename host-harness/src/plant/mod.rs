@@ -130,7 +130,11 @@ impl Plant {
             tool_mass: scene.tool.mass,
             gravity: scene.motion.gravity,
             decoupler,
-            contact: Contact::new(scene.target.stiffness, &scene.target.damping),
+            contact: match scene.target.kind {
+                // ISO/TS 15066 Annex A: the body is an undamped linear spring.
+                crate::scene::TargetKind::BodyRegion(b) => Contact::linear(b.stiffness_n_per_m),
+                _ => Contact::new(scene.target.stiffness, &scene.target.damping),
+            },
             target: Target::Obstacle { surface: 0.0 },
             detector: None,
             target_chi: 0.0,

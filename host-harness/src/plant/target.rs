@@ -1,8 +1,10 @@
 //! The target of the collision (MODEL.md element 4): a fixed obstacle at x_o, or a free object of
 //! mass m_p (eq 6, 9, 18, 27, 50) with optional floor friction (eq 30, F_f_floor), regularised
-//! Coulomb `-mu m_p g tanh(v_p / v0)`. Units: kg, m, m/s, N.
+//! Coulomb `-mu m_p g tanh(v_p / v0)`. Units: kg, m, m/s, N. A human body region (ISO/TS 15066
+//! Annex A) is a free object of its effective mass m_H (transient contact) or an obstacle (clamped).
 
 use super::friction::TanhFriction;
+use crate::body::BodyContact;
 use crate::scene::TargetKind;
 
 /// Standard gravity for the floor's normal force, m/s^2 (the floor is horizontal; the scene's
@@ -37,6 +39,12 @@ impl Target {
                 mass,
                 start: tool_face + gap,
                 floor: floor_friction.map(|mu| TanhFriction::new(mu, 0.0)),
+            },
+            // ISO/TS 15066 Annex A: a transient contact meets the free effective mass m_H (it
+            // recoils, nothing holds it); a quasi-static one a body backed by a rigid surface.
+            TargetKind::BodyRegion(b) => match b.contact {
+                BodyContact::Transient => Self::Object { mass: b.mass_kg, start: tool_face + gap, floor: None },
+                BodyContact::QuasiStatic => Self::Obstacle { surface: tool_face + gap },
             },
         }
     }

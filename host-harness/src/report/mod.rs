@@ -56,6 +56,9 @@ pub fn human(s: &Summary) -> String {
     };
     let _ = writeln!(o, "  working mode {mode}   max travel {:.2} mm   stroke exhausted: {}", s.max_travel * 1e3, if s.stroke_exhausted { "YES" } else { "no" });
     let _ = writeln!(o, "  {}", crate::verdict::line(s));
+    if let Some(b) = crate::verdict::body_line(s) {
+        let _ = writeln!(o, "  {b}");
+    }
     if let Some(e) = s.achieved_restitution {
         let _ = writeln!(o, "  first contact: approach {:.4} m/s, achieved restitution {:.3}", s.approach_velocity.unwrap_or(0.0), e);
     }

@@ -147,6 +147,7 @@ pub fn key_tables() -> &'static [KeyTable] {
         KeyTable { path: "decoupler.friction", when: "kind = \"bistable\"", keys: friction::KEYS },
         KeyTable { path: "target", when: "kind = \"obstacle\"", keys: target::OBSTACLE_KEYS },
         KeyTable { path: "target", when: "kind = \"object\"", keys: target::OBJECT_KEYS },
+        KeyTable { path: "target", when: "kind = \"body_region\"", keys: target::BODY_KEYS },
         KeyTable { path: "sensor", when: "kind = \"travel\"", keys: sensor::TRAVEL_KEYS },
         KeyTable { path: "sensor", when: "kind = \"force\"", keys: sensor::FORCE_KEYS },
         KeyTable { path: "solver", when: "", keys: solver::KEYS },

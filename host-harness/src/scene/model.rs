@@ -232,17 +232,21 @@ pub struct Target {
     pub kind: TargetKind,
     /// Gap between the tool and the target at t = 0, m, > 0.
     pub gap: f64,
-    /// k_c, N/m^1.5, > 0.
+    /// k_c, N/m^1.5, > 0 (a body region: its linear k, N/m).
     pub stiffness: f64,
-    /// How chi is set.
+    /// How chi is set (a body region: a fixed chi of 0, undamped as Annex A).
     pub damping: ContactDamping,
 }
 
-/// Fixed obstacle or free object.
+/// Fixed obstacle, free object, or a human body region.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TargetKind {
     /// A fixed obstacle surface.
     Obstacle,
+    /// A human body region of ISO/TS 15066 Annex A (`crate::body`): an undamped linear spring k
+    /// (`Target::stiffness`, N/m here) in front of a free effective mass m_H (transient contact)
+    /// or of a rigid surface (quasi-static, clamped).
+    BodyRegion(crate::body::BodyTarget),
     /// A free object of mass m_p, optionally with floor friction.
     Object {
         /// m_p, kg, > 0.

@@ -1131,7 +1131,7 @@ case!(
     "kind = \"wall\"",
     "target.kind",
     "wall",
-    "must be one of \"obstacle\" | \"object\", got \"wall\""
+    "must be one of \"obstacle\" | \"object\" | \"body_region\", got \"wall\""
 );
 case!(
     target_gap_zero,

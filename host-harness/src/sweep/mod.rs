@@ -374,6 +374,15 @@ impl Template {
             SweepError(format!("{}: the scene validator refuses it: {e}", what.join(", ")))
         })
     }
+
+    /// A new template: this one with its document changed by `edit` (a string key set, a table
+    /// replaced) and re-validated; `what` names the change in the validator's message.
+    pub fn edited(&self, what: &str, edit: impl FnOnce(&mut DocumentMut)) -> Result<Self, SweepError> {
+        let mut doc = self.doc.clone();
+        edit(&mut doc);
+        let base = scene::parse(&doc.to_string(), &self.file).map_err(|e| SweepError(format!("{what}: the scene validator refuses it: {e}")))?;
+        Ok(Self { doc, file: self.file.clone(), base })
+    }
 }
 
 /// A sweep checked and built: every point's scene is valid, or (built with
