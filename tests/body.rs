@@ -114,6 +114,7 @@ fn the_contact_is_the_linear_annex_a_spring_and_matches_the_closed_form() {
         let (s, _) = sim::run(&sc, false).unwrap();
         let expected = v * (0.6f64 * 75e3).sqrt();
         let f = s.body_peak_force_n.unwrap();
+        assert_eq!(s.body_force_limit_n, Some(280.0), "transient: twice Table A.2's 140 N");
         assert!((f / expected - 1.0).abs() < 1e-3, "v = {v}: simulated {f} N, energy formula {expected} N");
         // An elastic contact: the hand leaves at 2 v (m_R infinite).
         assert!((s.object_final_velocity.unwrap() / (2.0 * v) - 1.0).abs() < 1e-3);

@@ -266,6 +266,7 @@ scenes! {
     robot_two_link => "robot_two_link.toml";
     robot_viper_standin => "robot_viper_standin.toml";
     body_hand => "body_hand.toml";
+    body_hand_free => "body_hand_free.toml";
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! Human body regions of ISO/TS 15066:2016 Annex A: the body model (an effective mass m_H behind a
 //! linear effective spring k, Table A.3), the force and pressure limits of each region (Table A.2),
 //! the check of a run's peak contact force against them, and the Annex A closed form of the speed
-//! limit for a transient contact (A.3.2, eq A.6: v = F / sqrt(mu k), mu = (1/m_H + 1/m_R)^-1).
+//! limit for a transient contact (v = F / sqrt(mu k), mu = (1/m_H + 1/m_R)^-1).
 //!
 //! **Source of the numbers.** The values below are ISO/TS 15066:2016 Tables A.2 and A.3 as they are
 //! commonly reproduced (robot vendors' application notes, the DGUV/IFA research behind the TS);
@@ -10,9 +10,10 @@
 //! (the TS gives N/cm^2: 1 N/cm^2 = 1e4 Pa).
 //!
 //! **Which limit.** The TS gives a quasi-static limit (clamping, the body backed by a rigid
-//! surface) and a transient one (a free body part that recoils), the latter twice the former for
-//! force and for pressure (A.3.3: "the values for transient contact ... are twice the
-//! quasi-static values"). A `contact = "transient"` target is held against the transient limits;
+//! surface) and a transient one (a free body part that recoils); as commonly reproduced, Table
+//! A.2's transient values are twice its quasi-static ones, for force and for pressure, and Flinch
+//! uses that factor ([`TRANSIENT_FACTOR`]; check it against the licensed text as the rest). A
+//! `contact = "transient"` target is held against the transient limits;
 //! a `contact = "quasi_static"` (clamped) target against the quasi-static limits over the *whole*
 //! contact: Flinch does not credit the short transient phase the TS allows at the start of a
 //! clamp (conservative). Transient contact with the skull and forehead or the face is not permitted
@@ -70,7 +71,8 @@ pub const PRESETS: &[Preset] = &[
 /// The region names, in the order of [`PRESETS`] (the scene key's choices).
 pub const REGION_NAMES: &[&str] = &["skull", "face", "neck", "back", "chest", "abdomen", "pelvis", "upper_arm", "lower_arm", "hand", "thigh", "lower_leg"];
 
-/// The factor from quasi-static to transient limits, force and pressure (A.3.3).
+/// The factor from quasi-static to transient limits, force and pressure (Table A.2 as commonly
+/// reproduced: see the module docs).
 pub const TRANSIENT_FACTOR: f64 = 2.0;
 
 /// The preset of a region by name.
@@ -123,7 +125,7 @@ impl BodyTarget {
         }
     }
 
-    /// The Annex A closed form (A.3.2): the largest relative speed at which an undamped linear
+    /// The Annex A closed form: the largest relative speed at which an undamped linear
     /// spring k between the moving mass `m_r_kg` (kg, infinite allowed) and the body keeps the peak
     /// force at the force limit. Transient: mu = (1/m_H + 1/m_R)^-1; quasi-static (clamped, the body
     /// cannot recoil): mu = m_R. The energy of the relative motion 1/2 mu v^2 all goes into the

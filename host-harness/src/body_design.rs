@@ -17,7 +17,7 @@
 //!   That is the speed to quote for the module: beyond it the module has bottomed and the robot
 //!   pushes through its stack, which the stroke rule does not accept whatever the force.
 //!
-//! Beside each, the Annex A closed form (A.3.2) `v = F / sqrt(mu k)`, mu = (1/m_H + 1/m_R)^-1
+//! Beside each, the Annex A closed form `v = F / sqrt(mu k)`, mu = (1/m_H + 1/m_R)^-1
 //! (clamped: mu = m_R), F the limit that applies, with the moving mass m_R stated: the tool alone
 //! (m_t) with the module, whose soft decoupler lets the tool meet the body on its own; the robot's
 //! effective mass with the tool (m_r + m_t) for a rigid tool, infinite without `[robot]` (the
@@ -268,7 +268,7 @@ pub fn design(t: &Template, which: &str, dead_time: Option<f64>, rigid_sensor_n:
         ),
         format!("rigid tool: decoupler.kind = \"rigid\" (m_t joins the robot) and a {rigid_sensor_n} N force sensor in the tool (--rigid-sensor; 25 N as tables5-7_rigid.toml, Ch. 3.1.2)"),
         format!(
-            "closed form (Annex A.3.2): v = F / sqrt(mu k), {}; m_R = m_t = {m_t} kg with the module (the tool alone meets the body), {} for the rigid tool. Impact energy only: the robot driving on until it detects and brakes, its compliance and the module's stroke are not in it",
+            "closed form (ISO/TS 15066 Annex A): v = F / sqrt(mu k), {}; m_R = m_t = {m_t} kg with the module (the tool alone meets the body), {} for the rigid tool. Impact energy only: the robot driving on until it detects and brakes, its compliance and the module's stroke are not in it",
             if own.contact == BodyContact::Transient { "mu = (1/m_H + 1/m_R)^-1, F = 2x Table A.2 (transient)" } else { "mu = m_R (clamped: the body cannot recoil), F = Table A.2 (quasi-static)" },
             match m_r {
                 Some(m) => format!("m_R = m_r + m_t = {} kg", m + m_t),

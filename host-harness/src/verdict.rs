@@ -141,7 +141,13 @@ pub fn explain(scene: &Scene, b: &Budget, s: &Summary) -> Vec<String> {
     let mut out = Vec::new();
     let fits = b.fits();
     let predicted = b.switch_travel + b.stopping_distance;
-    if let TargetKind::Object { mass, .. } = scene.target.kind {
+    let free_mass = match scene.target.kind {
+        TargetKind::Object { mass, .. } => Some(mass),
+        // ISO/TS 15066 transient contact: the body part is a free effective mass m_H.
+        TargetKind::BodyRegion(b) if b.contact == crate::body::BodyContact::Transient => Some(b.mass_kg),
+        _ => None,
+    };
+    if let Some(mass) = free_mass {
         out.push(format!(
             "the target is a free object (m_p = {mass} kg): the budget assumes a fixed obstacle and counts the robot's whole stopping distance ({}) as travel, but the object was pushed away (up to {}), so the tool travelled only {}; the simulation's stroke left ({}) is what applies",
             mm(b.stopping_distance),
@@ -175,7 +181,7 @@ pub fn explain(scene: &Scene, b: &Budget, s: &Summary) -> Vec<String> {
             ));
         }
     }
-    let obstacle = matches!(scene.target.kind, TargetKind::Obstacle);
+    let obstacle = free_mass.is_none();
     if fits && s.stroke_exhausted {
         out.push(format!(
             "the budget fits but the simulation exhausts the stroke: the budget assumes the flange stops on its command ({} of travel at most) and a rigid target; the simulated robot's compliance and the tool's own dynamics carry it further. The simulation decides: NOT SAFE",

@@ -41,7 +41,8 @@ pub fn panels(scene: &Scene, s: &Summary, h: &[Sample], trace: &Trace, measured:
     let overlay = |col: &str, scale: f64, label: &str| -> Option<Series> {
         measured.iter().find(|(c, _)| c == col).map(|(_, p)| Series { name: format!("measured {label}"), points: p.iter().map(|&(t, v)| (t, v * scale)).collect(), color: MEASURED, style: Style::Thin })
     };
-    let object = matches!(scene.target.kind, TargetKind::Object { .. });
+    // A body part in transient contact (ISO/TS 15066) is a free mass too: draw its velocity.
+    let object = matches!(scene.target.kind, TargetKind::Object { .. }) || matches!(scene.target.kind, TargetKind::BodyRegion(b) if b.contact == crate::body::BodyContact::Transient);
     let mut out = Vec::new();
 
     // Velocities.
