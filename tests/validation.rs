@@ -110,3 +110,20 @@ fn fig76_under_hunt_crossley_the_jump_is_gone_but_the_landing_peak_is_not_smalle
         assert!((end(&hh) - end(&hl)).abs() < 1e-5, "{name}: rest {} vs {}", end(&hh), end(&hl));
     }
 }
+
+#[test]
+fn shipped_variants_are_the_ones_the_document_describes() {
+    // The Hunt-Crossley Fig. 76a scene is table12_hydraulic_object_dt10 with only the law added.
+    let (shipped, _) = recorded("figures/fig76_hydraulic_hunt_crossley.toml", 1e-3);
+    let (made, _) = recorded_hunt_crossley("table12_hydraulic_object_dt10.toml", 1e-3);
+    assert_eq!(shipped.peak_robot_force, made.peak_robot_force);
+    assert_eq!(shipped.first_impact_peak_robot_force_n, made.first_impact_peak_robot_force_n);
+    // The H = 45 mm _detached scenes: Table 3's other height, far from the measured peaks.
+    for (m, measured, sd) in [(136, 1.231, 0.054), (246, 1.430, 0.040)] {
+        let (h45, _) = recorded(&format!("figures/table4_bistable_{m}g_detached_h45.toml"), 1e-3);
+        let (h53, _) = recorded(&format!("figures/table4_bistable_{m}g_detached.toml"), 1e-3);
+        let (p45, p53) = (h45.object_peak_velocity.unwrap(), h53.object_peak_velocity.unwrap());
+        assert!((p53 - measured).abs() <= 2.0 * sd, "{m} g at 53 mm: {p53}");
+        assert!((p45 - measured).abs() > 2.0 * sd, "{m} g at 45 mm: {p45}");
+    }
+}
