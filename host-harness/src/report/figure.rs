@@ -272,9 +272,13 @@ where
     let (xa, xb) = (chart.x_range().start, chart.x_range().end);
     let (ya, yb) = (chart.y_range().start, chart.y_range().end);
     let yticks = p.y_ticks.clone();
-    let ylab = move |v: &f64| yticks.iter().find(|(t, _)| (t - v).abs() < 1e-9).map_or_else(|| if yticks.is_empty() { fmt_num(*v) } else { String::new() }, |(_, s)| s.clone());
+    // A tick stepped onto zero in floating point (-5.6e-17) is zero: snap anything below 1e-9 of
+    // the axis span.
+    let snap = |v: f64, a: f64, b: f64| if v.abs() < 1e-9 * (b - a).abs() { 0.0 } else { v };
+    let ylab = move |v: &f64| yticks.iter().find(|(t, _)| (t - v).abs() < 1e-9).map_or_else(|| if yticks.is_empty() { fmt_num(snap(*v, ya, yb)) } else { String::new() }, |(_, s)| s.clone());
+    let xlab = move |v: &f64| fmt_num(snap(*v, xa, xb));
     let mut mesh = chart.configure_mesh();
-    mesh.x_desc(&x.label).y_desc(&p.y_label).x_label_formatter(&|v| fmt_num(*v)).y_label_formatter(&ylab).label_style(("sans-serif", 13)).axis_desc_style(("sans-serif", 14)).light_line_style(RGBColor(247, 247, 247)).bold_line_style(RGBColor(220, 220, 220));
+    mesh.x_desc(&x.label).y_desc(&p.y_label).x_label_formatter(&xlab).y_label_formatter(&ylab).label_style(("sans-serif", 13)).axis_desc_style(("sans-serif", 14)).light_line_style(RGBColor(247, 247, 247)).bold_line_style(RGBColor(220, 220, 220));
     if !p.y_ticks.is_empty() {
         mesh.y_labels(p.y_ticks.len().max(2) * 4);
     }
