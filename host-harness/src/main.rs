@@ -41,6 +41,9 @@ enum Command {
     Avoid(flinch_harness::avoid::AvoidArgs),
     /// Run a scene over a grid of one or two of its keys (all cores): CSV and a line chart or heat map.
     Sweep(flinch_harness::sweep::cli::SweepArgs),
+    /// Monte Carlo over a scene's keys drawn from distributions (all cores, deterministic for a
+    /// seed, in chunks that merge): each failure's probability with a 95 % interval (docs/sample.md).
+    Sample(flinch_harness::sample::cli::SampleArgs),
     /// Your robot from its URDF: m_r, k_r, c_r reduced from joint space (thesis eq 10-16), and
     /// against one joint (--sweep-joint, like Fig. 12).
     Robot(flinch_harness::kinematics::cli::RobotArgs),
@@ -337,6 +340,7 @@ fn main() -> ExitCode {
         Command::Check(a) => check_cmd(a),
         Command::Scenes { what } => scenes_cmd(what),
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
+        Command::Sample(a) => flinch_harness::sample::cli::run(a),
         Command::Bench(a) => flinch_harness::bench::run(&flinch_harness::bench::Options { scenes: a.scenes.clone(), scenes_dir: a.scenes_dir.clone(), out: a.out.clone(), repeats: a.repeats, quick: a.quick }).map(|_| true).map_err(Failure::runtime),
         Command::Avoid(a) => classify(flinch_harness::avoid::scene::Avoid::load(&a.scene).map(|_| ()), flinch_harness::avoid::run(a)),
         Command::Robot(a) => flinch_harness::kinematics::cli::run(a),
