@@ -1061,6 +1061,64 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
     Ok(out)
 }
 
+/// Units of the report's numeric fields (docs/conventions.md): counts, indices and probabilities
+/// are "1"; the truncation bounds are in the key's unit, which the entry's `unit` gives.
+const UNITS: &[(&str, &str)] = &[
+    ("schema_version", "1"), ("seed", "1"), ("samples", "1"), ("drawn", "1"), ("ran", "1"), ("refused", "1"), ("solver_failed", "1"),
+    ("count", "1"), ("first_sample", "1"), ("mode_1", "1"), ("mode_2", "1"), ("mode_3", "1"), ("no_mode", "1"), ("confidence", "1"),
+    ("failures", "1"), ("runs", "1"), ("p", "1"), ("low", "1"), ("high", "1"), ("wilson_low", "1"), ("wilson_high", "1"),
+    ("clopper_pearson_low", "1"), ("clopper_pearson_high", "1"), ("high_if_unrun_failed", "1"), ("kept_probability", "1"),
+    ("outside_probability", "1"), ("within_lo", "the key's unit, given in `unit`"), ("within_hi", "the key's unit, given in `unit`"),
+];
+
+/// The JSON Schema of `flinch sample --json` (docs/schema/sample.json), every numeric field with
+/// its `unit`; and the numeric fields without one (none, or the test fails).
+pub fn schema() -> (String, Vec<String>) {
+    use serde_json::Value;
+    let mut schema = schemars::schema_for!(SampleReport);
+    let mut missing = Vec::new();
+    let numeric = |p: &Value| {
+        let ty = |t: &Value| matches!(t.as_str(), Some("number" | "integer"));
+        match p.get("type") {
+            Some(Value::Array(a)) => a.iter().any(ty),
+            Some(t) => ty(t),
+            None => false,
+        }
+    };
+    let mut visit = |obj: &mut serde_json::Map<String, Value>, at: &str| {
+        if let Some(Value::Object(props)) = obj.get_mut("properties") {
+            for (name, prop) in props.iter_mut() {
+                if !numeric(prop) {
+                    continue;
+                }
+                match UNITS.iter().find(|(n, _)| n == name) {
+                    Some((_, u)) => {
+                        if let Value::Object(p) = prop {
+                            p.insert("unit".into(), Value::String((*u).into()));
+                        }
+                    }
+                    None => missing.push(format!("{at}{name}")),
+                }
+            }
+        }
+    };
+    if let Some(root) = schema.as_object_mut() {
+        root.insert("description".into(), Value::String("`flinch sample --json`: the study, its counts and each failure's probability with a 95 % interval (docs/sample.md). Units: the `unit` keyword of every numeric field (docs/conventions.md).".into()));
+        root.insert("$id".into(), Value::String("https://flinch.invalid/schema/sample.json".into()));
+        visit(root, "");
+        if let Some(Value::Object(defs)) = root.get_mut("$defs") {
+            for (k, d) in defs.iter_mut() {
+                if let Value::Object(o) = d {
+                    visit(o, &format!("{k}."));
+                }
+            }
+        }
+    }
+    let mut text = serde_json::to_string_pretty(&schema).unwrap_or_default();
+    text.push('\n');
+    (text, missing)
+}
+
 /// Raised by Ctrl-C (installed by the command line): the run stops after the current block.
 pub static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -1129,5 +1187,18 @@ mod tests {
         assert_eq!(at, n);
         assert!(parse_chunk("0/3").is_err() && parse_chunk("4/3").is_err() && parse_chunk("x").is_err());
         assert_eq!(parse_chunk("2/3").unwrap(), (2, 3));
+    }
+    /// docs/schema/sample.json is generated: `FLINCH_BLESS=1 cargo test -p flinch-harness --lib
+    /// sample::tests::schema` rewrites it.
+    #[test]
+    fn schema_in_docs_is_current_and_every_number_has_a_unit() {
+        let (text, missing) = schema();
+        assert!(missing.is_empty(), "numeric fields of the sample report without a unit (add them to UNITS): {missing:?}");
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/schema/sample.json");
+        if std::env::var_os("FLINCH_BLESS").is_some() {
+            std::fs::write(&path, &text).unwrap();
+        }
+        let on_disk = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(on_disk == text, "{} is out of date: FLINCH_BLESS=1 cargo test -p flinch-harness --lib sample::tests::schema", path.display());
     }
 }
