@@ -236,6 +236,8 @@ fn bad_studies_are_refused_before_anything_runs() {
     assert!(refuse(&["decoupler.kind=uniform:0:1"], 10).contains("not a number"));
     assert!(refuse(&["motion.speed=uniform:0.04:0.06"], 0).contains("at least 1"));
     assert!(refuse(&[], 10).contains("nothing to vary"));
+    // A distribution wholly outside the key's accepted range.
+    assert!(refuse(&["target.restitution=uniform:1.1:1.2"], 10).contains("every sample would be refused"));
     // A truncation interval with no probability in it.
     assert!(refuse(&["motion.speed=normal:0.05:0.001:1:2"], 10).contains("no probability"));
 }

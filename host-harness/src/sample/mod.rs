@@ -449,6 +449,14 @@ impl Plan {
                 (Some(i), None) => d.cdf(i.lo.unwrap_or(f64::NEG_INFINITY)) + (1.0 - d.cdf(i.hi.unwrap_or(f64::INFINITY))),
                 _ => 0.0,
             };
+            if outside >= 1.0 - 1e-12 {
+                return err(format!(
+                    "--vary {}: every draw lies outside the accepted range of {} ({}): every sample would be refused",
+                    spec.spec(),
+                    spec.key,
+                    info.as_ref().map_or(String::new(), |i| i.range.clone())
+                ));
+            }
             let unit = info.as_ref().map_or("", |i| i.unit.as_str());
             let column = column(&spec.key, unit);
             let v = Varied { spec, column, info, within, kept, f_lo, outside };
