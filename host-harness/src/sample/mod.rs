@@ -437,7 +437,7 @@ impl Plan {
                 None => (0.0, 1.0),
             };
             if let Some((a, b)) = within {
-                if !(a < b) || !(kept > 1e-12) {
+                if a >= b || kept.is_nan() || kept <= 1e-12 {
                     return err(format!(
                         "--vary {}: the distribution has no probability in [{a}, {b}]{}",
                         spec.spec(),
