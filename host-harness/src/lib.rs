@@ -13,6 +13,7 @@ pub mod hil;
 pub mod kinematics;
 pub mod plant;
 pub mod report;
+pub mod sample;
 pub mod scene;
 pub mod shipped;
 pub mod sim;

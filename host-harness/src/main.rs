@@ -41,6 +41,9 @@ enum Command {
     Avoid(flinch_harness::avoid::AvoidArgs),
     /// Run a scene over a grid of one or two of its keys (all cores): CSV and a line chart or heat map.
     Sweep(flinch_harness::sweep::cli::SweepArgs),
+    /// Monte Carlo over a scene's keys drawn from distributions (all cores, deterministic for a
+    /// seed, in chunks that merge): each failure's probability with a 95 % interval (docs/sample.md).
+    Sample(flinch_harness::sample::cli::SampleArgs),
     /// Your robot from its URDF: m_r, k_r, c_r reduced from joint space (thesis eq 10-16), and
     /// against one joint (--sweep-joint, like Fig. 12).
     Robot(flinch_harness::kinematics::cli::RobotArgs),
@@ -344,6 +347,7 @@ fn main() -> ExitCode {
         Command::Check(a) => check_cmd(a),
         Command::Scenes { what } => scenes_cmd(what),
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
+        Command::Sample(a) => flinch_harness::sample::cli::run(a),
         Command::Bench(a) => bench_cmd(a),
         Command::Avoid(a) => flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input).and_then(|sc| flinch_harness::avoid::run_scene(a, sc).map_err(Failure::runtime)),
         Command::Robot(a) => flinch_harness::kinematics::cli::run(a),

@@ -363,15 +363,27 @@ impl Template {
     /// The scene with `sets` applied, validated; the error names the values and the validator's
     /// message.
     pub fn with(&self, sets: &[(&str, f64)]) -> Result<Scene, SweepError> {
+        self.with_refused_keys(sets).map_err(|(e, _)| e)
+    }
+
+    /// As [`Template::with`]; a refusal also names the keys the validator's issues are about (in
+    /// the order found, without repeats), so refusals can be counted by key (`flinch sample`).
+    pub fn with_refused_keys(&self, sets: &[(&str, f64)]) -> Result<Scene, (SweepError, Vec<String>)> {
         let mut doc = self.doc.clone();
         for &(k, x) in sets {
             if !set(&mut doc, k, x) {
-                return Err(SweepError(format!("{}: {k} cannot be set to {x}: the path runs into a value that is not a table", self.file)));
+                return Err((SweepError(format!("{}: {k} cannot be set to {x}: the path runs into a value that is not a table", self.file)), vec![k.to_string()]));
             }
         }
         scene::parse(&doc.to_string(), &self.file).map_err(|e| {
             let what: Vec<String> = sets.iter().map(|(k, x)| format!("{k} = {x}")).collect();
-            SweepError(format!("{}: the scene validator refuses it: {e}", what.join(", ")))
+            let mut keys: Vec<String> = Vec::new();
+            for i in &e.issues {
+                if !keys.contains(&i.key) {
+                    keys.push(i.key.clone());
+                }
+            }
+            (SweepError(format!("{}: the scene validator refuses it: {e}", what.join(", "))), keys)
         })
     }
 

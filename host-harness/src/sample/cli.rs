@@ -1,0 +1,156 @@
+//! The `flinch sample` command line.
+
+use super::{merge, parse_chunk, Plan, SampleReport, FORMS, STOP};
+use crate::report::output::{self, Failure};
+use crate::sweep::{Progress, Template};
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+/// `flinch sample SCENE --samples N --vary KEY=DIST ...`, or `flinch sample --merge A.json B.json`.
+#[derive(clap::Args, Debug)]
+pub struct SampleArgs {
+    /// The scene: a TOML file, `-`, or a shipped scene's name.
+    #[arg(required_unless_present = "merge")]
+    pub scene: Option<PathBuf>,
+    /// N, the number of samples of the whole study (with --chunk, this process runs its share).
+    /// Accepts 10000 or 1e4.
+    #[arg(long, value_name = "N", value_parser = parse_count, required_unless_present = "merge")]
+    pub samples: Option<u64>,
+    /// A varied key and its distribution, any number of times: KEY=normal:MEAN:SD[:LO:HI],
+    /// KEY=lognormal:MU:SIGMA[:LO:HI] (MU, SIGMA of ln X; median exp(MU)), KEY=uniform:LO:HI,
+    /// KEY=triangular:LO:MODE:HI. KEY is a scene key as in `flinch sweep` (motion.dead_time,
+    /// decoupler.spring_rate, ...).
+    #[arg(long = "vary", value_name = "KEY=DIST")]
+    pub vary: Vec<String>,
+    /// Seed: the same seed gives the same samples on any number of threads or machines.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Run only chunk K of M (sample indices [N(K-1)/M, NK/M)); merge the chunks' --json reports
+    /// with --merge.
+    #[arg(long, value_name = "K/M")]
+    pub chunk: Option<String>,
+    /// Draw every key within its accepted range (the validator's, docs/SCENES.md): an exact
+    /// truncated distribution; the report says how much probability that cuts. Without it a draw
+    /// outside the range is a refused sample, counted and reported.
+    #[arg(long)]
+    pub truncate: bool,
+    /// Write a row per sample here (`-`: standard output), in sample order, as it runs.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Print the report as JSON (merge it with --merge).
+    #[arg(long)]
+    pub json: bool,
+    /// Merge the --json reports of chunks of one study into its estimate.
+    #[arg(long, value_name = "REPORT.json", num_args = 1.., conflicts_with_all = ["scene", "samples", "vary", "chunk", "csv", "truncate"])]
+    pub merge: Vec<PathBuf>,
+    /// Threads (default: all cores). The result does not depend on it.
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+}
+
+/// A count given as 10000 or 1e4.
+pub fn parse_count(s: &str) -> Result<u64, String> {
+    if let Ok(n) = s.trim().parse::<u64>() {
+        return Ok(n);
+    }
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 && x.fract() == 0.0 && x < 1.8e19 => Ok(x as u64),
+        _ => Err(format!("{s:?} is not a whole number of samples (10000 or 1e4)")),
+    }
+}
+
+fn print(args: &SampleArgs, r: &SampleReport) -> Result<(), Failure> {
+    if args.json {
+        output::print(&crate::report::to_json(r))
+    } else if args.csv.as_deref().is_some_and(output::is_stdout) {
+        output::note(r.human().trim_end());
+        Ok(())
+    } else {
+        output::print(&r.human())
+    }
+}
+
+/// Runs `flinch sample`: exit 0 when it ran (the estimates are the answer, not a verdict), 2 for
+/// bad input or when every sample was refused, 3 when the solver failed at any sample (after
+/// writing everything), 130 on Ctrl-C (the CSV and the report cover the samples that ran).
+pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
+    if !args.merge.is_empty() {
+        let mut reports = Vec::new();
+        let names: Vec<String> = args.merge.iter().map(|p| p.display().to_string()).collect();
+        for p in &args.merge {
+            let text = std::fs::read_to_string(p).map_err(|e| Failure::bad_input(format!("--merge {}: cannot read it: {e}", p.display())))?;
+            let r: SampleReport = serde_json::from_str(&text).map_err(|e| Failure::bad_input(format!("--merge {}: not a `flinch sample --json` report: {e}", p.display())))?;
+            reports.push(r);
+        }
+        let m = merge(&reports, &names).map_err(|e| Failure::bad_input(e.0))?;
+        if !m.complete {
+            output::note(&format!("note: the merged reports cover {} of the {} samples", m.drawn, m.samples));
+        }
+        print(args, &m)?;
+        return if m.solver_failed > 0 { Err(Failure::runtime(format!("the solver failed at {} of {} samples", m.solver_failed, m.drawn))) } else { Ok(true) };
+    }
+    let (Some(scene), Some(samples)) = (&args.scene, args.samples) else {
+        return Err(Failure::bad_input("give a SCENE and --samples N (or --merge REPORT.json ...)"));
+    };
+    if args.json && args.csv.as_deref().is_some_and(output::is_stdout) {
+        return Err(Failure::bad_input("--json and --csv - both write to standard output; give --csv a file name"));
+    }
+    if args.vary.is_empty() {
+        return Err(Failure::bad_input(format!("nothing to vary: give --vary KEY=DIST at least once; DIST is one of {FORMS}")));
+    }
+    let chunk = args.chunk.as_deref().map(parse_chunk).transpose().map_err(|e| Failure::bad_input(e.0))?;
+    if args.jobs == Some(0) {
+        return Err(Failure::bad_input("--jobs must be at least 1"));
+    }
+    let (file, text) = crate::shipped::read(scene).map_err(|e| Failure::bad_input(e.0))?;
+    let template = Template::from_text(&text, &file).map_err(|e| Failure::bad_input(e.0))?;
+    let plan = Plan::new(template, &text, &args.vary, args.seed, samples, chunk, args.truncate).map_err(|e| Failure::bad_input(e.0))?;
+    for v in &plan.vary {
+        if v.outside > 0.0 && v.outside * (plan.range.1 - plan.range.0) as f64 >= 0.5 {
+            output::note(&format!(
+                "note: {} ~ {} puts {:.3} % of its draws outside the accepted range {}: those samples are refused and counted (--truncate draws within it)",
+                v.spec.key,
+                v.spec.dist.spec(),
+                v.outside * 100.0,
+                v.info.as_ref().map_or(String::new(), |i| i.range.clone())
+            ));
+        }
+    }
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    let mut out = match &args.csv {
+        Some(p) => Some(output::create(p)?),
+        None => None,
+    };
+    let t0 = Instant::now();
+    let pool = match args.jobs {
+        None => None,
+        Some(j) => Some(rayon::ThreadPoolBuilder::new().num_threads(j).build().map_err(|e| Failure::runtime(format!("--jobs {j}: {e}")))?),
+    };
+    let ran = plan.run(Progress::Auto, out.as_mut().map(|w| w.as_mut() as &mut dyn std::io::Write), &STOP, pool.as_ref());
+    let csv_path = args.csv.clone().unwrap_or_default();
+    let report = ran.map_err(|e| output::write_error(&csv_path, &e))?;
+    if let Some(w) = out.as_mut() {
+        w.flush().map_err(|e| output::write_error(&csv_path, &e))?;
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    output::note(&format!(
+        "{} samples in {:.2} s ({} threads, {:.0} samples/s){}",
+        report.drawn,
+        wall,
+        args.jobs.unwrap_or_else(rayon::current_num_threads),
+        report.drawn as f64 / wall.max(1e-9),
+        args.csv.as_ref().filter(|p| !output::is_stdout(p)).map_or(String::new(), |p| format!("; csv {}", p.display()))
+    ));
+    print(args, &report)?;
+    if STOP.load(Ordering::SeqCst) {
+        return Err(Failure::interrupted(format!("interrupted after {} samples: the report and the CSV cover samples {}..{}", report.drawn, plan.range.0, plan.range.0 + report.drawn)));
+    }
+    if report.ran == 0 && report.refused > 0 {
+        return Err(Failure::bad_input(format!("the validator refused all {} samples; the first: {}", report.refused, report.refusals.first().map_or("", |g| g.first_reason.as_str()))));
+    }
+    if report.solver_failed > 0 {
+        return Err(Failure::runtime(format!("the solver failed at {} of {} samples (status and reason columns)", report.solver_failed, report.drawn)));
+    }
+    Ok(true)
+}

@@ -1,0 +1,108 @@
+//! `flinch sample` as a user meets it: exit codes, `--csv -` with the report on standard error,
+//! chunks run as separate processes and merged from their JSON files, and a clean Ctrl-C.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+
+fn flinch(args: &[&str], dir: &Path) -> Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_flinch")).args(args).current_dir(dir).output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!e.contains("panicked"), "{args:?}: {e}");
+    o
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("flinch-sample-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const KEYS: [&str; 4] = ["--vary", "motion.dead_time=uniform:0.016:0.032", "--vary", "motion.speed=normal:0.27:0.01"];
+
+#[test]
+fn chunks_run_as_processes_merge_into_the_whole_run() {
+    let d = tmp("merge");
+    let run = |extra: &[&str], out: &str| {
+        let mut a = vec!["sample", "tables5-7_bistable_v025", "--samples", "90", "--seed", "9", "--json"];
+        a.extend_from_slice(&KEYS);
+        a.extend_from_slice(extra);
+        let o = flinch(&a, &d);
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::write(d.join(out), &o.stdout).unwrap();
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let whole = run(&[], "whole.json");
+    run(&["--chunk", "1/3"], "c1.json");
+    run(&["--chunk", "2/3"], "c2.json");
+    run(&["--chunk", "3/3"], "c3.json");
+    let m = flinch(&["sample", "--merge", "c3.json", "c1.json", "c2.json", "--json"], &d);
+    assert_eq!(m.status.code(), Some(0));
+    assert_eq!(String::from_utf8_lossy(&m.stdout), whole, "merged chunks differ from the whole run");
+    let v: serde_json::Value = serde_json::from_str(&whole).unwrap();
+    assert_eq!(v["schema_version"], 1);
+    assert_eq!(v["complete"], true);
+    // A chunk twice is refused (exit 2), naming the files.
+    let o = flinch(&["sample", "--merge", "c1.json", "c1.json"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("overlap"));
+    // Two chunks of three: merged, with a note that it is partial.
+    let o = flinch(&["sample", "--merge", "c1.json", "c3.json"], &d);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cover 60 of the 90 samples"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("60 of 90 samples (ranges 0..30, 60..90)"));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn exit_codes_and_standard_output() {
+    let d = tmp("exit");
+    // --csv -: rows on standard output, the report on standard error.
+    let mut a = vec!["sample", "tables5-7_bistable", "--samples", "5", "--csv", "-"];
+    a.extend_from_slice(&KEYS[..2]);
+    let o = flinch(&a, &d);
+    assert_eq!(o.status.code(), Some(0));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(out.lines().count(), 6, "{out}");
+    assert!(out.starts_with("sample,motion.dead_time_s,stroke_exhausted,"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("probability (95 % interval"));
+    // Bad input: exit 2 with the reason.
+    for (args, says) in [
+        (vec!["sample", "tables5-7_bistable", "--samples", "5"], "nothing to vary"),
+        (vec!["sample", "tables5-7_bistable", "--samples", "5", "--vary", "motion.sped=uniform:0:1"], "close matches: motion.speed"),
+        (vec!["sample", "tables5-7_bistable", "--samples", "5", "--vary", "motion.speed=gauss:1:1"], "unknown distribution"),
+        (vec!["sample", "tables5-7_bistable", "--samples", "5", "--vary", "target.restitution=uniform:1.1:1.2"], "every sample would be refused"),
+        (vec!["sample", "tables5-7_bistable", "--samples", "5", "--chunk", "0/2", "--vary", "motion.speed=uniform:0.04:0.06"], "--chunk"),
+        (vec!["sample", "tables5-7_bistable", "--samples", "5", "--json", "--csv", "-", "--vary", "motion.speed=uniform:0.04:0.06"], "both write to standard output"),
+        (vec!["sample", "no_such_scene", "--samples", "5", "--vary", "motion.speed=uniform:0.04:0.06"], "no_such_scene"),
+    ] {
+        let o = flinch(&args, &d);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(e.contains(says), "{args:?}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn ctrl_c_stops_with_complete_rows_and_a_report_of_what_ran() {
+    let d = tmp("ctrlc");
+    let csv = d.join("rows.csv");
+    let mut a: Vec<String> = ["sample", "tables5-7_bistable", "--samples", "1e7", "--json", "--csv"].map(String::from).to_vec();
+    a.push(csv.display().to_string());
+    a.extend(KEYS[..2].iter().map(|s| s.to_string()));
+    let child = Command::new(env!("CARGO_BIN_EXE_flinch")).args(&a).current_dir(&d).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let o = child.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{e}");
+    assert!(e.contains("interrupted after"), "{e}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let drawn = v["drawn"].as_u64().unwrap();
+    assert!(drawn > 0 && drawn < 10_000_000 && v["complete"] == false, "{drawn}");
+    let rows = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(rows.lines().count() as u64, drawn + 1, "the CSV holds exactly the samples the report counts");
+    assert!(rows.ends_with('\n'));
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -1,0 +1,243 @@
+//! `flinch sample`: the same result on one thread or two, chunks that merge into the whole run,
+//! the intervals against published values, a failure probability known by construction inside its
+//! interval, and refused samples counted (never dropped, never clamped).
+
+use flinch_harness::sample::{self, merge, stats, Plan, SampleReport};
+use flinch_harness::sweep::{Progress, Template};
+use flinch_tests::scene_path;
+use std::sync::atomic::AtomicBool;
+
+const FOUR_KEYS: [&str; 4] = ["motion.dead_time=uniform:0.016:0.032", "decoupler.spring_rate=normal:200:10", "decoupler.height=triangular:0.029:0.03:0.031", "motion.speed=lognormal:-1.3:0.05"];
+
+fn plan(scene: &str, keys: &[&str], seed: u64, n: u64, chunk: Option<(u64, u64)>, truncate: bool) -> Plan {
+    let path = scene_path(scene);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let t = Template::from_text(&text, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
+    let keys: Vec<String> = keys.iter().map(|s| s.to_string()).collect();
+    Plan::new(t, &text, &keys, seed, n, chunk, truncate).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Runs a plan on a pool of `threads`; the CSV and the report.
+fn run(p: &Plan, threads: usize) -> (String, SampleReport) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let mut csv = Vec::new();
+    let r = p.run(Progress::Hidden, Some(&mut csv), &AtomicBool::new(false), Some(&pool)).unwrap();
+    (String::from_utf8(csv).unwrap(), r)
+}
+
+fn close(a: f64, b: f64, tol: f64, what: &str) {
+    assert!((a - b).abs() <= tol, "{what}: {a} vs {b}");
+}
+
+#[test]
+fn the_same_samples_on_one_thread_and_two() {
+    // More than one block, so the blocks' order is tested too.
+    let n = sample::BLOCK as u64 + 300;
+    let p = plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 7, n, None, false);
+    let (csv1, r1) = run(&p, 1);
+    let (csv2, r2) = run(&p, 2);
+    assert_eq!(csv1, csv2, "the CSV depends on the thread count");
+    assert_eq!(r1, r2);
+    assert_eq!(csv1.lines().count() as u64, n + 1);
+    assert!(r1.complete && r1.drawn == n);
+    // In index order, and a different seed draws differently.
+    let idx: Vec<u64> = csv1.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert_eq!(idx, (0..n).collect::<Vec<_>>());
+    let other = plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 8, n, None, false);
+    assert_ne!(p.draw(5), other.draw(5));
+    // The header names every varied key with its unit.
+    let header = csv1.lines().next().unwrap();
+    assert!(header.starts_with("sample,motion.dead_time_s,decoupler.spring_rate_n_per_m,decoupler.height_m,motion.speed_mps,stroke_exhausted,mode,peak_contact_force_n,peak_robot_force_n,stroke_left_min_m,safe,status,reason"), "{header}");
+}
+
+#[test]
+fn chunks_merge_into_the_whole_run() {
+    let n = 601;
+    let whole = plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 3, n, None, false);
+    let (csv, r) = run(&whole, 2);
+    let (c1, r1) = run(&plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 3, n, Some((1, 2)), false), 1);
+    let (c2, r2) = run(&plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 3, n, Some((2, 2)), false), 2);
+    assert!(!r1.complete && r1.ranges == vec![[0, 300]] && r2.ranges == vec![[300, 601]]);
+    // In either order, and through JSON as `--merge` reads it.
+    let through_json = |r: &SampleReport| serde_json::from_str::<SampleReport>(&serde_json::to_string(r).unwrap()).unwrap();
+    let m = merge(&[through_json(&r2), through_json(&r1)], &[]).unwrap();
+    assert_eq!(m, r, "merged chunks differ from the whole run");
+    assert_eq!(serde_json::to_value(&m).unwrap(), serde_json::to_value(&r).unwrap());
+    // The chunks' rows, headers dropped after the first, are the whole run's CSV.
+    let joined: String = c1.lines().chain(c2.lines().skip(1)).map(|l| format!("{l}\n")).collect();
+    assert_eq!(joined, csv);
+    // The run has failures to estimate, so the merge is tested on non-zero counts.
+    assert!(r.estimates.iter().any(|e| e.failures > 0 && e.failures < e.runs), "{:?}", r.estimates);
+
+    // Three chunks merge too; a chunk given twice, or one of another study, is refused.
+    let third = |k| run(&plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 3, n, Some((k, 3)), false), 2).1;
+    let (t1, t2, t3) = (third(1), third(2), third(3));
+    assert_eq!(merge(&[t3.clone(), t1.clone(), t2.clone()], &[]).unwrap(), r);
+    let partial = merge(&[t1.clone(), t3.clone()], &[]).unwrap();
+    assert!(!partial.complete && partial.ranges.len() == 2);
+    let e = merge(&[t1.clone(), t1.clone()], &["a.json".into(), "b.json".into()]).unwrap_err().0;
+    assert!(e.contains("overlap") && e.contains("a.json"), "{e}");
+    let seed4 = run(&plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 4, n, Some((2, 3)), false), 2).1;
+    let e = merge(&[t1.clone(), seed4], &[]).unwrap_err().0;
+    assert!(e.contains("seed"), "{e}");
+    let other_scene = run(&plan("tables5-7_bistable_v020.toml", &FOUR_KEYS, 3, n, Some((2, 3)), false), 2).1;
+    assert!(merge(&[t1, other_scene], &[]).unwrap_err().0.contains("scene text"));
+}
+
+#[test]
+fn intervals_against_published_values() {
+    // Wilson: 5 of 100 -> [0.0215, 0.1118] (Newcombe 1998, method 3; Brown, Cai, DasGupta 2001).
+    let (lo, hi) = stats::wilson(5, 100, stats::Z95);
+    close(lo, 0.0215, 5e-5, "Wilson 5/100 low");
+    close(hi, 0.1118, 5e-5, "Wilson 5/100 high");
+    // Clopper-Pearson: 0 of 100 -> upper 0.0362 (the "rule of three" gives 0.03); 5 of 100 ->
+    // [0.0164, 0.1128]; 100 of 100 -> lower 0.9638; 1 of 10 -> [0.0025, 0.4450].
+    let (lo, hi) = stats::clopper_pearson(0, 100, 0.05);
+    assert_eq!(lo, 0.0);
+    close(hi, 0.036217, 1e-6, "CP 0/100 high");
+    let (lo, hi) = stats::clopper_pearson(5, 100, 0.05);
+    close(lo, 0.016432, 1e-6, "CP 5/100 low");
+    close(hi, 0.112835, 1e-6, "CP 5/100 high");
+    let (lo, hi) = stats::clopper_pearson(100, 100, 0.05);
+    close(lo, 0.963783, 1e-6, "CP 100/100 low");
+    assert_eq!(hi, 1.0);
+    let (lo, hi) = stats::clopper_pearson(1, 10, 0.05);
+    close(lo, 0.002529, 1e-6, "CP 1/10 low");
+    close(hi, 0.445016, 1e-6, "CP 1/10 high");
+    // Large N, rare failures: 3 in 1e6 -> [6.187e-7, 8.767e-6].
+    let (lo, hi) = stats::clopper_pearson(3, 1_000_000, 0.05);
+    close(lo / 6.187e-7, 1.0, 1e-3, "CP 3/1e6 low");
+    close(hi / 8.767e-6, 1.0, 1e-3, "CP 3/1e6 high");
+    // At 0 failures the report uses the exact interval, Wilson otherwise.
+    let kind = &sample::FAILURES[0];
+    let e = sample::estimate(kind, 0, 100, 0);
+    assert_eq!((e.interval.as_str(), e.low), ("clopper-pearson", 0.0));
+    close(e.high, 0.036217, 1e-6, "estimate 0/100");
+    let e = sample::estimate(kind, 5, 100, 0);
+    assert_eq!(e.interval, "wilson");
+    close(e.low, 0.0215, 5e-5, "estimate 5/100");
+    // Unrun samples counted as failures widen the upper end: 0 of 100 ran, 10 refused.
+    let e = sample::estimate(kind, 0, 100, 10);
+    close(e.high_if_unrun_failed, stats::clopper_pearson(10, 110, 0.05).1, 1e-12, "worst case");
+    assert!(e.high_if_unrun_failed > 0.09);
+}
+
+/// Tables 5-7 at 0.28 m/s: the stroke runs out when the dead time exceeds a threshold DT* (between
+/// 24 and 32 ms, `flinch sweep tables5-7_bistable_v025 --vary motion.speed=0.25:0.35:11 --vary
+/// motion.dead_time=0.016:0.032:3`). The simulation's DT*, found here by bisection, is later than
+/// the stroke budget's `(C - d_sw - v^2/2d) / v` = 19.3 ms (docs/verdicts.md: the budget counts the
+/// whole stopping distance as travel). Drawing DT uniformly on [16, 40] ms, the failure probability
+/// is (40 ms - DT*) / 24 ms exactly; it must lie in the interval, and every sample must fail exactly
+/// when its DT > DT*.
+#[test]
+fn a_failure_probability_known_by_construction_lies_in_its_interval() {
+    let path = scene_path("tables5-7_bistable_v025.toml");
+    let t = Template::load(&path).unwrap();
+    let exhausted = |dt: f64| {
+        let sc = t.with(&[("motion.speed", 0.28), ("motion.dead_time", dt)]).unwrap();
+        flinch_harness::sim::run(&sc, false).unwrap().0.stroke_exhausted
+    };
+    // Monotone on a grid, then bisect.
+    let grid: Vec<bool> = (0..=24).map(|i| exhausted(0.016 + 0.001 * i as f64)).collect();
+    let first = grid.iter().position(|&e| e).expect("some dead time exhausts the stroke");
+    assert!(first > 0 && grid[first..].iter().all(|&e| e), "not monotone in the dead time: {grid:?}");
+    let (mut lo, mut hi) = (0.016 + 0.001 * (first - 1) as f64, 0.016 + 0.001 * first as f64);
+    for _ in 0..30 {
+        let mid = 0.5 * (lo + hi);
+        if exhausted(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let dt_star = 0.5 * (lo + hi);
+    let budget = (0.030 - 0.005 - 0.28 * 0.28 / 4.0) / 0.28;
+    assert!(dt_star > budget, "DT* {dt_star} vs budget {budget}");
+    let p_true = (0.040 - dt_star) / 0.024;
+
+    let keys = ["motion.speed=uniform:0.279999:0.280001", "motion.dead_time=uniform:0.016:0.040"];
+    let p = plan("tables5-7_bistable_v025.toml", &keys, 11, 400, None, false);
+    let (csv, r) = run(&p, 2);
+    let e = &r.estimates[0];
+    assert_eq!(e.failure, "stroke_exhausted");
+    assert_eq!(e.runs, 400);
+    assert!(e.low <= p_true && p_true <= e.high, "p = {p_true} outside [{}, {}] ({} of {})", e.low, e.high, e.failures, e.runs);
+    // Row by row, away from DT* (the speed's +-1e-6 m/s moves it by microseconds).
+    let mut beyond = 0;
+    for l in csv.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        let dt: f64 = f[2].parse().unwrap();
+        if (dt - dt_star).abs() > 2e-5 {
+            assert_eq!(f[3] == "1", dt > dt_star, "sample {}: dead time {dt} vs DT* {dt_star}: {l}", f[0]);
+        }
+        beyond += u64::from(dt > dt_star);
+    }
+    assert!((e.failures as i64 - beyond as i64).abs() <= 1, "{} failures, {beyond} draws beyond DT*", e.failures);
+    // Not safe is the same here (the one definition: the stroke exhausted).
+    assert_eq!(r.estimates[2].failures, e.failures);
+}
+
+#[test]
+fn refused_samples_are_counted_with_the_reason_and_truncate_draws_within_the_range() {
+    // A restitution of 0.95 +- 0.05: P(e > 1) = 1 - Phi(1) = 15.9 % of the draws are refused.
+    let keys = ["target.restitution=normal:0.95:0.05"];
+    let n = 500;
+    let p = plan("tables5-7_bistable.toml", &keys, 5, n, None, false);
+    let outside = p.vary[0].outside;
+    close(outside, 1.0 - stats::normal_cdf(1.0), 1e-12, "outside probability");
+    let expected = (0..n).filter(|&i| p.draw(i)[0] > 1.0).count() as u64;
+    let (csv, r) = run(&p, 2);
+    assert!(expected > 50, "{expected}");
+    assert_eq!(r.refused, expected, "every draw above 1 is refused and counted");
+    assert_eq!(r.ran + r.refused, n);
+    assert_eq!(r.estimates[0].runs, n - expected);
+    assert_eq!(r.refusals.len(), 1);
+    let g = &r.refusals[0];
+    assert_eq!((g.count, g.keys.clone()), (expected, vec!["target.restitution".to_string()]));
+    assert!(g.first_reason.contains("target.restitution") && g.first_reason.contains("[0, 1]"), "{}", g.first_reason);
+    // The rows are there, with status and reason, not clamped: the drawn value stands.
+    let refused_rows: Vec<&str> = csv.lines().filter(|l| l.contains(",refused,")).collect();
+    assert_eq!(refused_rows.len() as u64, expected);
+    for l in &refused_rows {
+        let v: f64 = l.split(',').nth(1).unwrap().parse().unwrap();
+        assert!(v > 1.0, "{l}");
+    }
+    let human = r.human();
+    assert!(human.contains(&format!("REFUSED {expected} (target.restitution)")) && human.contains("if the"), "{human}");
+    // The worst case counts them as failures.
+    assert!(r.estimates[0].high_if_unrun_failed > (expected as f64 / n as f64));
+
+    // --truncate: nothing refused, every value within [0, 1], and the cut probability stated.
+    let t = plan("tables5-7_bistable.toml", &keys, 5, n, None, true);
+    close(t.vary[0].kept, stats::normal_cdf(1.0) - stats::normal_cdf(-19.0), 1e-12, "kept probability");
+    let (csv, r) = run(&t, 2);
+    assert_eq!((r.refused, r.ran), (0, n));
+    for l in csv.lines().skip(1) {
+        let v: f64 = l.split(',').nth(1).unwrap().parse().unwrap();
+        assert!((0.0..=1.0).contains(&v), "{l}");
+    }
+    assert!(r.human().contains("within [0, 1] (keeps 84.1 %)"), "{}", r.human());
+}
+
+#[test]
+fn bad_studies_are_refused_before_anything_runs() {
+    let path = scene_path("tables5-7_bistable.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let t = || Template::from_text(&text, "tables5-7_bistable.toml").unwrap();
+    let refuse = |keys: &[&str], n: u64| -> String {
+        let keys: Vec<String> = keys.iter().map(|s| s.to_string()).collect();
+        match Plan::new(t(), &text, &keys, 1, n, None, false) {
+            Ok(_) => panic!("{keys:?} accepted"),
+            Err(e) => e.0,
+        }
+    };
+    assert!(refuse(&["motion.sped=uniform:0.04:0.06"], 10).contains("close matches: motion.speed"));
+    assert!(refuse(&["motion.speed=uniform:0.04:0.06", "motion.speed=normal:0.05:0.001"], 10).contains("given twice"));
+    assert!(refuse(&["decoupler.kind=uniform:0:1"], 10).contains("not a number"));
+    assert!(refuse(&["motion.speed=uniform:0.04:0.06"], 0).contains("at least 1"));
+    assert!(refuse(&[], 10).contains("nothing to vary"));
+    // A distribution wholly outside the key's accepted range.
+    assert!(refuse(&["target.restitution=uniform:1.1:1.2"], 10).contains("every sample would be refused"));
+    // A truncation interval with no probability in it.
+    assert!(refuse(&["motion.speed=normal:0.05:0.001:1:2"], 10).contains("no probability"));
+}
