@@ -281,6 +281,7 @@ fn kind_of(base: &Scene, table: &str) -> Option<&'static str> {
         "target" => Some(match base.target.kind {
             TargetKind::Obstacle => "obstacle",
             TargetKind::Object { .. } => "object",
+            TargetKind::BodyRegion(_) => "body_region",
         }),
         "sensor" => base.sensor.map(|s| match s {
             Sensor::Travel { .. } => "travel",
