@@ -580,3 +580,54 @@ fn no_fontconfig() -> Result<String, String> {
     }
     Ok(format!("built without pkg-config, PNG and SVG drawn without fontconfig, ldd lists only the C runtime ({} libraries), {:.1} s", listing.lines().count(), start.elapsed().as_secs_f64()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Run `.ci/run` with fake `rustup` (exiting `rustup_status`) and `cargo` (recording its
+    /// arguments and `CI`) first on PATH; returns the script's exit status and what cargo recorded.
+    fn ci_run_with(rustup_status: i32) -> (bool, String) {
+        let dir = env::temp_dir().join(format!("flinch-ci-run-{}-{rustup_status}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        let record = dir.join("cargo.log");
+        let write_exe = |name: &str, body: String| {
+            use std::os::unix::fs::PermissionsExt;
+            let p = dir.join(name);
+            fs::write(&p, format!("#!/bin/sh\n{body}\n")).unwrap();
+            fs::set_permissions(&p, fs::Permissions::from_mode(0o755)).unwrap();
+        };
+        write_exe("rustup", format!("exit {rustup_status}"));
+        write_exe("cargo", format!("echo \"CI=${{CI:-}} $*\" >> '{}'", record.display()));
+        // Also a qemu-system-arm, so the script never tries apt-get.
+        write_exe("qemu-system-arm", "exit 0".into());
+        let path = format!("{}:/usr/bin:/bin", dir.display());
+        let status = Command::new("bash")
+            .arg(repo_root().join(".ci/run"))
+            .env_clear()
+            .env("PATH", path)
+            .env("HOME", &dir)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .unwrap();
+        let log = fs::read_to_string(&record).unwrap_or_default();
+        let _ = fs::remove_dir_all(&dir);
+        (status.success(), log)
+    }
+
+    #[test]
+    fn ci_run_fails_without_the_target_and_runs_xtask_in_ci_mode() {
+        let (ok, log) = ci_run_with(1);
+        assert!(!ok, ".ci/run went on after rustup target add failed");
+        assert!(!log.contains("xtask"), "xtask ran without the target: {log}");
+        let (ok, log) = ci_run_with(0);
+        assert!(ok, ".ci/run failed with every tool present: {log}");
+        let xtask = log.lines().find(|l| l.contains("xtask test")).unwrap_or_else(|| panic!("no cargo xtask test: {log}"));
+        assert!(xtask.starts_with("CI=1 "), "xtask not in CI mode (skips would pass): {xtask}");
+        let flip = log.lines().position(|l| l.contains("install flip-link --locked"));
+        let run = log.lines().position(|l| l.contains("xtask test"));
+        assert!(flip.is_some() && flip < run, "flip-link (the firmware's linker) not installed before xtask: {log}");
+    }
+}
