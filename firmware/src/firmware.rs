@@ -361,6 +361,10 @@ where
     /// fault first) the stop is only written again: the state already says why it is stopped.
     pub fn edge_stopped(&mut self, at: Micros) {
         let ok = self.out.drop_stop();
+        // Let the sensor see the channels as they are now (a two-channel switch records which
+        // channels have shown the trip; one shorter than the hand-over is missed and ends, on the
+        // safe side, in a discrepancy fault).
+        let _ = self.sensor.fast_trip();
         if self.state == State::Armed {
             let travel = self.sensor.trip_travel_um();
             self.commit_trip(at, at, travel, 0, FLAG_EDGE);

@@ -49,6 +49,7 @@ fn main() -> ExitCode {
             build_firmware()?;
             let log = run_board_qemu()?;
             println!("{}", check_board_log(&log)?);
+            println!("{}", check_board_vectors(&elf_path("board"))?);
             Ok(())
         }),
         Some("size") => single(|| {
@@ -153,7 +154,10 @@ fn test() -> ExitCode {
             if which("qemu-system-arm").is_none() {
                 Outcome::Skip("qemu-system-arm not found".into())
             } else {
-                match run_board_qemu().and_then(|log| check_board_log(&log)) {
+                match run_board_qemu()
+                    .and_then(|log| check_board_log(&log))
+                    .and_then(|m| check_board_vectors(&elf_path("board")).map(|v| format!("{m}; {v}")))
+                {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }
@@ -313,6 +317,37 @@ fn check_board_log(log: &str) -> Result<String, String> {
         ));
     }
     Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
+}
+
+/// The board's vector table (`__INTERRUPTS`): both switch channels' EXTI lines (EXTI0 = IRQ 6, PA0;
+/// EXTI4 = IRQ 10, PA4) go to the edge handler and the bookkeeping line (UART5 = IRQ 53) to the
+/// bookkeeping. QEMU does not model the F405's GPIO, so the edges cannot be driven there; this
+/// checks that they are wired.
+fn check_board_vectors(path: &Path) -> Result<String, String> {
+    use object::{Object, ObjectSection, ObjectSymbol};
+    let b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let elf = object::File::parse(&*b).map_err(|e| format!("{}: not an ELF object: {e}", path.display()))?;
+    let sym = |part: &str| elf.symbols().find(|s| s.name().is_ok_and(|n| n.contains(part))).map(|s| s.address());
+    let table = sym("__INTERRUPTS").ok_or("no __INTERRUPTS in the board ELF")?;
+    let entry = |irq: u64| -> Result<u64, String> {
+        let addr = table + 4 * irq;
+        let sec = elf
+            .sections()
+            .find(|s| s.address() <= addr && addr + 4 <= s.address() + s.size())
+            .ok_or_else(|| format!("vector {irq} outside every section"))?;
+        let data = sec.data().map_err(|e| format!("reading {}: {e}", sec.name().unwrap_or("?")))?;
+        let off = (addr - sec.address()) as usize;
+        let w = data.get(off..off + 4).ok_or("vector table truncated")?;
+        Ok(u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) & !1)
+    };
+    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)")] {
+        let want = sym(handler).ok_or_else(|| format!("no {handler} in the board ELF"))? & !1;
+        let got = entry(irq)?;
+        if got != want {
+            return Err(format!("vector {irq}, {what}: {got:#x}, want {handler} at {want:#x}"));
+        }
+    }
+    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping".into())
 }
 
 fn target_installed() -> bool {

@@ -4,7 +4,8 @@
 //!
 //! | signal            | pin  | notes                                                             |
 //! |-------------------|------|-------------------------------------------------------------------|
-//! | travel switch in  | PA0  | EXTI0 on both edges; pull-down, so a cut wire reads low = trip     |
+//! | travel switch A   | PA0  | EXTI0 on both edges; NC channel, high at rest; pull-down, so a cut wire reads low = trip |
+//! | travel switch B   | PA4  | EXTI4 on both edges; the antivalent channel (a powered sensor driving low at rest, high when tripped); pull-up, so a cut wire or an unpowered sensor reads high = trip, and the start-up test sees both channels trip with the supply off |
 //! | reset input       | PA1  | pull-down, active high; acts on release (`flinch_firmware::reset`) |
 //! | EDM K1, K2        | PA2, PA3 | the stop relays' force-guided NC mirror contacts, high = released; pull-down (`flinch_firmware::edm`) |
 //! | stop out          | PD12 | high = energised = go; low = controlled stop (fit an external pull-down: a reset or dead MCU floats the pin) |
@@ -63,7 +64,7 @@ mod board {
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
     use flinch_firmware::{
-        Boot, BudgetConfig, Cause, Clock, Config, DigitalSwitch, Edm, Firmware, Micros, ResetCause, Retained,
+        Boot, BudgetConfig, Cause, Clock, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
         SwitchKind,
     };
 
@@ -97,6 +98,8 @@ mod board {
     const IWDG_RLR: u32 = 0x4000_3008;
     const ODR: u32 = 0x14;
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
+    const EXTI4_IRQ: u16 = 10;
+    const SYSCFG_EXTICR2: u32 = 0x4001_3800 + 0x0C; // sec. 9.2.4: EXTI4..7
     /// The bookkeeping interrupt: UART5's line (RM0090 Table 61), pended by software only.
     const BOOK_IRQ: u16 = 53;
     /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
@@ -163,7 +166,7 @@ mod board {
         }
     }
 
-    type Switch = DigitalSwitch<In<GPIOA, 0>, Out<GPIOD, 14>>;
+    type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
     type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>, 16, Edm<In<GPIOA, 2>, In<GPIOA, 3>>>;
     static FW: IsrCell<Fw> = IsrCell::new();
 
@@ -178,9 +181,15 @@ mod board {
         )
     }
     const SWITCH_TRAVEL_UM: i32 = 5_000;
+    /// Channel A (PA0): the inductive switch, high at rest, low when tripped (a cut wire too).
     const SWITCH_KIND: SwitchKind = SwitchKind::Inductive;
-    /// PA0's level when the switch reads "tripped" (low for the inductive switch: a cut wire too).
-    const TRIP_LEVEL_HIGH: bool = SWITCH_KIND.level_for(true);
+    /// Channel B (PA4): its antivalent partner, high when tripped.
+    const SWITCH_KIND_B: SwitchKind = SwitchKind::Magnetic { trip_high: true };
+    /// How long the two channels may disagree before it is a fault, microseconds.
+    const DISCREPANCY_US: u32 = 20_000;
+    /// PA0's and PA4's IDR bits when each channel reads "tripped".
+    const TRIP_A: u32 = if SWITCH_KIND.level_for(true) { 1 << 0 } else { 0 };
+    const TRIP_B: u32 = if SWITCH_KIND_B.level_for(true) { 1 << 4 } else { 0 };
 
     /// `Firmware::edge_stops_directly`, stored once before EXTI0 is unmasked.
     static EDGE_FAST: AtomicBool = AtomicBool::new(false);
@@ -232,8 +241,8 @@ mod board {
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
         modify(GPIOD + MODER, 0b11_11_11 << 24, 0b01_01_01 << 24); // PD12..14 output
-        modify(GPIOA + MODER, 0xFF, 0); // PA0..PA3 input
-        modify(GPIOA + PUPDR, 0xFF, 0b10_10_10_10); // pull-down
+        modify(GPIOA + MODER, 0x3FF, 0); // PA0..PA4 input
+        modify(GPIOA + PUPDR, 0x3FF, 0b01_10_10_10_10); // PA0..PA3 pull-down, PA4 pull-up
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
         wr(TIM2_PSC, HSI_HZ / 1_000_000 - 1);
         wr(TIM2_ARR, u32::MAX);
@@ -250,7 +259,8 @@ mod board {
         modify(RCC_CSR, 0, RCC_CSR_RMVF);
         let boot = Boot { cause, retained: retained_load() };
 
-        let sensor = DigitalSwitch::with_supply(In::<GPIOA, 0>, Out::<GPIOD, 14>, SWITCH_KIND, SWITCH_TRAVEL_UM);
+        let sensor = DualSwitch::new(In::<GPIOA, 0>, SWITCH_KIND, In::<GPIOA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
+            .with_supply(Out::<GPIOD, 14>);
         match Firmware::after_reset(config(), boot, Tim2, sensor, Out, Out, In) {
             Ok(fw) => {
                 let fw = fw.with_feedback(Edm::new(In::<GPIOA, 2>, In::<GPIOA, 3>));
@@ -267,15 +277,17 @@ mod board {
             }
         }
 
-        // EXTI0 <- PA0 (EXTICR1 = 0 is port A), both edges.
+        // EXTI0 <- PA0, EXTI4 <- PA4 (EXTICRx field 0 is port A), both edges.
         modify(SYSCFG_EXTICR1, 0xF, 0);
-        modify(EXTI_RTSR, 0, 1);
-        modify(EXTI_FTSR, 0, 1);
-        modify(EXTI_IMR, 0, 1);
+        modify(SYSCFG_EXTICR2, 0xF, 0);
+        modify(EXTI_RTSR, 0, 0b1_0001);
+        modify(EXTI_FTSR, 0, 0b1_0001);
+        modify(EXTI_IMR, 0, 0b1_0001);
         // The edge above the tick and the bookkeeping, set before any of them can run.
         // SAFETY: priorities only; the sharing they allow is the one described at the top.
         unsafe {
             cp.NVIC.set_priority(Exti0, PRIO_EDGE);
+            cp.NVIC.set_priority(Exti4, PRIO_EDGE);
             cp.NVIC.set_priority(Book, PRIO_TICK);
             cp.SCB.set_priority(SystemHandler::SysTick, PRIO_TICK);
         }
@@ -283,6 +295,7 @@ mod board {
         unsafe {
             NVIC::unmask(Book);
             NVIC::unmask(Exti0);
+            NVIC::unmask(Exti4);
         }
 
         cp.SYST.set_clock_source(SystClkSource::Core);
@@ -306,6 +319,15 @@ mod board {
     }
 
     #[derive(Copy, Clone)]
+    struct Exti4;
+    // SAFETY: 10 is EXTI4's position in the STM32F407 vector table (RM0090 Table 61).
+    unsafe impl cortex_m::interrupt::InterruptNumber for Exti4 {
+        fn number(self) -> u16 {
+            EXTI4_IRQ
+        }
+    }
+
+    #[derive(Copy, Clone)]
     struct Book;
     // SAFETY: 53 is UART5's position in the STM32F407 vector table; UART5 is not enabled.
     unsafe impl cortex_m::interrupt::InterruptNumber for Book {
@@ -314,21 +336,23 @@ mod board {
         }
     }
 
-    /// The switch edge, highest priority: the detect-to-stop path. Armed (the stop reads back
-    /// energised), unfiltered and the switch at its trip level: the stop write first, then the
-    /// pending bit, then the hand-over. Everything else is the bookkeeping's, at the tick's priority.
+    /// A switch edge (EXTI0: channel A, EXTI4: channel B; `line` is its EXTI_PR bit), highest
+    /// priority: the detect-to-stop path. Armed (the stop reads back energised), unfiltered and either
+    /// channel at its trip level (1oo2): the stop write first, then this line's pending bit, then the
+    /// hand-over. Everything else is the bookkeeping's, at the tick's priority.
     #[inline(always)]
-    fn exti0() {
+    fn edge(line: u32) {
+        let idr = rd(GPIOA + IDR);
         if EDGE_FAST.load(Relaxed)
             && rd(GPIOD + ODR) & (1 << 12) != 0
-            && (rd(GPIOA + IDR) & 1 != 0) == TRIP_LEVEL_HIGH
+            && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B)
         {
             wr(GPIOD + BSRR, 1 << (12 + 16)); // the stop
-            wr(EXTI_PR, 1); // right after the stop write: a new edge from here on pends again
+            wr(EXTI_PR, line); // right after the stop write: a new edge from here on pends again
             EDGE_AT.store(rd(TIM2_CNT), Relaxed);
             EDGE_STOPPED.store(true, Relaxed);
         } else {
-            wr(EXTI_PR, 1);
+            wr(EXTI_PR, line);
         }
         NVIC::pend(Book);
     }
@@ -395,11 +419,15 @@ mod board {
     const fn vectors() -> [Vector; 82] {
         let mut v = [DEFAULT; 82];
         v[EXTI0_IRQ as usize] = Vector { handler: exti0_entry };
+        v[EXTI4_IRQ as usize] = Vector { handler: exti4_entry };
         v[BOOK_IRQ as usize] = Vector { handler: book_entry };
         v
     }
     unsafe extern "C" fn exti0_entry() {
-        exti0()
+        edge(1 << 0)
+    }
+    unsafe extern "C" fn exti4_entry() {
+        edge(1 << 4)
     }
     unsafe extern "C" fn book_entry() {
         book()
