@@ -9,8 +9,12 @@ use std::env;
 fn main() {
     let dir = env::var("CARGO_MANIFEST_DIR").unwrap_or_default();
     if env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("none") {
-        println!("cargo:rustc-link-arg-bin=board=-L{dir}/link/stm32f407");
-        println!("cargo:rustc-link-arg-bin=qemu=-L{dir}/link/mps2-an386");
+        // "-L" and the path as two arguments: flip-link (the linker wrapper) only finds memory.x
+        // through search paths given that way.
+        for (bin, part) in [("board", "stm32f407"), ("qemu", "mps2-an386")] {
+            println!("cargo:rustc-link-arg-bin={bin}=-L");
+            println!("cargo:rustc-link-arg-bin={bin}={dir}/link/{part}");
+        }
     }
     println!("cargo:rerun-if-changed=link");
     println!("cargo:rerun-if-changed=build.rs");

@@ -196,6 +196,8 @@ pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16, FB = NoFeedback
     feedback: FB,
     edm_mismatch_since: Option<Micros>,
     clock_monitor: ClockMonitor,
+    /// `cfg.budget`'s stopping distance at the configured speed, computed once.
+    required_um: u32,
 }
 
 impl<C, S, STOP, ESC, RST, const LOG: usize> Firmware<C, S, STOP, ESC, RST, LOG, NoFeedback>
@@ -250,6 +252,7 @@ where
             feedback: NoFeedback,
             edm_mismatch_since: None,
             clock_monitor: ClockMonitor::new(cfg.clock_check),
+            required_um: cfg.budget.configured_required_um(),
         };
         let now = fw.clock.now();
         let record = boot.retained.decode();
@@ -300,6 +303,7 @@ where
             feedback,
             edm_mismatch_since: None,
             clock_monitor: self.clock_monitor,
+            required_um: self.required_um,
         }
     }
 }
@@ -334,6 +338,39 @@ where
         self.commit_trip(now, now, travel, 0, FLAG_EDGE);
         if !ok {
             self.fault(Cause::OutputFault, now);
+        }
+    }
+
+    /// Whether the edge stops directly ([`Filter::None`]; with a glitch filter the tick decides).
+    ///
+    /// A board whose edge interrupt preempts the tick does not call into the firmware from it: its
+    /// edge handler writes the stop pin itself when this holds (a configuration constant, read once),
+    /// the stop output reads back energised (it is energised only while [`State::Armed`]) and the
+    /// switch reads tripped; then it hands over to [`Firmware::edge_stopped`] at the tick's priority.
+    /// Otherwise it hands over to [`Firmware::on_edge`] there. The one window this leaves: an edge
+    /// inside the tick that arms, before that tick's energise write, is stopped by the
+    /// [`Firmware::on_edge`] that follows the tick (bounded by one tick's length).
+    pub const fn edge_stops_directly(&self) -> bool {
+        self.fast_edge
+    }
+
+    /// The bookkeeping of a stop that the board's edge handler has already written at `at` (see
+    /// [`Firmware::edge_stops_directly`]), run at the tick's priority: the stop output is written low
+    /// again through the library (idempotent), and the trip is timestamped, budgeted, latched and
+    /// logged as an edge trip. If the firmware has left `Armed` meanwhile (the tick saw the trip or a
+    /// fault first) the stop is only written again: the state already says why it is stopped.
+    pub fn edge_stopped(&mut self, at: Micros) {
+        let ok = self.out.drop_stop();
+        // Let the sensor see the channels as they are now (a two-channel switch records which
+        // channels have shown the trip; one shorter than the hand-over is missed and ends, on the
+        // safe side, in a discrepancy fault).
+        let _ = self.sensor.fast_trip();
+        if self.state == State::Armed {
+            let travel = self.sensor.trip_travel_um();
+            self.commit_trip(at, at, travel, 0, FLAG_EDGE);
+        }
+        if !ok {
+            self.fault(Cause::OutputFault, at);
         }
     }
 
@@ -467,7 +504,13 @@ where
 
     /// Record a trip whose stop write has already happened.
     fn commit_trip(&mut self, now: Micros, first_seen: Micros, travel_um: i32, closing_um_per_s: u32, flags: u8) {
-        let verdict = self.cfg.budget.check_at(travel_um, closing_um_per_s);
+        // The configured speed's stopping distance was computed at configuration; only a measured
+        // closing speed above it (analog sensor, from the tick) pays the u64 divisions here.
+        let verdict = if closing_um_per_s > self.cfg.budget.robot_speed_um_per_s {
+            self.cfg.budget.check_at(travel_um, closing_um_per_s)
+        } else {
+            self.cfg.budget.verdict_with(self.required_um, travel_um)
+        };
         let mut flags = flags;
         if verdict.escalate {
             flags |= FLAG_ESCALATED;

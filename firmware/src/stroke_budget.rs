@@ -75,6 +75,19 @@ impl BudgetConfig {
     pub fn check_at(&self, trip_travel_um: i32, closing_um_per_s: u32) -> Verdict {
         let v = if closing_um_per_s > self.robot_speed_um_per_s { closing_um_per_s } else { self.robot_speed_um_per_s };
         let required_um = stopping_distance_um(v, self.dead_time_us, self.decel_um_per_s2);
+        self.verdict_with(required_um, trip_travel_um)
+    }
+
+    /// The stopping distance at the configured speed: the constant part of every check, computed
+    /// once at configuration ([`Firmware`](crate::Firmware) keeps it) so that a trip pays no `u64`
+    /// division.
+    pub const fn configured_required_um(&self) -> u32 {
+        stopping_distance_um(self.robot_speed_um_per_s, self.dead_time_us, self.decel_um_per_s2)
+    }
+
+    /// The verdict for a precomputed stopping distance `required_um` and a detection at
+    /// `trip_travel_um`: one subtraction and one comparison.
+    pub fn verdict_with(&self, required_um: u32, trip_travel_um: i32) -> Verdict {
         let left = i64::from(self.stroke_um).wrapping_sub(i64::from(trip_travel_um));
         let remaining_um = left.clamp(0, u32::MAX as i64) as u32;
         Verdict { required_um, remaining_um, escalate: required_um > remaining_um }
@@ -130,5 +143,10 @@ mod tests {
         assert!(b.check_at(5_000, 250_000).escalate);
         // Travel past the back stop leaves nothing.
         assert_eq!(b.check(12_000).remaining_um, 0);
+        // The precomputed constant part gives the same verdicts.
+        for travel in [-1_000, 0, 5_000, 7_950, 7_951, 12_000] {
+            assert_eq!(b.verdict_with(b.configured_required_um(), travel), b.check(travel), "{travel}");
+            assert_eq!(fast.verdict_with(fast.configured_required_um(), travel), fast.check(travel));
+        }
     }
 }

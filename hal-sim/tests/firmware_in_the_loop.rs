@@ -74,6 +74,41 @@ fn polling_alone_detects_within_one_tick_over_all_phases() {
 }
 
 #[test]
+fn board_split_edge_path_bookkeeping_after_the_stop_write() {
+    // The board's EXTI0 writes the stop itself (highest priority) and hands over to
+    // `edge_stopped` at the tick's priority: the trip is latched and logged at the edge's instant.
+    let mut rig = booted(cfg());
+    assert!(rig.fw.edge_stops_directly());
+    rig.set_edge_interrupt(false);
+    rig.advance_to(0.010_25);
+    rig.set_travel_m(0.006);
+    rig.stop.set(false); // the edge handler's BSRR write
+    let at = rig.micros_at(0.010_25);
+    rig.advance_to(0.010_3); // no tick in between
+    rig.fw.edge_stopped(at);
+    assert_eq!(rig.fw.state(), State::Tripped);
+    assert!(rig.stop_requested() && rig.fw.stop_requested());
+    assert_eq!(rig.detected_at_s(), Some(0.010_25));
+    let ev = *rig.events().last().unwrap();
+    assert_eq!((ev.cause, ev.flags, ev.travel_um), (Cause::Trip, FLAG_EDGE, 5_000));
+    // The tick got there first (the edge preempted it, the tick then polled the trip): the
+    // bookkeeping only writes the stop again, nothing is logged twice.
+    let mut rig = booted(cfg());
+    rig.set_edge_interrupt(false);
+    rig.advance_to(0.010_25);
+    rig.set_travel_m(0.006);
+    rig.stop.set(false);
+    rig.advance_to(0.011);
+    let n = rig.events().len();
+    rig.fw.edge_stopped(rig.micros_at(0.010_25));
+    assert_eq!((rig.fw.state(), rig.events().len()), (State::Tripped, n));
+    // With a glitch filter the edge must not stop by itself: the board asks first.
+    let mut c = cfg();
+    c.filter = Filter::Consecutive(3);
+    assert!(!booted(c).fw.edge_stops_directly());
+}
+
+#[test]
 fn cut_wire_reads_as_a_trip() {
     let mut rig = booted(cfg());
     rig.advance_to(0.1);

@@ -4,7 +4,8 @@
 //!
 //! | signal            | pin  | notes                                                             |
 //! |-------------------|------|-------------------------------------------------------------------|
-//! | travel switch in  | PA0  | EXTI0 on both edges; pull-down, so a cut wire reads low = trip     |
+//! | travel switch A   | PA0  | EXTI0 on both edges; NC channel, high at rest; pull-down, so a cut wire reads low = trip |
+//! | travel switch B   | PA4  | EXTI4 on both edges; the antivalent channel (a powered sensor driving low at rest, high when tripped); pull-up, so a cut wire or an unpowered sensor reads high = trip, and the start-up test sees both channels trip with the supply off |
 //! | reset input       | PA1  | pull-down, active high; acts on release (`flinch_firmware::reset`) |
 //! | EDM K1, K2        | PA2, PA3 | the stop relays' force-guided NC mirror contacts, high = released; pull-down (`flinch_firmware::edm`) |
 //! | stop out          | PD12 | high = energised = go; low = controlled stop (fit an external pull-down: a reset or dead MCU floats the pin) |
@@ -12,8 +13,15 @@
 //! | sensor supply out | PD14 | high = powered; switched off by the start-up stuck-input test     |
 //!
 //! Time: TIM2, a 32-bit counter at 1 MHz, is the firmware's `Clock`. SysTick interrupts every
-//! `TICK_US` and calls `Firmware::tick`; EXTI0 calls `Firmware::on_edge`. Both run at the same
-//! priority (0, the reset default), so they never preempt each other (see `support/isr_cell.rs`).
+//! `TICK_US` and calls `Firmware::tick`.
+//!
+//! Priorities (a bounded edge-to-stop): EXTI0, the switch edge, has the highest priority (0) and
+//! preempts everything else. It does not touch the `Firmware` object: it reads the switch (IDR) and
+//! whether the stop is energised (ODR: it is only while armed), writes the stop low through BSRR,
+//! clears its pending bit, and pends the bookkeeping interrupt (UART5's line, unused otherwise),
+//! which runs `Firmware::edge_stopped` (timestamp, budget, latch, log) or `Firmware::on_edge` at
+//! SysTick's priority (0x80). SysTick and the bookkeeping share that priority, so `IsrCell`'s rule
+//! (no two `&mut` at once, `support/isr_cell.rs`) holds between them; the edge shares only atomics.
 //! The core runs on the 16 MHz HSI, the reset default: no PLL code to get wrong, and the detection
 //! path is short enough at that speed (the QEMU build measures it in instructions).
 //!
@@ -48,12 +56,15 @@ mod board {
     use super::isr_cell::IsrCell;
     use core::convert::Infallible;
     use core::ptr::{read_volatile, write_volatile};
+    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
+    use cortex_m::peripheral::scb::SystemHandler;
     use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m::peripheral::NVIC;
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
     use flinch_firmware::{
-        Boot, BudgetConfig, Cause, Clock, Config, DigitalSwitch, Edm, Firmware, Micros, ResetCause, Retained,
+        Boot, BudgetConfig, Cause, Clock, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
         SwitchKind,
     };
 
@@ -85,7 +96,15 @@ mod board {
     const IWDG_KR: u32 = 0x4000_3000; // sec. 21.4
     const IWDG_PR: u32 = 0x4000_3004;
     const IWDG_RLR: u32 = 0x4000_3008;
+    const ODR: u32 = 0x14;
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
+    const EXTI4_IRQ: u16 = 10;
+    const SYSCFG_EXTICR2: u32 = 0x4001_3800 + 0x0C; // sec. 9.2.4: EXTI4..7
+    /// The bookkeeping interrupt: UART5's line (RM0090 Table 61), pended by software only.
+    const BOOK_IRQ: u16 = 53;
+    /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
+    const PRIO_EDGE: u8 = 0x00;
+    const PRIO_TICK: u8 = 0x80;
 
     const HSI_HZ: u32 = 16_000_000;
     const TICK_US: u32 = 1_000;
@@ -147,7 +166,7 @@ mod board {
         }
     }
 
-    type Switch = DigitalSwitch<In<GPIOA, 0>, Out<GPIOD, 14>>;
+    type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
     type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>, 16, Edm<In<GPIOA, 2>, In<GPIOA, 3>>>;
     static FW: IsrCell<Fw> = IsrCell::new();
 
@@ -162,6 +181,21 @@ mod board {
         )
     }
     const SWITCH_TRAVEL_UM: i32 = 5_000;
+    /// Channel A (PA0): the inductive switch, high at rest, low when tripped (a cut wire too).
+    const SWITCH_KIND: SwitchKind = SwitchKind::Inductive;
+    /// Channel B (PA4): its antivalent partner, high when tripped.
+    const SWITCH_KIND_B: SwitchKind = SwitchKind::Magnetic { trip_high: true };
+    /// How long the two channels may disagree before it is a fault, microseconds.
+    const DISCREPANCY_US: u32 = 20_000;
+    /// PA0's and PA4's IDR bits when each channel reads "tripped".
+    const TRIP_A: u32 = if SWITCH_KIND.level_for(true) { 1 << 0 } else { 0 };
+    const TRIP_B: u32 = if SWITCH_KIND_B.level_for(true) { 1 << 4 } else { 0 };
+
+    /// `Firmware::edge_stops_directly`, stored once before EXTI0 is unmasked.
+    static EDGE_FAST: AtomicBool = AtomicBool::new(false);
+    /// The edge handler wrote the stop, at `EDGE_AT` (TIM2): for the bookkeeping.
+    static EDGE_STOPPED: AtomicBool = AtomicBool::new(false);
+    static EDGE_AT: AtomicU32 = AtomicU32::new(0);
 
     defmt::timestamp!("{=u32:us}", rd(TIM2_CNT));
 
@@ -182,8 +216,8 @@ mod board {
     }
 
     fn retained_store(r: Retained) {
-        // SAFETY: as above; written from the handlers, which all run at the same priority, and from
-        // the fault handlers, which never return.
+        // SAFETY: as above; written from SysTick and the bookkeeping, which share one priority (EXTI0
+        // never writes it), and from the fault handlers, which never return.
         unsafe { write_volatile(core::ptr::addr_of_mut!(RETAINED).cast::<[u32; 4]>(), r.words) }
     }
 
@@ -207,8 +241,8 @@ mod board {
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
         modify(GPIOD + MODER, 0b11_11_11 << 24, 0b01_01_01 << 24); // PD12..14 output
-        modify(GPIOA + MODER, 0xFF, 0); // PA0..PA3 input
-        modify(GPIOA + PUPDR, 0xFF, 0b10_10_10_10); // pull-down
+        modify(GPIOA + MODER, 0x3FF, 0); // PA0..PA4 input
+        modify(GPIOA + PUPDR, 0x3FF, 0b01_10_10_10_10); // PA0..PA3 pull-down, PA4 pull-up
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
         wr(TIM2_PSC, HSI_HZ / 1_000_000 - 1);
         wr(TIM2_ARR, u32::MAX);
@@ -225,12 +259,14 @@ mod board {
         modify(RCC_CSR, 0, RCC_CSR_RMVF);
         let boot = Boot { cause, retained: retained_load() };
 
-        let sensor = DigitalSwitch::with_supply(In::<GPIOA, 0>, Out::<GPIOD, 14>, SwitchKind::Inductive, SWITCH_TRAVEL_UM);
+        let sensor = DualSwitch::new(In::<GPIOA, 0>, SWITCH_KIND, In::<GPIOA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
+            .with_supply(Out::<GPIOD, 14>);
         match Firmware::after_reset(config(), boot, Tim2, sensor, Out, Out, In) {
             Ok(fw) => {
                 let fw = fw.with_feedback(Edm::new(In::<GPIOA, 2>, In::<GPIOA, 3>));
                 retained_store(fw.retained());
-                // SAFETY: once, before SysTick and EXTI0 are enabled below.
+                EDGE_FAST.store(fw.edge_stops_directly(), Relaxed);
+                // SAFETY: once, before SysTick and the bookkeeping interrupt are enabled below.
                 unsafe { FW.init(fw) }
             }
             Err(e) => {
@@ -241,13 +277,26 @@ mod board {
             }
         }
 
-        // EXTI0 <- PA0 (EXTICR1 = 0 is port A), both edges.
+        // EXTI0 <- PA0, EXTI4 <- PA4 (EXTICRx field 0 is port A), both edges.
         modify(SYSCFG_EXTICR1, 0xF, 0);
-        modify(EXTI_RTSR, 0, 1);
-        modify(EXTI_FTSR, 0, 1);
-        modify(EXTI_IMR, 0, 1);
-        // SAFETY: the handler's data (FW) is initialised.
-        unsafe { cortex_m::peripheral::NVIC::unmask(Exti0) };
+        modify(SYSCFG_EXTICR2, 0xF, 0);
+        modify(EXTI_RTSR, 0, 0b1_0001);
+        modify(EXTI_FTSR, 0, 0b1_0001);
+        modify(EXTI_IMR, 0, 0b1_0001);
+        // The edge above the tick and the bookkeeping, set before any of them can run.
+        // SAFETY: priorities only; the sharing they allow is the one described at the top.
+        unsafe {
+            cp.NVIC.set_priority(Exti0, PRIO_EDGE);
+            cp.NVIC.set_priority(Exti4, PRIO_EDGE);
+            cp.NVIC.set_priority(Book, PRIO_TICK);
+            cp.SCB.set_priority(SystemHandler::SysTick, PRIO_TICK);
+        }
+        // SAFETY: the bookkeeping's data (FW) is initialised; EXTI0 uses atomics only.
+        unsafe {
+            NVIC::unmask(Book);
+            NVIC::unmask(Exti0);
+            NVIC::unmask(Exti4);
+        }
 
         cp.SYST.set_clock_source(SystClkSource::Core);
         cp.SYST.set_reload(HSI_HZ / 1_000_000 * TICK_US - 1);
@@ -269,18 +318,61 @@ mod board {
         }
     }
 
-    /// The switch edge: the detect-to-stop path.
-    extern "C" fn exti0() {
-        // SAFETY: same priority as SysTick, initialised before unmasking.
+    #[derive(Copy, Clone)]
+    struct Exti4;
+    // SAFETY: 10 is EXTI4's position in the STM32F407 vector table (RM0090 Table 61).
+    unsafe impl cortex_m::interrupt::InterruptNumber for Exti4 {
+        fn number(self) -> u16 {
+            EXTI4_IRQ
+        }
+    }
+
+    #[derive(Copy, Clone)]
+    struct Book;
+    // SAFETY: 53 is UART5's position in the STM32F407 vector table; UART5 is not enabled.
+    unsafe impl cortex_m::interrupt::InterruptNumber for Book {
+        fn number(self) -> u16 {
+            BOOK_IRQ
+        }
+    }
+
+    /// A switch edge (EXTI0: channel A, EXTI4: channel B; `line` is its EXTI_PR bit), highest
+    /// priority: the detect-to-stop path. Armed (the stop reads back energised), unfiltered and either
+    /// channel at its trip level (1oo2): the stop write first, then this line's pending bit, then the
+    /// hand-over. Everything else is the bookkeeping's, at the tick's priority.
+    #[inline(always)]
+    fn edge(line: u32) {
+        let idr = rd(GPIOA + IDR);
+        if EDGE_FAST.load(Relaxed)
+            && rd(GPIOD + ODR) & (1 << 12) != 0
+            && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B)
+        {
+            wr(GPIOD + BSRR, 1 << (12 + 16)); // the stop
+            wr(EXTI_PR, line); // right after the stop write: a new edge from here on pends again
+            EDGE_AT.store(rd(TIM2_CNT), Relaxed);
+            EDGE_STOPPED.store(true, Relaxed);
+        } else {
+            wr(EXTI_PR, line);
+        }
+        NVIC::pend(Book);
+    }
+
+    /// The bookkeeping of an edge, at SysTick's priority.
+    fn book() {
+        // SAFETY: same priority as SysTick (the only other user), initialised before unmasking.
         let fw = unsafe { FW.get() };
-        fw.on_edge();
-        wr(EXTI_PR, 1); // clear the pending line after the stop write, not before
+        if EDGE_STOPPED.swap(false, Relaxed) {
+            fw.edge_stopped(Micros(EDGE_AT.load(Relaxed)));
+        } else {
+            fw.on_edge();
+        }
         retained_store(fw.retained());
     }
 
     #[exception]
     fn SysTick() {
-        // SAFETY: same priority as EXTI0, initialised before SysTick was enabled.
+        // SAFETY: same priority as the bookkeeping (the only other user), initialised before SysTick
+        // was enabled.
         let fw = unsafe { FW.get() };
         fw.tick();
         retained_store(fw.retained());
@@ -327,10 +419,18 @@ mod board {
     const fn vectors() -> [Vector; 82] {
         let mut v = [DEFAULT; 82];
         v[EXTI0_IRQ as usize] = Vector { handler: exti0_entry };
+        v[EXTI4_IRQ as usize] = Vector { handler: exti4_entry };
+        v[BOOK_IRQ as usize] = Vector { handler: book_entry };
         v
     }
     unsafe extern "C" fn exti0_entry() {
-        exti0()
+        edge(1 << 0)
+    }
+    unsafe extern "C" fn exti4_entry() {
+        edge(1 << 4)
+    }
+    unsafe extern "C" fn book_entry() {
+        book()
     }
     #[link_section = ".vector_table.interrupts"]
     #[no_mangle]

@@ -1,9 +1,11 @@
 //! `IsrCell`: a static shared by interrupt handlers of one priority level, without a lock.
 //!
-//! The firmware object is used by two handlers (the tick and the switch edge). Both run at the same
-//! NVIC priority, so neither can preempt the other, and the main thread touches the object only before
-//! it enables them. Under those two rules a `&mut` from inside a handler is unique, and the edge path
-//! pays no critical section (no `cpsid`/`cpsie`, no `RefCell` flag) before its stop write.
+//! The firmware object is used by two handlers (the tick and the edge's bookkeeping). Both run at the
+//! same NVIC priority, which the binaries set explicitly, so neither can preempt the other, and the
+//! main thread touches the object only before it enables them (or with both masked). Under those two
+//! rules a `&mut` from inside a handler is unique. The edge interrupt itself runs at a higher
+//! priority and never touches the object (atomics and registers only), so its stop write waits for
+//! no critical section and no tick.
 
 use core::cell::UnsafeCell;
 use core::mem::MaybeUninit;
