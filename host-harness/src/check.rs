@@ -22,11 +22,36 @@ pub(crate) fn um_down(x: f64) -> u32 {
     (x * 1e6).floor().clamp(0.0, u32::MAX as f64) as u32
 }
 
+/// Stopping distance after detection, m, rounded up to the micrometre: the firmware's formula
+/// `v DT + v^2 / (2 d)`, or with the robot's stopping table `v DT + D(v)`, D read from the table
+/// itself (DT then being the delay to the stop signal; plant/stopping.rs).
+pub fn stopping_distance(m: &crate::scene::Motion) -> Result<f64, String> {
+    match &m.stopping {
+        None => Ok(stopping_distance_um(um_up(m.speed), um_up(m.dead_time), um_down(m.decel).max(1)) as f64 * 1e-6),
+        Some(t) => {
+            let d = t.distance(m.speed).ok_or_else(|| format!("motion.speed: {} m/s is above the stopping table's largest speed {} m/s (not extrapolated)", m.speed, t.max_speed()))?;
+            Ok(um_up(m.speed * m.dead_time + d) as f64 * 1e-6)
+        }
+    }
+}
+
+/// How the stopping distance after detection was computed, for people.
+pub fn stopping_law(m: &crate::scene::Motion) -> String {
+    match &m.stopping {
+        None => "v DT + v^2/2d".into(),
+        Some(t) if m.dead_time > 0.0 => format!("v DT + D(v), D from the robot's category-{} stopping table", t.category),
+        Some(t) => format!("D(v) from the robot's category-{} stopping table", t.category),
+    }
+}
+
 /// The budget and its confirmation.
 #[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct BudgetCheck {
-    /// Stopping distance after detection, m (firmware formula, rounded up to the micrometre).
+    /// Stopping distance after detection, m (firmware formula, or v DT + D(v) from the robot's
+    /// stopping table; rounded up to the micrometre).
     pub stopping_distance: f64,
+    /// How it was computed, for people ("v DT + v^2/2d" or the stopping table).
+    pub stopping_law: String,
     /// Total stroke C (front stop to back stop), m.
     pub stroke: f64,
     /// Switch travel d_sw, m.
@@ -58,7 +83,7 @@ pub fn check(scene: &Scene) -> Result<BudgetCheck, String> {
         return Err("sensor.kind: flinch check needs a travel switch (sensor.kind = \"travel\")".into());
     };
     let m = &scene.motion;
-    let stop = stopping_distance_um(um_up(m.speed), um_up(m.dead_time), um_down(m.decel).max(1)) as f64 * 1e-6;
+    let stop = stopping_distance(m)?;
     let remaining = stroke - threshold;
     let (simulated, _) = sim::run(scene, false).map_err(|e| e.to_string())?;
     let fits = stop <= remaining;
@@ -69,7 +94,7 @@ pub fn check(scene: &Scene) -> Result<BudgetCheck, String> {
         failures.push(format!("stroke budget: the stopping distance after detection {} exceeds the stroke left at detection {} (escalate to a category-0 stop)", verdict::mm(stop), verdict::mm(remaining)));
     }
     failures.extend(simulated.failures.iter().map(|f| format!("simulation: {f}")));
-    Ok(BudgetCheck { stopping_distance: stop, stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits, safe: failures.is_empty(), failures, explanations, simulated })
+    Ok(BudgetCheck { stopping_distance: stop, stopping_law: stopping_law(m), stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits, safe: failures.is_empty(), failures, explanations, simulated })
 }
 
 /// The human text of `flinch check`.
@@ -77,7 +102,7 @@ pub fn human(c: &BudgetCheck) -> String {
     use crate::verdict::{mm, mm_signed};
     let s = &c.simulated;
     let mut t = format!("{}\n", s.scene);
-    t.push_str(&format!("  stopping distance after detection v DT + v^2/2d = {}\n", mm(c.stopping_distance)));
+    t.push_str(&format!("  stopping distance after detection {} = {}\n", c.stopping_law, mm(c.stopping_distance)));
     t.push_str(&format!("  stroke C = {}, switch travel {}, left at detection {}\n", mm(c.stroke), mm(c.switch_travel), mm(c.remaining)));
     t.push_str(&format!("  budget: {} (margin {})\n", if c.fits { "FITS" } else { "DOES NOT FIT: escalate to a category-0 stop" }, mm_signed(c.margin)));
     t.push_str(&format!("  simulation: max travel {}, flange reached the target: {}\n", mm(s.max_travel), if s.stroke_exhausted { "YES" } else { "no" }));

@@ -76,8 +76,13 @@ pub struct DesignReport {
     pub speed: f64,
     /// DT, s.
     pub dead_time: f64,
-    /// d_c, m/s^2.
+    /// d_c, m/s^2 (with the robot's stopping table: its equivalent at V_c, plant/stopping.rs).
     pub decel: f64,
+    /// How the stopping distance after detection is computed: "v DT + v^2/2d", or from the
+    /// robot's stopping table (`motion.stopping`; DT is then the delay to the stop signal).
+    pub stopping_law: String,
+    /// The stopping table's largest speed, m/s: no speed above it is answered (null without a table).
+    pub stopping_table_max_speed_mps: Option<f64>,
     /// m_t, kg.
     pub tool_mass: f64,
     /// d_sw, m.
@@ -176,7 +181,8 @@ impl Candidates<'_> {
         let t_contact = if m.start_at_speed { gap / v } else { v / (2.0 * m.accel) + gap / v };
         // Contact, up to 0.5 s to detect, the dead time, braking, and 0.3 s for the back-stop
         // impacts and the ring-down.
-        self.base.duration_s.max(t_contact + 0.5 + self.dead_time + v / m.decel + 0.3)
+        let stop = m.stop_after_detection(v, self.dead_time).map_or(self.dead_time + v / m.decel, |(_, t)| t);
+        self.base.duration_s.max(t_contact + 0.5 + stop + 0.3)
     }
     fn scene(&self, v: f64, c: f64) -> Result<Scene, SweepError> {
         let mut sets = self.module.keys(c);
@@ -197,6 +203,29 @@ impl Candidates<'_> {
 fn trial_of(s: &Scene, v: f64, c: f64) -> Result<Trial, String> {
     let (summary, _) = crate::sim::run(s, false).map_err(|e| format!("V_c = {}, C = {}: {e}", crate::verdict::mps(v), crate::verdict::mm(c)))?;
     Ok(Trial { speed: v, stroke: c, summary })
+}
+
+/// Speed that uses the budget exactly for the scene's motion: `v DT + v^2 / (2 d) = room`, or with
+/// the robot's stopping table `v DT + D(v) = room` by bisection (D increases with v). With a table
+/// the answer is capped at its largest speed (`true`: capped, the budget is not used up there).
+pub fn speed_for_room(m: &crate::scene::Motion, room: f64, dead_time: f64) -> (f64, bool) {
+    let Some(t) = &m.stopping else {
+        return (speed_for_budget(room, dead_time, m.decel), false);
+    };
+    let used = |v: f64| m.stop_after_detection(v, dead_time).map_or(f64::INFINITY, |(d, _)| d);
+    if room <= 0.0 {
+        return (0.0, false);
+    }
+    let top = t.max_speed();
+    if used(top) <= room {
+        return (top, true);
+    }
+    let (mut lo, mut hi) = (0.0, top);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if used(mid) <= room { lo = mid } else { hi = mid }
+    }
+    (lo, false)
 }
 
 /// Speed that uses the budget exactly: v DT + v^2 / (2 d) = room.
@@ -274,14 +303,24 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
         Err(e) => (None, Some(format!("stroke search over {:.2}..{:.2} mm ({} C1:C2 scaled together): {e}", strokes[0] * 1e3, strokes[15] * 1e3, module.name()))),
     };
     // Largest safe speed for this stroke, simulated: scan 0.1..3 x the formula's, then bisect.
-    let v_formula = speed_for_budget(c - d_sw, dt, decel);
-    let speeds: Vec<f64> = (0..20).map(|i| v_formula * (0.1 + 2.9 * i as f64 / 19.0)).collect();
+    let (v_formula, formula_capped) = speed_for_room(&base.motion, c - d_sw, dt);
+    let table_top = base.motion.stopping.map(|s| s.max_speed());
+    if formula_capped {
+        notes.push(format!("the budget still fits at the stopping table's largest speed {}: the formula limit is that speed (the table is not extrapolated)", crate::verdict::mps(v_formula)));
+    }
+    let speeds: Vec<f64> = (0..20).map(|i| (v_formula * (0.1 + 2.9 * i as f64 / 19.0)).min(table_top.unwrap_or(f64::INFINITY))).collect();
     let safe_at = |vv: f64| cand.safe(vv, c);
     let (speed_sim, speed_note, at_limit) = if v_formula <= 0.0 {
         (None, Some("the switch travel takes the whole stroke: no speed is safe".to_string()), None)
     } else {
         match boundary(&speeds, &safe_at, true, 16, crate::verdict::mps) {
             Ok((vmax, _)) => (Some(vmax), None, cand.trial(vmax, c).ok()),
+            // Safe up to the end of the robot's stopping table: the answer stops there.
+            Err(_) if table_top.is_some_and(|top| safe_at(top) == Some(true)) => {
+                let top = table_top.unwrap_or(0.0);
+                notes.push(format!("simulated safe up to the stopping table's largest speed {}: faster is not in the robot's data", crate::verdict::mps(top)));
+                (Some(top), None, cand.trial(top, c).ok())
+            }
             Err(e) => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}", speeds[0], speeds[19])), None),
         }
     };
@@ -291,6 +330,8 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
         speed: v,
         dead_time: dt,
         decel,
+        stopping_law: check::stopping_law(&base.motion),
+        stopping_table_max_speed_mps: table_top,
         tool_mass: base.tool.mass,
         switch_travel: d_sw,
         stroke: c,
@@ -327,10 +368,17 @@ pub fn human(r: &DesignReport) -> String {
     use std::fmt::Write;
     let mut o = String::new();
     let _ = writeln!(o, "{} ({} module, m_t = {} kg)", r.scene, r.module, r.tool_mass);
-    let _ = writeln!(o, "  robot: V_c = {}, DT = {}, d_c = {} m/s^2; switch travel d_sw = {}", mps(r.speed), ms(r.dead_time), r.decel, mm(r.switch_travel));
-    let _ = writeln!(o, "  stopping distance after detection v DT + v^2/2d = {}", mm(r.stopping_distance));
+    match r.stopping_table_max_speed_mps {
+        None => {
+            let _ = writeln!(o, "  robot: V_c = {}, DT = {}, d_c = {} m/s^2; switch travel d_sw = {}", mps(r.speed), ms(r.dead_time), r.decel, mm(r.switch_travel));
+        }
+        Some(top) => {
+            let _ = writeln!(o, "  robot: V_c = {}, its stopping table up to {} (equivalent d = {:.3} m/s^2 at V_c), delay to the stop signal DT = {}; switch travel d_sw = {}", mps(r.speed), mps(top), r.decel, ms(r.dead_time), mm(r.switch_travel));
+        }
+    }
+    let _ = writeln!(o, "  stopping distance after detection {} = {}", r.stopping_law, mm(r.stopping_distance));
     let _ = writeln!(o, "stroke needed");
-    let _ = writeln!(o, "  formula d_sw + v DT + v^2/2d = {}", mm(r.stroke_needed_formula));
+    let _ = writeln!(o, "  formula d_sw + {} = {}", r.stopping_law, mm(r.stroke_needed_formula));
     match (r.stroke_needed_simulated, &r.stroke_search_note) {
         (Some(s), _) => {
             let _ = writeln!(o, "  simulated: smallest stroke that the tool does not exhaust while touching the target = {} ({} vs the formula)", mm(s), mm_signed(s - r.stroke_needed_formula));
@@ -348,8 +396,12 @@ pub fn human(r: &DesignReport) -> String {
     for e in &r.explanations {
         let _ = writeln!(o, "  why: {e}");
     }
-    let _ = writeln!(o, "largest safe speed with this stroke and DT = {} (safe: docs/verdicts.md)", ms(r.dead_time));
-    let _ = writeln!(o, "  formula (v DT + v^2/2d = C - d_sw): {}", mps(r.speed_limit_formula));
+    let robot = match r.stopping_table_max_speed_mps {
+        None => format!("a {} controller", ms(r.dead_time)),
+        Some(_) => format!("this robot's stopping table and {} to the stop signal", ms(r.dead_time)),
+    };
+    let _ = writeln!(o, "largest safe speed with this stroke and {robot} (safe: docs/verdicts.md)");
+    let _ = writeln!(o, "  formula ({} = C - d_sw): {}", r.stopping_law, mps(r.speed_limit_formula));
     match (r.speed_limit_simulated, &r.at_limit, &r.speed_search_note) {
         (Some(v), Some(t), _) => {
             let _ = writeln!(o, "  simulated: {} ({:+.1} % vs the formula); there: working mode {}, peak force on the robot {:.1} N, {}", mps(v), (v / r.speed_limit_formula - 1.0) * 100.0, mode_text(t.summary.mode), t.summary.peak_robot_force, crate::verdict::line(&t.summary));
@@ -361,7 +413,7 @@ pub fn human(r: &DesignReport) -> String {
     }
     match r.speed_limit_mps {
         Some(v) => {
-            let _ = writeln!(o, "  => with this module and a {} controller the robot may go up to {} (the smaller of the two)", ms(r.dead_time), mps(v));
+            let _ = writeln!(o, "  => with this module and {robot} the robot may go up to {} (the smaller of the two)", mps(v));
         }
         None => {
             let _ = writeln!(o, "  => no safe speed could be confirmed by simulation: do not rely on the formula alone");
@@ -398,7 +450,8 @@ pub fn draw(path: &Path, t: &Template, r: &DesignReport) -> Result<(), String> {
     if !exhausted.is_empty() {
         force.push(Series { name: "not safe (stroke exhausted)".into(), points: exhausted, color: splot::PALETTE[3], style: Style::Points });
     }
-    let budget: Vec<(f64, f64)> = speeds.iter().map(|&v| (v, (r.stroke - r.switch_travel - crate::plant::motion_law::MotionLaw::stopping_distance(v, r.dead_time, r.decel)) * 1e3)).collect();
+    let m = &t.base.motion;
+    let budget: Vec<(f64, f64)> = speeds.iter().map(|&v| (v, m.stop_after_detection(v, r.dead_time).map_or(f64::NAN, |(d, _)| (r.stroke - r.switch_travel - d) * 1e3))).collect();
     let panels = vec![
         Panel { caption: "peak forces".into(), y_label: "force [N]".into(), series: force, marks: marks.clone(), y_log: false },
         Panel {
@@ -407,7 +460,7 @@ pub fn draw(path: &Path, t: &Template, r: &DesignReport) -> Result<(), String> {
             series: vec![
                 Series { name: "simulated: stroke left while touching the target (< 0: exhausted, not safe)".into(), points: pts(&|t| t.summary.stroke_left_min_m.map_or(f64::NAN, |m| m * 1e3)), color: PALETTE[2], style: Style::Line },
                 Series { name: "simulated: closest approach to the undeformed target (counts its deformation)".into(), points: pts(&|t| t.summary.closest_approach_m.map_or(f64::NAN, |m| m * 1e3)), color: PALETTE[3], style: Style::Dashed },
-                Series { name: "formula: C - d_sw - (v DT + v^2/2d)".into(), points: budget, color: PALETTE[5], style: Style::Dashed },
+                Series { name: format!("formula: C - d_sw - ({})", r.stopping_law), points: budget, color: PALETTE[5], style: Style::Dashed },
             ],
             marks: marks.clone(),
             y_log: false,

@@ -227,7 +227,8 @@ pub fn run_with(scene: &Scene, ctl: &Controller, step: f64, record: bool, opts: 
     let kind = if matches!(scene.decoupler, Decoupler::Hydraulic(_)) { SwitchKind::Magnetic { trip_high: false } } else { SwitchKind::Inductive };
     let budget = BudgetConfig {
         robot_speed_um_per_s: um_up(scene.motion.speed),
-        dead_time_us: um_up(ctl.scan_cycle),
+        // With the robot's stopping table, its equivalent dead time at V_c follows the signal.
+        dead_time_us: um_up(ctl.scan_cycle + scene.motion.total_dead_time() - scene.motion.dead_time),
         decel_um_per_s2: um_down(scene.motion.decel).max(1),
         stroke_um: um_down(stroke(scene)) as i32,
     };

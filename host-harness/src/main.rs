@@ -51,6 +51,9 @@ enum Command {
     Design(flinch_harness::design::DesignArgs),
     /// Regenerate docs/validation.md and its pictures: the thesis's figures against ours.
     Validate(flinch_harness::validate::ValidateArgs),
+    /// One printable, self-contained HTML page: inputs and their sources, the verdicts, the safe
+    /// speed, the time history, the design curve (and a sweep), the tool version and the scene's SHA-256.
+    Report(flinch_harness::report::html::ReportArgs),
     /// The shipped scenes, built into this binary: list them, or print one to start your own.
     Scenes {
         #[command(subcommand)]
@@ -353,6 +356,7 @@ fn main() -> ExitCode {
         Command::Robot(a) => flinch_harness::kinematics::cli::run(a),
         Command::Design(a) => classify(shipped::load(&a.scene).map(|_| ()), flinch_harness::design::run(a)),
         Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),
+        Command::Report(a) => report::html::run(a),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,

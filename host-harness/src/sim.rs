@@ -364,7 +364,7 @@ impl Hybrid<N, E> for Simulation {
                 if self.brake_pending && self.contacts >= self.brake_after_contact {
                     self.brake_pending = false;
                     let due = self.t_detect.map_or(t, |d| d + self.dead_time).max(t);
-                    self.plant.motion.brake_at(due);
+                    self.plant.motion.stop_signal_at(due);
                 }
             }
             EV_FRONT => {
@@ -396,7 +396,7 @@ impl Hybrid<N, E> for Simulation {
                     if held {
                         self.brake_pending = true;
                     } else {
-                        self.plant.motion.brake_at(t + self.dead_time);
+                        self.plant.motion.stop_signal_at(t + self.dead_time);
                     }
                 }
             }
@@ -786,9 +786,10 @@ impl Run {
         self.sim.plant.travel(&k)
     }
 
-    /// Starts braking at `t` (>= now), for an external controller.
+    /// The robot gets the stop signal at `t` (>= now), for an external controller: braking starts
+    /// then, or with a stopping table the table's equivalent dead time later.
     pub fn command_brake(&mut self, t: f64) {
-        self.sim.plant.motion.brake_at(t.max(self.driver.t));
+        self.sim.plant.motion.stop_signal_at(t.max(self.driver.t));
     }
 
     /// Integration cost so far.
@@ -811,6 +812,9 @@ impl Run {
         let (achieved, achieved_null_reason) = achieved_restitution(s.v_in_first, s.v_out_first);
         let (detection_delay, detection_delay_null_reason) = detection_delay(s.t_contact, s.t_detect);
         let mut warnings = s.warnings.clone();
+        if let Some(why) = s.plant.motion.adjusted {
+            warnings.push(format!("motion.stopping: {why}"));
+        }
         for (name, t) in [("t_brake", t_brake), ("t_stop", s.plant.motion.t_stop())] {
             if let Some(t) = t.filter(|&t| t > self.duration) {
                 warnings.push(format!(

@@ -14,6 +14,7 @@ pub mod friction;
 pub mod motion_law;
 pub mod robot;
 pub mod sensor;
+pub mod stopping;
 pub mod target;
 
 use crate::scene::Scene;

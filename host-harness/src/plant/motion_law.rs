@@ -1,7 +1,12 @@
 //! Motion law of the commanded flange x_c (MODEL.md element 1; Ch. 3.1.2, "trapezoidal velocity
 //! profile"): accelerate at a_c to V_c, cruise, and, from t_brake = t_detect + DT, brake at d_c to
 //! standstill without reversing. Units: s, m, m/s, m/s^2.
+//!
+//! With the robot's stopping table (`motion.stopping`, `plant/stopping.rs`) the stop is signalled
+//! ([`MotionLaw::stop_signal_at`]) and the law brakes with the table's equivalent dead time and
+//! deceleration at the speed commanded at that instant, so it covers the table's D(v) in T(v).
 
+use super::stopping::StoppingTable;
 use crate::scene::Motion;
 
 /// The commanded flange motion, with the braking instant once it is known.
@@ -13,6 +18,10 @@ pub struct MotionLaw {
     start_at_speed: bool,
     /// Start of braking, s; `None` until detection has scheduled it.
     t_brake: Option<f64>,
+    /// The robot's stopping table, if the scene gives one.
+    stopping: Option<StoppingTable>,
+    /// Set when a stop signalled from the table needed its equivalent adjusted (the reason).
+    pub adjusted: Option<&'static str>,
 }
 
 /// Commanded position, velocity and acceleration at one instant.
@@ -29,7 +38,34 @@ pub struct Commanded {
 impl MotionLaw {
     /// The law of a scene's `[motion]`, not yet braking.
     pub fn new(m: &Motion) -> Self {
-        Self { speed: m.speed, accel: m.accel, decel: m.decel, start_at_speed: m.start_at_speed, t_brake: None }
+        Self { speed: m.speed, accel: m.accel, decel: m.decel, start_at_speed: m.start_at_speed, t_brake: None, stopping: m.stopping, adjusted: None }
+    }
+
+    /// The robot gets the stop signal at `t`: without a table braking starts then (`brake_at`);
+    /// with one, the table's equivalent dead time later, at its equivalent deceleration, both for
+    /// the speed commanded at `t` (plant/stopping.rs). A second signal changes nothing.
+    pub fn stop_signal_at(&mut self, t: f64) {
+        if self.t_brake.is_some() {
+            return;
+        }
+        let Some(table) = self.stopping else {
+            self.brake_at(t);
+            return;
+        };
+        // The loader holds V_c within the table, and the commanded speed never exceeds V_c; the
+        // scene's own equivalent at V_c (self.decel) stands in if that ever failed.
+        let v = self.unbraked(t).v;
+        match table.equivalent(v) {
+            Some(e) => {
+                self.decel = e.decel;
+                self.adjusted = e.adjusted;
+                self.brake_at(t + e.dead_time);
+            }
+            None => {
+                let dt = table.equivalent(self.speed).map_or(0.0, |e| e.dead_time);
+                self.brake_at(t + dt);
+            }
+        }
     }
 
     /// End of the acceleration phase, s (0 when the scene starts at speed).
@@ -106,7 +142,7 @@ mod tests {
     use super::*;
 
     fn law() -> MotionLaw {
-        MotionLaw::new(&Motion { speed: 0.05, accel: 1.0, decel: 2.0, dead_time: 0.016, gravity: 0.0, start_at_speed: false, brake_after_contact: 0 })
+        MotionLaw::new(&Motion { speed: 0.05, accel: 1.0, decel: 2.0, dead_time: 0.016, stopping: None, stopping_payload: None, gravity: 0.0, start_at_speed: false, brake_after_contact: 0 })
     }
 
     #[test]
@@ -132,6 +168,31 @@ mod tests {
         m.brake_at(0.02); // v = 0.02 < V_c
         assert!((m.at(0.02).v - 0.02).abs() < 1e-12);
         assert!((m.t_stop().unwrap() - 0.03).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_signalled_stop_follows_the_table_from_the_signal() {
+        // D = v 0.1 + v^2 / 10 and T = 0.1 + v / 5 at 0.02 and 0.05 m/s.
+        let v = [0.02, 0.05];
+        let d: Vec<f64> = v.iter().map(|v| v * 0.1 + v * v / 10.0).collect();
+        let t: Vec<f64> = v.iter().map(|v| 0.1 + v / 5.0).collect();
+        let table = StoppingTable::new(1, &v, &d, &t).unwrap();
+        let mut m = MotionLaw::new(&Motion { stopping: Some(table), ..law_motion() });
+        let ts = 0.3; // cruising at 0.05
+        m.stop_signal_at(ts);
+        assert!((m.t_brake().unwrap() - (ts + 0.1)).abs() < 1e-12);
+        let travel = m.at(10.0).x - m.at(ts).x;
+        assert!((travel - d[1]).abs() < 1e-12, "{travel} vs {}", d[1]);
+        assert!((m.t_stop().unwrap() - ts - t[1]).abs() < 1e-12);
+        // Signalled while accelerating (v = 0.02 at t = 0.02): the table's stop from 0.02 m/s,
+        // give or take the speed gained during the dead time.
+        let mut m = MotionLaw::new(&Motion { stopping: Some(table), ..law_motion() });
+        m.stop_signal_at(0.02);
+        assert!((m.t_brake().unwrap() - 0.12).abs() < 1e-12);
+    }
+
+    fn law_motion() -> Motion {
+        Motion { speed: 0.05, accel: 1.0, decel: 2.0, dead_time: 0.016, stopping: None, stopping_payload: None, gravity: 0.0, start_at_speed: false, brake_after_contact: 0 }
     }
 
     #[test]

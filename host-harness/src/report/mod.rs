@@ -5,6 +5,7 @@
 pub mod csv;
 pub mod figure;
 pub mod font;
+pub mod html;
 pub mod measured;
 pub mod output;
 pub mod plot;

@@ -19,6 +19,7 @@
 //! |---|---|---|
 //! | `name`, `duration` | this file | `sim.rs` |
 //! | `[motion]` | `motion_law.rs` | `plant/motion_law.rs` |
+//! | `motion.stopping` | `stopping.rs` | `plant/stopping.rs` |
 //! | `[robot]` | `robot.rs` | `plant/robot.rs` |
 //! | `[tool]` | `tool.rs` | `plant/mod.rs` (m_t) |
 //! | `[decoupler]` | `decoupler/{mod,linear,bistable,hydraulic}.rs` | `plant/decoupler/...` |
@@ -84,6 +85,7 @@ mod motion_law;
 mod robot;
 mod sensor;
 mod solver;
+mod stopping;
 mod target;
 #[cfg(test)]
 mod tests;
@@ -136,6 +138,7 @@ pub fn key_tables() -> &'static [KeyTable] {
     const TABLES: &[KeyTable] = &[
         KeyTable { path: "", when: "", keys: ROOT },
         KeyTable { path: "motion", when: "", keys: motion_law::KEYS },
+        KeyTable { path: "motion.stopping", when: "", keys: stopping::KEYS },
         KeyTable { path: "robot", when: "", keys: robot::KEYS },
         KeyTable { path: "tool", when: "", keys: tool::KEYS },
         KeyTable { path: "decoupler", when: "kind = \"rigid\"", keys: decoupler::RIGID_KEYS },
@@ -235,13 +238,13 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
     let name = cx.string(&root, &NAME);
     let duration_s = cx.number(&root, &DURATION);
 
-    let motion = cx
-        .table(&root, &motion_law::TABLE)
-        .and_then(|t| motion_law::motion(cx, &t));
-    let robot = optional(cx, &root, &robot::TABLE, robot::robot);
     let tool = cx
         .table(&root, &tool::TABLE)
         .and_then(|t| tool::tool(cx, &t));
+    let motion = cx
+        .table(&root, &motion_law::TABLE)
+        .and_then(|t| motion_law::motion(cx, &t, tool.map(|t| t.mass)));
+    let robot = optional(cx, &root, &robot::TABLE, robot::robot);
     let gravity = motion.map(|m| m.gravity);
     let decoupler = cx
         .table(&root, &decoupler::TABLE)

@@ -37,10 +37,16 @@ pub struct Motion {
     pub speed: f64,
     /// a_c, m/s^2, > 0.
     pub accel: f64,
-    /// d_c, m/s^2, > 0.
+    /// d_c, m/s^2, > 0; with `stopping`, the table's equivalent at V_c (plant/stopping.rs; the
+    /// plant recomputes it at the speed the stop is signalled at).
     pub decel: f64,
-    /// DT, s, >= 0, from detection to the start of braking.
+    /// DT, s, >= 0, from detection to the start of braking; with `stopping`, from detection to the
+    /// stop signal at the robot (the table's times include the robot's reaction).
     pub dead_time: f64,
+    /// `motion.stopping`: the robot's own stopping table, instead of `decel`.
+    pub stopping: Option<crate::plant::stopping::StoppingTable>,
+    /// `motion.stopping.payload`, kg: the payload the table was measured with.
+    pub stopping_payload: Option<f64>,
     /// m/s^2 along the approach direction (9.81 for a tool moving down), acts on the tool.
     pub gravity: f64,
     /// `motion.start_at_speed`: at t = 0 flange, robot and tool already cruise at V_c (the
@@ -51,6 +57,25 @@ pub struct Motion {
     /// thesis's account of Table 4 (Ch. 2.5: the object detached before the deceleration began),
     /// not a controller: it delays the stop.
     pub brake_after_contact: u32,
+}
+
+impl Motion {
+    /// Distance and time the flange travels from detection to standstill when it was moving at `v`
+    /// and the stop signal (or, without a table, braking) came `dead_time` after detection:
+    /// `v DT + v^2 / 2 d_c` and `DT + v / d_c`, or with the table `v DT + D(v)` and `DT + T(v)`.
+    /// `None` above the table's largest speed (not extrapolated).
+    pub fn stop_after_detection(&self, v: f64, dead_time: f64) -> Option<(f64, f64)> {
+        match &self.stopping {
+            Some(s) => s.at(v).map(|(d, t)| (v * dead_time + d, dead_time + t)),
+            None => Some((v * dead_time + v * v / (2.0 * self.decel), dead_time + v / self.decel)),
+        }
+    }
+
+    /// The whole delay from detection to the start of braking at V_c, s: `dead_time`, plus with the
+    /// table its equivalent dead time at V_c (what the firmware's budget needs).
+    pub fn total_dead_time(&self) -> f64 {
+        self.dead_time + self.stopping.and_then(|s| s.equivalent(self.speed)).map_or(0.0, |e| e.dead_time)
+    }
 }
 
 /// Compliant robot, a base-excited mass (eq 33): Table 7 gives the Viper s650 values.
