@@ -70,7 +70,7 @@ fn crossings_are_reported_as_collisions() {
     }
 }
 
-const ADVERSARIAL: [&str; 10] = [
+const ADVERSARIAL: [&str; 11] = [
     "avoid_operator_hand.toml",
     "avoid_hand_at_tool.toml",
     "avoid_head_on.toml",
@@ -78,6 +78,7 @@ const ADVERSARIAL: [&str; 10] = [
     "avoid_goal_covered.toml",
     "avoid_wall.toml",
     "avoid_under_tool.toml",
+    "avoid_low_hand.toml",
     "avoid_fast_hand.toml",
     "avoid_empty_diagonal.toml",
     "avoid_extreme_gain.toml",
@@ -87,7 +88,7 @@ const ADVERSARIAL: [&str; 10] = [
 /// under, whatever it sensed), m/s.
 fn ssm_bound(scene: &Avoid, s: f64) -> f64 {
     let f = &scene.safety;
-    let free = s - f.human_speed_mps * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_m - f.sensor_uncertainty_m - f.robot_uncertainty_m;
+    let free = s - f.human_speed_mps * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_used_m(scene.camera.m_per_px) - f.sensor_uncertainty_m - f.robot_uncertainty_m;
     (free / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps)
 }
 
@@ -138,6 +139,44 @@ fn hand_beside_the_tool_is_not_erased() {
     assert!(r.max_speed_mps < 1e-9, "{}", r.max_speed_mps);
     let (_, t) = thesis("avoid_hand_at_tool.toml");
     assert!(matches!(t.status, Status::Collision(_)), "{:?}", t.status);
+}
+
+/// A hand and forearm lying flat (20 mm high) reach across the path. With the sense height below a
+/// finger's thickness (14 mm, ISO 13855's d) the monitor sees them and the tool never enters. With the
+/// old 30 mm nothing of this operator is above the sense height: the intrusion distance ISO 13855 then
+/// asks for (128 mm, applied automatically) assumes some thicker part of the body is seen, and it is
+/// not here, so the tool goes in: the test can tell the two apart, and the docs state the assumption.
+#[test]
+fn a_low_hand_is_seen() {
+    let (scene, r) = run("avoid_low_hand.toml");
+    assert!(scene.safety.sense_height_m < scene.operator.hand_height_m, "the scene is the adversarial one");
+    safe("avoid_low_hand.toml", &scene, &r);
+    assert!(!matches!(r.status, Status::Collision(_)), "{:?}", r.status);
+    let mut blind = scene.clone();
+    blind.safety.sense_height_m = 0.03;
+    assert!((blind.safety.intrusion_used_m(blind.camera.m_per_px) - 0.128).abs() < 1e-9, "C = 8 (30 - 14) mm");
+    let (_, b) = run_scene(blind);
+    assert!(matches!(b.status, Status::Collision(_)), "30 mm sense height: {:?}, {} m", b.status, b.min_signed_distance_m);
+}
+
+/// The intrusion distance follows the detection capability (ISO 13855): 0 up to a finger (14 mm),
+/// 8 (d - 14 mm) up to 40 mm, 850 mm beyond; a configured larger `intrusion_m` is kept; the pixel
+/// pitch counts as well as the height.
+#[test]
+fn intrusion_distance_follows_the_detection_capability() {
+    let mut scene = Avoid::load(&scene_path("avoid_low_hand.toml")).unwrap();
+    let f = |s: &Avoid| s.safety.intrusion_used_m(s.camera.m_per_px);
+    scene.camera.m_per_px = 0.005;
+    for (h, c) in [(0.010, 0.0), (0.014, 0.0), (0.02, 0.048), (0.04, 0.208), (0.041, 0.85)] {
+        scene.safety.sense_height_m = h;
+        assert!((f(&scene) - c).abs() < 1e-9, "sense {h}: {} != {c}", f(&scene));
+    }
+    scene.safety.sense_height_m = 0.014;
+    scene.safety.intrusion_m = 0.3;
+    assert_eq!(f(&scene), 0.3);
+    scene.safety.intrusion_m = 0.0;
+    scene.camera.m_per_px = 0.02;
+    assert!((f(&scene) - 8.0 * (20.0 * 2f64.sqrt() - 14.0) * 1e-3).abs() < 1e-9, "28 mm pixels miss a finger");
 }
 
 /// The thesis's law on every scene: whatever it does, the report is honest.

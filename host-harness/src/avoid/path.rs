@@ -65,7 +65,7 @@ pub fn ssm<R: Real>(scene: &Avoid) -> Option<SsmParams<R>> {
         human_speed_mps: R::from_f64(s.human_speed_mps),
         reaction_time_s: R::from_f64(s.reaction_time_s),
         stopping_time_s: R::from_f64(s.stopping_time_s),
-        margin_m: R::from_f64(s.intrusion_m + s.sensor_uncertainty_m + s.robot_uncertainty_m),
+        margin_m: R::from_f64(s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m),
         speed_cap_mps: R::from_f64(scene.speed_mps),
     })
 }
