@@ -28,17 +28,24 @@ fn run_scene(scene: Avoid) -> (Avoid, PathResult) {
 fn honest(name: &str, scene: &Avoid, r: &PathResult) {
     let min = r.signed_distance_m.iter().copied().fold(f64::INFINITY, f64::min);
     assert_eq!(min, r.min_signed_distance_m, "{name}: min over the path");
-    // Recomputed here from the true geometry at every step, not from the sensed image.
+    // Recomputed here from the true geometry at every step, not from the sensed image: from the
+    // tool's surface (the wrist disc), not its centre.
     let op = scene.operator_shape();
     for (k, (p, s)) in r.points.iter().zip(&r.signed_distance_m).enumerate() {
         let t = k as f64 * scene.dt_s;
-        assert!((op.signed_distance(scene.hand_at(t), *p) - s).abs() < 1e-9, "{name}: step {k}");
+        let surface = op.signed_distance(scene.hand_at(t), *p) - scene.robot.wrist_radius_m;
+        assert!((surface - s).abs() < 1e-9, "{name}: step {k}");
     }
+    assert_eq!(r.clearance_m, scene.clearance_m);
     let inside_steps = r.signed_distance_m.iter().skip(1).filter(|s| **s < 0.0).count();
     assert!((r.time_inside_s - inside_steps as f64 * scene.dt_s).abs() < 1e-9, "{name}: time inside");
     match r.status {
-        Status::Reached => {
-            assert!(r.min_signed_distance_m >= 0.0, "{name}: reached but went {} m deep", r.min_signed_distance_m);
+        Status::Reached | Status::TooClose => {
+            if r.status == Status::Reached {
+                assert!(r.min_signed_distance_m >= scene.clearance_m, "{name}: reached but came within {} m (clearance {} m)", r.min_signed_distance_m, scene.clearance_m);
+            } else {
+                assert!((0.0..scene.clearance_m).contains(&r.min_signed_distance_m), "{name}: too close is within the clearance, not inside");
+            }
             let last = r.points.last().unwrap();
             let d = ((last[0] - scene.goal_m[0]).powi(2) + (last[1] - scene.goal_m[1]).powi(2)).sqrt();
             assert!(d <= scene.goal_tolerance_m, "{name}: reached but {d} m from the goal");
@@ -88,7 +95,7 @@ const ADVERSARIAL: [&str; 11] = [
 /// under, whatever it sensed), m/s.
 fn ssm_bound(scene: &Avoid, s: f64) -> f64 {
     let f = &scene.safety;
-    let free = s - f.human_speed_mps * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_used_m(scene.camera.m_per_px) - f.sensor_uncertainty_m - f.robot_uncertainty_m;
+    let free = s - f.human_speed_mps * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_used_m(scene.camera.m_per_px) - f.sensor_uncertainty_m - f.robot_uncertainty_m - scene.clearance_m;
     (free / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps)
 }
 
@@ -97,8 +104,21 @@ fn ssm_bound(scene: &Avoid, s: f64) -> f64 {
 /// of the step (a sensing chain that misses the operator, a blind zone, would break this).
 fn safe(name: &str, scene: &Avoid, r: &PathResult) {
     honest(name, scene, r);
-    assert!(!matches!(r.status, Status::Collision(_)), "{name}: {:?}", r.status);
-    assert!(r.min_signed_distance_m > 0.0, "{name}: {} m", r.min_signed_distance_m);
+    // The tool never moves in contact: a person may walk into a tool held in a protective stop
+    // (ISO/TS 15066 5.5.4 allows contact with a stopped robot), which is still reported as a
+    // collision, but no step ever commands motion while touching or into the operator.
+    for (k, row) in r.rows.iter().enumerate() {
+        if row.separation_m < 0.0 || r.signed_distance_m[k] < 0.0 {
+            assert!(row.v_mps[0].hypot(row.v_mps[1]) == 0.0, "{name}: t = {} s: moving in contact", row.t_s);
+        }
+    }
+    if !matches!(r.status, Status::Collision(_)) {
+        assert!(r.min_signed_distance_m > 0.0, "{name}: {} m", r.min_signed_distance_m);
+    }
+    assert_ne!(r.status, Status::TooClose, "{name}: {} m, clearance {} m", r.min_signed_distance_m, scene.clearance_m);
+    if r.status == Status::Reached {
+        assert!(r.min_signed_distance_m >= scene.clearance_m, "{name}: {} m < clearance {} m", r.min_signed_distance_m, scene.clearance_m);
+    }
     assert!(r.max_speed_mps <= scene.speed_mps + 1e-9, "{name}: {} m/s", r.max_speed_mps);
     for (k, row) in r.rows.iter().enumerate() {
         let s_true = r.signed_distance_m[k];
@@ -113,6 +133,7 @@ fn every_adversarial_scene_is_safe_with_the_monitor() {
         let (scene, r) = run(name);
         assert!(scene.safety.on(), "{name}: shipped with the monitor on");
         safe(name, &scene, &r);
+        assert!(!matches!(r.status, Status::Collision(_)), "{name}: {:?}", r.status);
     }
 }
 
@@ -177,6 +198,45 @@ fn intrusion_distance_follows_the_detection_capability() {
     scene.safety.intrusion_m = 0.0;
     scene.camera.m_per_px = 0.02;
     assert!((f(&scene) - 8.0 * (20.0 * 2f64.sqrt() - 14.0) * 1e-3).abs() < 1e-9, "28 mm pixels miss a finger");
+}
+
+/// The signed distance is from the tool's surface (the 45 mm wrist), and a run that reaches the goal
+/// closer than `clearance_m` is `too_close`, not `reached` (exit 1). The thesis's law on the empty
+/// diagonal with a hand placed 60 mm beside the straight line: the tool point misses it, the wrist
+/// does not keep 20 mm. With the monitor, the clearance is part of the protective separation.
+#[test]
+fn clearance_is_from_the_surface_and_enforced() {
+    let mut s = Avoid::load(&scene_path("avoid_empty_diagonal.toml")).unwrap();
+    s.operator.entry_m = [1.05, 0.0];
+    // Its edge 60 mm from the line y = x.
+    let a = (0.06 + 0.05) / 2f64.sqrt();
+    s.operator.keyframes[0].hand_m = [0.55 + a, 0.55 - a];
+    // A hand beside the line of motion, low enough to barely shape the field.
+    s.operator.hand_height_m = 0.05;
+    s.operator.forearm_height_m = 0.05;
+    let mut t = s.clone();
+    t.thesis_mode();
+    t.k_rep = 0.0;
+    let (t, r) = run_scene(t);
+    honest("thesis, hand beside the line", &t, &r);
+    let centre = r.min_signed_distance_m + t.robot.wrist_radius_m;
+    assert!(centre > t.clearance_m, "the tool point keeps {centre} m");
+    assert!(r.min_signed_distance_m < t.clearance_m, "the surface does not: {}", r.min_signed_distance_m);
+    if r.min_signed_distance_m >= 0.0 {
+        assert_eq!(r.status, Status::TooClose);
+        let json = avoid::metrics_json(&r, Engine::Reference, false);
+        assert_eq!((json["status"].as_str(), json["clearance_kept"].as_bool(), json["reached_goal"].as_bool()), (Some("too_close"), Some(false), Some(false)));
+    } else {
+        assert!(matches!(r.status, Status::Collision(_)));
+    }
+    // The monitor with a large clearance asked: whatever it does, it never comes closer.
+    for c in [0.05, 0.15] {
+        let mut m = s.clone();
+        m.clearance_m = c;
+        let (m, r) = run_scene(m);
+        safe(&format!("clearance {c}"), &m, &r);
+        assert!(r.min_signed_distance_m >= c, "clearance {c}: {}", r.min_signed_distance_m);
+    }
 }
 
 /// The thesis's law on every scene: whatever it does, the report is honest.
@@ -245,7 +305,7 @@ fn cli_verdict_and_csv() {
     std::fs::remove_file(&csv).ok();
     // With the monitor the wall is a safe stop, still exit 1 (the goal is not reached).
     assert_eq!(avoid::run(&args("avoid_wall.toml", None, false)), Ok(false));
-    let mut thesis_demo = args("avoid_operator_hand.toml", None, true);
-    thesis_demo.json = false;
-    assert_eq!(avoid::run(&thesis_demo), Ok(true));
+    let mut empty = args("avoid_empty_diagonal.toml", None, false);
+    empty.json = false;
+    assert_eq!(avoid::run(&empty), Ok(true));
 }

@@ -70,6 +70,8 @@ pub fn metrics_json(res: &PathResult, engine: Engine, monitor: bool) -> serde_js
         "time_to_goal_s": res.time_to_goal_s,
         "time_to_goal_null_reason": if res.time_to_goal_s.is_none() { Some("the goal was not reached") } else { None },
         "min_signed_distance_m": res.min_signed_distance_m,
+        "clearance_m": res.clearance_m,
+        "clearance_kept": res.min_signed_distance_m >= res.clearance_m,
         "time_inside_s": res.time_inside_s,
         "max_speed_mps": res.max_speed_mps,
         "max_speed_near_operator_mps": res.max_speed_near_operator_mps,
@@ -181,6 +183,7 @@ pub fn run(args: &AvoidArgs) -> Result<bool, String> {
         let verdict = match res.status {
             path::Status::Reached => "reached the goal, never inside the operator".to_string(),
             path::Status::Stopped(r) => format!("stopped before the goal: {}", r.name()),
+            path::Status::TooClose => format!("TOO CLOSE: reached the goal but came closer to the operator than clearance_m = {} m", res.clearance_m),
             path::Status::Collision(None) => "COLLISION: the tool entered the operator (then reached the goal)".to_string(),
             path::Status::Collision(Some(r)) => format!("COLLISION: the tool entered the operator (then stopped: {})", r.name()),
         };
@@ -190,9 +193,10 @@ pub fn run(args: &AvoidArgs) -> Result<bool, String> {
             None => println!("  time to goal      not reached (final {:?})", res.points.last()),
         }
         println!(
-            "  min signed dist.  {:.1} mm (at t = {:.2} s; negative = inside the operator, {:.2} s inside)",
+            "  min signed dist.  {:.1} mm from the tool's surface (at t = {:.2} s; clearance asked {:.0} mm; negative = inside the operator, {:.2} s inside)",
             res.min_signed_distance_m * 1e3,
             res.snapshot.t_s,
+            res.clearance_m * 1e3,
             res.time_inside_s
         );
         println!(

@@ -55,6 +55,11 @@ pub struct Avoid {
     /// (capture, fit and transmission; the thesis measured 81 ms), s.
     #[serde(default = "default_latency")]
     pub latency_s: f64,
+    /// The clearance asked for: the tool's surface (the wrist disc, `robot.wrist_radius_m` round the
+    /// tool point) must stay at least this far from the operator; a run that comes closer is not
+    /// `reached`. The monitor adds it to its protective separation, m.
+    #[serde(default = "default_clearance")]
+    pub clearance_m: f64,
     /// Speed and separation monitoring.
     #[serde(default)]
     pub safety: SafetyCfg,
@@ -82,6 +87,9 @@ fn default_stall_move() -> f64 {
 }
 fn default_latency() -> f64 {
     0.081
+}
+fn default_clearance() -> f64 {
+    0.02
 }
 
 /// `[avoid.safety]`: speed and separation monitoring (ISO/TS 15066, 5.5.4) after the field.
@@ -336,6 +344,7 @@ impl Avoid {
             }
         };
         range("latency_s", self.latency_s, 0.0, 10.0)?;
+        range("clearance_m", self.clearance_m, 0.0, 1.0)?;
         if !matches!(self.robot.removal.as_str(), "model" | "calibration") {
             return Err(format!("avoid.robot.removal = {:?}: expected \"model\" or \"calibration\"", self.robot.removal));
         }
@@ -460,6 +469,13 @@ impl Avoid {
             forearm_width_m: o.forearm_width_m,
             forearm_height_m: o.forearm_height_m,
         }
+    }
+
+    /// Signed distance from the tool's surface (the wrist disc of `robot.wrist_radius_m` round the
+    /// tool point `p`) to the operator's true footprint at time `t`, m: negative is the depth of the
+    /// overlap.
+    pub fn signed_distance_m(&self, t: f64, p: [f64; 2]) -> f64 {
+        self.operator_shape().signed_distance(self.hand_at(t), p) - self.robot.wrist_radius_m
     }
 
     /// Hand position at time `t`.
