@@ -77,8 +77,9 @@ fn crossings_are_reported_as_collisions() {
     }
 }
 
-const ADVERSARIAL: [&str; 11] = [
+const ADVERSARIAL: [&str; 12] = [
     "avoid_operator_hand.toml",
+    "avoid_thesis_reach.toml",
     "avoid_hand_at_tool.toml",
     "avoid_head_on.toml",
     "avoid_forearm_across.toml",
@@ -239,6 +240,27 @@ fn clearance_is_from_the_surface_and_enforced() {
     }
 }
 
+/// The shipped demo needs avoidance and uses it: the hand rests on the straight line. With the field
+/// off (k_rep = 0) the thesis's law runs into it and the monitor alone stops short; with both, the
+/// field takes the tool round beyond the protective separation and it reaches the goal keeping its
+/// clearance (and well beyond: the monitor would not let it pass closer than about 0.36 m).
+#[test]
+fn the_demo_needs_avoidance_and_goes_round() {
+    let (scene, r) = run("avoid_operator_hand.toml");
+    safe("avoid_operator_hand.toml", &scene, &r);
+    assert_eq!(r.status, Status::Reached, "{} m", r.min_signed_distance_m);
+    let off_line = r.points.iter().map(|p| (p[1] - scene.start_m[1]).abs()).fold(0.0, f64::max);
+    assert!(off_line > 0.4, "went round: {off_line} m off the line");
+    assert!(r.min_signed_distance_m > 0.3, "{}", r.min_signed_distance_m);
+    let mut off = scene.clone();
+    off.k_rep = 0.0;
+    let (_, stopped) = run_scene(off.clone());
+    assert!(matches!(stopped.status, Status::Stopped(_)), "{:?}", stopped.status);
+    off.thesis_mode();
+    let (_, t) = run_scene(off);
+    assert!(matches!(t.status, Status::Collision(_)) && t.min_signed_distance_m < -0.05, "{:?} {}", t.status, t.min_signed_distance_m);
+}
+
 /// The thesis's law on every scene: whatever it does, the report is honest.
 #[test]
 fn every_adversarial_scene_is_reported_honestly_without_the_monitor() {
@@ -308,4 +330,53 @@ fn cli_verdict_and_csv() {
     let mut empty = args("avoid_empty_diagonal.toml", None, false);
     empty.json = false;
     assert_eq!(avoid::run(&empty), Ok(true));
+}
+
+/// One row of the docs' table: `| scene | law | status | reason | min_signed_distance_m |
+/// max_speed_near_operator_mps | time_to_goal_s |`.
+fn table_row(name: &str, law: &str, r: &PathResult) -> String {
+    format!(
+        "| `{name}` | {law} | {} | {} | {:.4} | {:.3} | {} |",
+        r.status.name(),
+        r.status.reason().map_or("-", |x| x.name()),
+        r.min_signed_distance_m,
+        r.max_speed_near_operator_mps,
+        r.time_to_goal_s.map_or("-".to_string(), |t| format!("{t:.2}"))
+    )
+}
+
+/// docs/avoidance.md's per-scene table (every `scenes/avoid_*.toml`, the thesis's law against ours)
+/// is what the scenes give now: it cannot drift. `FLINCH_BLESS=1` rewrites it (then review the
+/// diff). Every row of ours is also checked safe, every row of the thesis's honest.
+#[test]
+fn docs_table_is_current() {
+    let scenes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let mut names: Vec<String> = std::fs::read_dir(&scenes)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("avoid_") && n.ends_with(".toml"))
+        .collect();
+    names.sort();
+    let mut rows = vec![
+        "| scene | law | status | reason | min_signed_distance_m | max_speed_near_operator_mps | time_to_goal_s |".to_string(),
+        "|---|---|---|---|---|---|---|".to_string(),
+    ];
+    for name in &names {
+        let (ts, t) = thesis(name);
+        honest(name, &ts, &t);
+        let (os, o) = run(name);
+        safe(name, &os, &o);
+        rows.push(table_row(name, "thesis (`--thesis`)", &t));
+        rows.push(table_row(name, "ours", &o));
+    }
+    let table = rows.join("\n");
+    let doc_path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../docs/avoidance.md");
+    let doc = std::fs::read_to_string(&doc_path).unwrap();
+    let (begin, end) = ("<!-- avoid-table:begin -->\n", "\n<!-- avoid-table:end -->");
+    let (a, b) = (doc.find(begin).expect("begin marker") + begin.len(), doc.find(end).expect("end marker"));
+    if std::env::var_os("FLINCH_BLESS").is_some() {
+        std::fs::write(&doc_path, format!("{}{table}{}", &doc[..a], &doc[b..])).unwrap();
+    } else {
+        assert_eq!(&doc[a..b], table, "docs/avoidance.md's table is out of date: FLINCH_BLESS=1 cargo test -p flinch-tests --test avoid_adversarial docs_table_is_current");
+    }
 }

@@ -152,13 +152,14 @@ pub fn run(args: &AvoidArgs) -> Result<bool, String> {
         let sf = &scene.safety;
         if sf.on() {
             println!(
-                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, T_r {} s, T_s {} s, C {} m (detection capability {} mm), Z {} m, latency {} s, cap {} m/s",
+                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, T_r {} s, T_s {} s, C {:.4} m (detection capability {:.1} mm), Z {} m, clearance {} m, latency {} s, cap {} m/s",
                 sf.human_speed_mps,
                 sf.reaction_time_s,
                 sf.stopping_time_s,
                 sf.intrusion_used_m(scene.camera.m_per_px),
-                (sf.detection_capability_m(scene.camera.m_per_px) * 1e3 * 10.0).round() / 10.0,
+                sf.detection_capability_m(scene.camera.m_per_px) * 1e3,
                 sf.sensor_uncertainty_m + sf.robot_uncertainty_m,
+                scene.clearance_m,
                 scene.latency_s,
                 scene.speed_mps
             );

@@ -669,7 +669,7 @@ mod tests {
 
     /// The shipped scene made small and fast: 105 px at 1 cm, the hand static on the straight line.
     pub(crate) fn small_scene(repulsion: &str, hand: [f64; 2]) -> Avoid {
-        let text = include_str!("../../../scenes/avoid_operator_hand.toml");
+        let text = include_str!("../../../scenes/avoid_thesis_reach.toml");
         let mut s = Avoid::parse(text).unwrap();
         s.camera.width_px = 105;
         s.camera.height_px = 105;

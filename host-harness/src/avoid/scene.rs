@@ -502,7 +502,7 @@ impl Avoid {
 mod tests {
     use super::*;
 
-    const SHIPPED: &str = include_str!("../../../scenes/avoid_operator_hand.toml");
+    const SHIPPED: &str = include_str!("../../../scenes/avoid_thesis_reach.toml");
 
     #[test]
     fn shipped_scene_loads_and_errors_name_the_key() {
@@ -516,7 +516,7 @@ mod tests {
         assert!(bad("stop_height_m = 0.30", "stop_height_m = 0.01").contains("avoid.stop_height_m"));
         assert!(bad("goal_m = [0.93, 0.50]", "goal_m = [3.0, 0.50]").contains("avoid.goal_m"));
         let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nlatency_s = -0.1");
-        assert!(e.starts_with("line 21: avoid.latency_s = -0.1: must be a number in [0, 10]"), "{e}");
+        assert!(e.starts_with("line 24: avoid.latency_s = -0.1: must be a number in [0, 10]"), "{e}");
         let with_safety = |kv: &str| Avoid::parse(&format!("{SHIPPED}\n[avoid.safety]\n{kv}\n"));
         assert_eq!(with_safety("human_speed_mps = 2.0").unwrap().safety.human_speed_mps, 2.0);
         for (kv, key) in [("human_speed_mps = inf", "avoid.safety.human_speed_mps"), ("stopping_time_s = -1", "avoid.safety.stopping_time_s"), ("mode = \"fast\"", "avoid.safety.mode"), ("sense_height_m = 0", "avoid.safety.sense_height_m")] {
@@ -525,7 +525,7 @@ mod tests {
         }
         assert!(with_safety("speed = 1").unwrap_err().contains("speed"));
         let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_m = -1");
-        assert!(e.starts_with("line 21: avoid.progress_m = -1: must be > 0"), "{e}");
+        assert!(e.starts_with("line 24: avoid.progress_m = -1: must be > 0"), "{e}");
         assert!(bad("grid = 15", "grid = 40").starts_with("line "), "the line of a nested key");
         assert!(bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_window_s = nan").contains("progress_window_s"));
         let unknown = bad("dt_s = 0.01", "dt_s = 0.01\nspeeed = 1");
