@@ -77,12 +77,13 @@ fn crossings_are_reported_as_collisions() {
     }
 }
 
-const ADVERSARIAL: [&str; 12] = [
+const ADVERSARIAL: [&str; 13] = [
     "avoid_operator_hand.toml",
     "avoid_thesis_reach.toml",
     "avoid_hand_at_tool.toml",
     "avoid_head_on.toml",
     "avoid_forearm_across.toml",
+    "avoid_forearm_across_30.toml",
     "avoid_goal_covered.toml",
     "avoid_wall.toml",
     "avoid_under_tool.toml",
@@ -379,4 +380,42 @@ fn docs_table_is_current() {
     } else {
         assert_eq!(&doc[a..b], table, "docs/avoidance.md's table is out of date: FLINCH_BLESS=1 cargo test -p flinch-tests --test avoid_adversarial docs_table_is_current");
     }
+}
+
+/// The serial line: frames measured as the host encodes them (15 x 15: 932 bytes, 30 x 30: 3,632),
+/// the baud each grid needs at 30 frames a second (8N1), a line too slow refused with the key and the
+/// rate it needs, and a modelled line delays every frame by its transmission time.
+#[test]
+fn the_serial_line_takes_its_time() {
+    use flinch_harness::avoid::path::{fit_frame, link_time, min_baud};
+    let mut s = Avoid::load(&scene_path("avoid_forearm_across_30.toml")).unwrap();
+    for (grid, bytes, baud) in [(15, 932, 282_425), (30, 3_632, 1_100_607)] {
+        s.fit.grid = grid;
+        s.baud = None;
+        let setup = Setup::new(&s, None).unwrap();
+        let mut rng = flinch_harness::avoid::depth::Rng::new(1);
+        let frame = fit_frame(&s, &setup, s.start_m, s.hand_at(0.0), &mut rng).to_frame(0, 0).unwrap();
+        assert_eq!(frame.len(), bytes, "grid {grid}");
+        assert_eq!(link_time(grid, grid, 1_000_000).unwrap().0, bytes);
+        assert_eq!(min_baud(bytes, s.frame_period_s), baud, "grid {grid}");
+        s.baud = Some(115_200);
+        let e = Setup::new(&s, None).err().unwrap();
+        assert!(e.contains("avoid.baud = 115200") && e.contains(&format!("at least {baud} baud")), "{e}");
+    }
+    // 30 x 30 at 1.5 Mbaud: 24.2 ms on the line; the frame reaches the controller that much later.
+    let s = Avoid::load(&scene_path("avoid_forearm_across_30.toml")).unwrap();
+    assert!((link_time(30, 30, 1_500_000).unwrap().1 - 0.024213).abs() < 1e-5);
+    let (scene, slow) = run_scene(s.clone());
+    safe("30 x 30 at 1.5 Mbaud", &scene, &slow);
+    let first_move = |r: &PathResult| r.rows.iter().find(|w| w.v_mps[0].hypot(w.v_mps[1]) > 0.0).map(|w| w.t_s);
+    // Where the tool can move at once (the empty workspace), with and without the line.
+    let mut s = Avoid::load(&scene_path("avoid_empty_diagonal.toml")).unwrap();
+    s.fit.grid = 30;
+    s.baud = Some(1_500_000);
+    let (_, slow) = run_scene(s.clone());
+    let mut fast = s;
+    fast.baud = None;
+    let (_, fast) = run_scene(fast);
+    let (a, b) = (first_move(&slow).unwrap(), first_move(&fast).unwrap());
+    assert!(a >= b + 0.015, "the first frame arrives 24 ms later (10 ms steps): moves at {a} s against {b} s");
 }

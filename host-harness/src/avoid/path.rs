@@ -211,8 +211,32 @@ impl Setup {
                 )
             }
         };
+        if let Some(baud) = scene.baud {
+            let (bytes, tx) = link_time(fitter.grid.nx, fitter.grid.ny, baud)?;
+            if tx > scene.frame_period_s {
+                return Err(format!(
+                    "avoid.baud = {baud}: a {} x {} frame ({bytes} bytes, 10 bits a byte) takes {:.1} ms, longer than frame_period_s = {} s; the line needs at least {} baud",
+                    fitter.grid.nx,
+                    fitter.grid.ny,
+                    tx * 1e3,
+                    scene.frame_period_s,
+                    min_baud(bytes, scene.frame_period_s)
+                ));
+            }
+        }
         Ok(Setup { fitter, calibration, plane_weights })
     }
+}
+
+/// A frame's size in bytes and its time on a serial line at `baud` (8N1: 10 bits a byte), s.
+pub fn link_time(nx: usize, ny: usize, baud: u32) -> Result<(usize, f64), String> {
+    let bytes = fw::frame_len(nx, ny).ok_or_else(|| format!("grid {nx} x {ny}: no frame for it (1..=30 a side)"))?;
+    Ok((bytes, bytes as f64 * 10.0 / baud.max(1) as f64))
+}
+
+/// The lowest baud rate that carries one frame of `bytes` per `period_s` (8N1), rounded up.
+pub fn min_baud(bytes: usize, period_s: f64) -> u64 {
+    (bytes as f64 * 10.0 / period_s).ceil() as u64
 }
 
 /// The state of the scene at the moment of minimum clearance, for the plot.
@@ -524,7 +548,12 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
     let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2])> = std::collections::VecDeque::new();
     let (f0, sep0) = fit_and_sense(scene, setup, p, scene.hand_at(0.0), &mut rng);
     let mut field = f0.clone();
-    in_flight.push_back((scene.latency_s, 0.0, f0, sep0, p));
+    // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
+    let delay = scene.latency_s + match scene.baud {
+        Some(b) => link_time(setup.fitter.grid.nx, setup.fitter.grid.ny, b)?.1,
+        None => 0.0,
+    };
+    in_flight.push_back((delay, 0.0, f0, sep0, p));
     let mut frames = 1;
     let mut seq: u32 = 0;
     let mut sensed: Option<Sensed<f64>> = None;
@@ -549,7 +578,7 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
             let (f, sep) = fit_and_sense(scene, setup, p, scene.hand_at(t_prev), &mut rng);
-            in_flight.push_back((t_prev + scene.latency_s, t_prev, f, sep, p));
+            in_flight.push_back((t_prev + delay, t_prev, f, sep, p));
             frames += 1;
             next_frame += scene.frame_period_s;
         }

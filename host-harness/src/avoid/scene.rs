@@ -60,6 +60,12 @@ pub struct Avoid {
     /// `reached`. The monitor adds it to its protective separation, m.
     #[serde(default = "default_clearance")]
     pub clearance_m: f64,
+    /// The serial line's baud rate (8N1: 10 bits a byte), if modelled: each frame then reaches the
+    /// controller `latency_s` plus its transmission time after capture, and a line too slow for one
+    /// frame per `frame_period_s` is refused. Absent: the transmission is taken to be inside
+    /// `latency_s` (the thesis's 81 ms is capture to command).
+    #[serde(default)]
+    pub baud: Option<u32>,
     /// Speed and separation monitoring.
     #[serde(default)]
     pub safety: SafetyCfg,
@@ -345,6 +351,11 @@ impl Avoid {
         };
         range("latency_s", self.latency_s, 0.0, 10.0)?;
         range("clearance_m", self.clearance_m, 0.0, 1.0)?;
+        if let Some(b) = self.baud {
+            if !(300..=20_000_000).contains(&b) {
+                return Err(format!("avoid.baud = {b}: must be 300..=20000000"));
+            }
+        }
         if !matches!(self.robot.removal.as_str(), "model" | "calibration") {
             return Err(format!("avoid.robot.removal = {:?}: expected \"model\" or \"calibration\"", self.robot.removal));
         }
