@@ -77,7 +77,7 @@ fn crossings_are_reported_as_collisions() {
     }
 }
 
-const ADVERSARIAL: [&str; 13] = [
+const ADVERSARIAL: [&str; 15] = [
     "avoid_operator_hand.toml",
     "avoid_thesis_reach.toml",
     "avoid_hand_at_tool.toml",
@@ -91,6 +91,8 @@ const ADVERSARIAL: [&str; 13] = [
     "avoid_fast_hand.toml",
     "avoid_empty_diagonal.toml",
     "avoid_extreme_gain.toml",
+    "avoid_u_trap.toml",
+    "avoid_box_wall.toml",
 ];
 
 /// The speed limit of ISO/TS 15066 5.5.4 at a true separation `s` (the bound the monitor must stay
@@ -418,4 +420,30 @@ fn the_serial_line_takes_its_time() {
     let (_, fast) = run_scene(fast);
     let (a, b) = (first_move(&slow).unwrap(), first_move(&fast).unwrap());
     assert!(a >= b + 0.015, "the first frame arrives 24 ms later (10 ms steps): moves at {a} s against {b} s");
+}
+
+/// Static obstacles (boxes and discs) are sensed, fitted and judged like the operator: the U-shaped
+/// trap and the box wall with no way round end stopped and never inside with the monitor; the
+/// thesis's law goes through; a bad obstacle is refused with its key.
+#[test]
+fn obstacles_trap_and_wall() {
+    for name in ["avoid_u_trap.toml", "avoid_box_wall.toml"] {
+        let (scene, r) = run(name);
+        assert!(!scene.operator.obstacles.is_empty());
+        safe(name, &scene, &r);
+        assert!(matches!(r.status, Status::Stopped(_)), "{name}: {:?}", r.status);
+        let (ts, t) = thesis(name);
+        honest(name, &ts, &t);
+        assert!(matches!(t.status, Status::Collision(_)), "{name}: thesis {:?}", t.status);
+        // The signed distance includes the obstacles: inside a box is negative.
+        let o = &scene.operator.obstacles[0];
+        assert!(scene.operator_shape().signed_distance(scene.hand_at(0.0), o.center_m) < 0.0);
+    }
+    let text = std::fs::read_to_string(scene_path("avoid_u_trap.toml")).unwrap();
+    let e = Avoid::parse(&text.replacen("kind = \"box\"", "kind = \"cone\"", 1)).unwrap_err();
+    assert!(e.contains("avoid.operator.obstacles[0].kind = \"cone\""), "{e}");
+    let e = Avoid::parse(&text.replacen("size_m = [0.05, 0.45]", "size_m = [0.05, -1]", 1)).unwrap_err();
+    assert!(e.contains("avoid.operator.obstacles[0].size_m[1] = -1: must be > 0"), "{e}");
+    let e = Avoid::parse(&text.replacen("height_m = 0.20", "height_m = 0.20\nradius = 1", 1)).unwrap_err();
+    assert!(e.contains("radius"), "{e}");
 }

@@ -280,6 +280,10 @@ pub struct OperatorCfg {
     pub forearm_height_m: f64,
     /// Hand position over time: linear between key frames, held after the last.
     pub keyframes: Vec<Keyframe>,
+    /// Further static obstacles, `[[avoid.operator.obstacles]]`: `kind = "disc"` (`radius_m`) or
+    /// `"box"` (`size_m`), `center_m`, `height_m`.
+    #[serde(default)]
+    pub obstacles: Vec<super::depth::Obstacle>,
 }
 
 /// One key frame of the hand.
@@ -410,6 +414,21 @@ impl Avoid {
         if self.operator.keyframes.is_empty() {
             return Err("avoid.operator.keyframes: at least one key frame".into());
         }
+        for (k, o) in self.operator.obstacles.iter().enumerate() {
+            let key = format!("operator.obstacles[{k}]");
+            match o.kind.as_str() {
+                "disc" => pos(&format!("{key}.radius_m"), o.radius_m)?,
+                "box" => {
+                    pos(&format!("{key}.size_m[0]"), o.size_m[0])?;
+                    pos(&format!("{key}.size_m[1]"), o.size_m[1])?;
+                }
+                other => return Err(format!("avoid.{key}.kind = {other:?}: expected \"disc\" or \"box\"")),
+            }
+            range(&format!("{key}.height_m"), o.height_m, 0.001, 2.0)?;
+            if !o.center_m.iter().all(|v| v.is_finite()) {
+                return Err(format!("avoid.{key}.center_m = {:?}: must be finite", o.center_m));
+            }
+        }
         if self.operator.keyframes.windows(2).any(|k| k[1].t_s <= k[0].t_s) {
             return Err("avoid.operator.keyframes: t_s must increase".into());
         }
@@ -479,6 +498,7 @@ impl Avoid {
             hand_height_m: o.hand_height_m,
             forearm_width_m: o.forearm_width_m,
             forearm_height_m: o.forearm_height_m,
+            obstacles: o.obstacles.clone(),
         }
     }
 
