@@ -15,7 +15,7 @@ const PX: usize = 210;
 fn image() -> depth::HeightMap {
     let cam = Camera { width_px: PX, height_px: PX, m_per_px: 0.005, camera_height_m: 1.2, noise_mm: 3.0, null_fraction: 0.01 };
     let robot = RobotShape { base_m: [0.55, 1.3], wrist_radius_m: 0.045, wrist_height_m: 0.3, link_width_m: 0.07, link_height_m: 0.4 };
-    let op = OperatorShape { entry_m: [0.5, 0.0], hand_radius_m: 0.05, hand_height_m: 0.2, forearm_width_m: 0.07, forearm_height_m: 0.15 };
+    let op = OperatorShape { entry_m: [0.5, 0.0], hand_radius_m: 0.05, hand_height_m: 0.2, forearm_width_m: 0.07, forearm_height_m: 0.15, obstacles: Vec::new() };
     let img = depth::render(&cam, Some((&robot, [0.3, 0.5])), Some((&op, [0.5, 0.42])), &mut Rng::new(1));
     calib::preprocess(&img, &cam, 0.065, None)
 }
@@ -50,7 +50,7 @@ fn pinv(c: &mut Criterion) {
 fn frame(c: &mut Criterion) {
     // One camera frame as `flinch avoid` processes it: fill, raise, weights, filter (render excluded).
     let cam = Camera { width_px: PX, height_px: PX, m_per_px: 0.005, camera_height_m: 1.2, noise_mm: 3.0, null_fraction: 0.01 };
-    let op = OperatorShape { entry_m: [0.5, 0.0], hand_radius_m: 0.05, hand_height_m: 0.2, forearm_width_m: 0.07, forearm_height_m: 0.15 };
+    let op = OperatorShape { entry_m: [0.5, 0.0], hand_radius_m: 0.05, hand_height_m: 0.2, forearm_width_m: 0.07, forearm_height_m: 0.15, obstacles: Vec::new() };
     let img = depth::render(&cam, None, Some((&op, [0.5, 0.42])), &mut Rng::new(2));
     let sep = rbf::Fitter::new(grid(15)).expect("fitter");
     c.bench_function("frame_210px_15x15_preprocess_fit_filter", |b| {

@@ -7,7 +7,11 @@
 //! subtracted.
 //!
 //! One step = `avoidance::sample` (field height and gradient over the truncated window) plus
-//! `Controller::command` (attraction, vortex, speed scaling, watchdog factor) at one tool position.
+//! `Controller::command` (attraction, vortex, speed scaling, watchdog factor) plus
+//! `SafeController::limit` (speed and separation monitoring: separation less the tool's motion since
+//! capture and the frame's age, speed limit, clamp) at one tool position. The separations are chosen
+//! so that every branch is taken: run, slow (a scaled command) and protective stop (counted in the
+//! output).
 //! Measured at 16 positions across a hill, for each number type and Gaussian, on a 15 x 15 grid
 //! (the thesis's) and a 30 x 30 one, both with the widened sigma' = 1.5 sigma of Fig. 90 (the
 //! largest window: 7 x 7 centres at 15 x 15). Prints max and mean, then exits through semihosting.
@@ -22,7 +26,8 @@ use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use flinch_firmware::avoidance::{
     num::{I16F16, I20F12, I8F24},
-    sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, Watchdog,
+    sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, SafeController, SafeState, Sensed,
+    SsmParams, Watchdog,
 };
 
 const SYST_CVR: u32 = 0xE000_E018;
@@ -68,24 +73,61 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
         stop_height_m: R::from_f64(0.3),
     });
     let wd = Watchdog { slow_after_ms: 100, stop_after_ms: 330 };
+    let safe = SafeController::new(SsmParams {
+        human_speed_mps: R::from_f64(1.6),
+        reaction_time_s: R::from_f64(0.02),
+        stopping_time_s: R::from_f64(0.1),
+        margin_m: R::from_f64(0.035),
+        speed_cap_mps: R::from_f64(0.25),
+    });
+    let kick = R::from_f64(0.3);
     let (mut max, mut sum) = (0u32, 0u32);
+    let mut states = [0u32; 3];
     let mut check = R::ZERO;
     for k in 0..16 {
         let x = R::from_f64(0.30 + 0.028 * k as f64);
         let y = R::from_f64(0.40 + 0.011 * k as f64);
         let (gx, gy) = (R::from_f64(0.95), R::from_f64(0.5));
+        // 0.30 to 0.60 m at capture, 0.1 s old, the tool 10 mm on: stop, slow and run.
+        let sensed = Sensed {
+            separation_m: R::from_f64(0.30 + 0.02 * k as f64),
+            tool_x_m: x.sub(R::from_f64(0.01)),
+            tool_y_m: y,
+            age_s: R::from_f64(0.1),
+        };
         let t0 = now();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
         let factor = wd.factor::<R>(black_box(Some(40)));
         let c = ctl.command(x, y, gx, gy, &f, factor);
+        // On top of the hill the field's command is zero: a 0.3 m/s kick keeps a command for the
+        // monitor to scale at every position (its costliest branch).
+        let out = safe.limit(c.vx.add(black_box(kick)), c.vy, x, y, black_box(Some(&sensed)));
         let t1 = now();
-        black_box(c);
-        check = check.add(c.vx.abs()).add(c.vy.abs());
+        black_box(out);
+        if let Some(n) = states.get_mut(match out.state {
+            SafeState::Run => 0,
+            SafeState::Slow => 1,
+            _ => 2,
+        }) {
+            *n += 1;
+        }
+        check = check.add(out.vx.abs()).add(out.vy.abs());
         let ins = (counts(t0, t1).saturating_sub(overhead)) * 40 / 64;
         max = max.max(ins);
         sum += ins;
     }
-    hprintln!("avoid_cost grid={}x{} variant={} max={} mean={} (instructions) check={}", n, n, name, max, sum / 16, check.to_f64());
+    hprintln!(
+        "avoid_cost grid={}x{} variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} check={}",
+        n,
+        n,
+        name,
+        max,
+        sum / 16,
+        states[0],
+        states[1],
+        states[2],
+        check.to_f64()
+    );
 }
 
 /// Exit QEMU through semihosting (and spin if not under a debugger).

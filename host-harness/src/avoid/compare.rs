@@ -117,7 +117,7 @@ mod tests {
     /// table within 20 mm/s everywhere and 2 mm/s rms (of a 250 mm/s command); f32 within 5 mm/s.
     #[test]
     fn firmware_step_matches_the_f64_reference() {
-        let mut scene = Avoid::parse(include_str!("../../../scenes/avoid_operator_hand.toml")).unwrap();
+        let mut scene = Avoid::parse(include_str!("../../../scenes/avoid_thesis_reach.toml")).unwrap();
         scene.camera.width_px = 105;
         scene.camera.height_px = 105;
         scene.camera.m_per_px = 0.01;

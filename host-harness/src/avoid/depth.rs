@@ -189,6 +189,49 @@ pub struct OperatorShape {
     pub forearm_width_m: f64,
     /// Top of the forearm above the plane, m.
     pub forearm_height_m: f64,
+    /// Further static obstacles (discs and boxes) in the workspace: sensed, fitted and judged like
+    /// the operator (the monitor cannot tell them from a person).
+    pub obstacles: Vec<Obstacle>,
+}
+
+/// A static obstacle on the plane: a disc (`radius_m`) or an axis-aligned box (`size_m`), `height_m`
+/// high, centred at `center_m`.
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Obstacle {
+    /// `"disc"` or `"box"`.
+    pub kind: String,
+    /// Centre on the plane, m.
+    pub center_m: [f64; 2],
+    /// Disc radius, m.
+    #[serde(default)]
+    pub radius_m: f64,
+    /// Box size along x and y, m.
+    #[serde(default)]
+    pub size_m: [f64; 2],
+    /// Top above the plane, m.
+    pub height_m: f64,
+}
+
+impl Obstacle {
+    /// Signed distance from `p` to the footprint, m (negative inside).
+    pub fn signed_distance(&self, p: [f64; 2]) -> f64 {
+        let (dx, dy) = (p[0] - self.center_m[0], p[1] - self.center_m[1]);
+        if self.kind == "box" {
+            let (qx, qy) = (dx.abs() - 0.5 * self.size_m[0], dy.abs() - 0.5 * self.size_m[1]);
+            qx.max(0.0).hypot(qy.max(0.0)) + qx.max(qy).min(0.0)
+        } else {
+            dx.hypot(dy) - self.radius_m
+        }
+    }
+    /// Height above `p`, m (0 off it).
+    pub fn height_at(&self, p: [f64; 2]) -> f64 {
+        if self.signed_distance(p) < 0.0 {
+            self.height_m
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Distance from `p` to the segment `a`-`b`.
@@ -225,7 +268,7 @@ impl OperatorShape {
         };
         let arm =
             if dist_to_segment(p, self.entry_m, hand) < 0.5 * self.forearm_width_m { self.forearm_height_m } else { 0.0 };
-        palm.max(arm)
+        self.obstacles.iter().fold(palm.max(arm), |h, o| h.max(o.height_at(p)))
     }
 
     /// Planar distance from `p` to the operator's footprint (0 inside), m.
@@ -240,7 +283,7 @@ impl OperatorShape {
     pub fn signed_distance(&self, hand: [f64; 2], p: [f64; 2]) -> f64 {
         let d_hand = ((p[0] - hand[0]).powi(2) + (p[1] - hand[1]).powi(2)).sqrt() - self.hand_radius_m;
         let d_arm = dist_to_segment(p, self.entry_m, hand) - 0.5 * self.forearm_width_m;
-        d_hand.min(d_arm)
+        self.obstacles.iter().fold(d_hand.min(d_arm), |d, o| d.min(o.signed_distance(p)))
     }
 }
 
@@ -307,6 +350,7 @@ mod tests {
             hand_height_m: 0.2,
             forearm_width_m: 0.06,
             forearm_height_m: 0.15,
+            obstacles: Vec::new(),
         };
         let img = render(&cam(), None, Some((&op, [0.3, 0.2])), &mut rng);
         assert!(img.mm.iter().any(|&d| d == 0), "some null pixels");

@@ -96,8 +96,13 @@ pub struct AvoidMetrics {
     pub time_to_goal_s: Option<f64>,
     /// Why `time_to_goal_s` is null.
     pub time_to_goal_null_reason: Option<&'static str>,
-    /// Smallest signed distance to the operator's true footprint, m (negative inside).
+    /// Smallest signed distance from the tool's surface to the operator's true footprint, m
+    /// (negative inside).
     pub min_signed_distance_m: f64,
+    /// The clearance the scene asks for, m.
+    pub clearance_m: f64,
+    /// `min_signed_distance_m` is at least `clearance_m`.
+    pub clearance_kept: bool,
     /// Time with the tool inside the operator, s.
     pub time_inside_s: f64,
     /// Largest commanded speed, m/s.
@@ -141,6 +146,8 @@ impl AvoidMetrics {
             time_to_goal_s: res.time_to_goal_s,
             time_to_goal_null_reason: res.time_to_goal_s.is_none().then_some("the goal was not reached"),
             min_signed_distance_m: res.min_signed_distance_m,
+            clearance_m: res.clearance_m,
+            clearance_kept: res.min_signed_distance_m >= res.clearance_m,
             time_inside_s: res.time_inside_s,
             max_speed_mps: res.max_speed_mps,
             max_speed_near_operator_mps: res.max_speed_near_operator_mps,
@@ -230,11 +237,14 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
         let sf = &scene.safety;
         if sf.on() {
             println!(
-                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, T_r {} s, T_s {} s, C+Z {} m, latency {} s, cap {} m/s",
+                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, T_r {} s, T_s {} s, C {:.4} m (detection capability {:.1} mm), Z {} m, clearance {} m, latency {} s, cap {} m/s",
                 sf.human_speed_mps,
                 sf.reaction_time_s,
                 sf.stopping_time_s,
-                sf.intrusion_m + sf.sensor_uncertainty_m + sf.robot_uncertainty_m,
+                sf.intrusion_used_m(scene.camera.m_per_px),
+                sf.detection_capability_m(scene.camera.m_per_px) * 1e3,
+                sf.sensor_uncertainty_m + sf.robot_uncertainty_m,
+                scene.clearance_m,
                 scene.latency_s,
                 scene.speed_mps
             );
@@ -259,6 +269,7 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
         let verdict = match res.status {
             path::Status::Reached => "reached the goal, never inside the operator".to_string(),
             path::Status::Stopped(r) => format!("stopped before the goal: {}", r.name()),
+            path::Status::TooClose => format!("TOO CLOSE: reached the goal but came closer to the operator than clearance_m = {} m", res.clearance_m),
             path::Status::Collision(None) => "COLLISION: the tool entered the operator (then reached the goal)".to_string(),
             path::Status::Collision(Some(r)) => format!("COLLISION: the tool entered the operator (then stopped: {})", r.name()),
         };
@@ -268,9 +279,10 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             None => println!("  time to goal      not reached (final {:?})", res.points.last()),
         }
         println!(
-            "  min signed dist.  {:.1} mm (at t = {:.2} s; negative = inside the operator, {:.2} s inside)",
+            "  min signed dist.  {:.1} mm from the tool's surface (at t = {:.2} s; clearance asked {:.0} mm; negative = inside the operator, {:.2} s inside)",
             res.min_signed_distance_m * 1e3,
             res.snapshot.t_s,
+            res.clearance_m * 1e3,
             res.time_inside_s
         );
         println!(

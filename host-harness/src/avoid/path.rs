@@ -65,7 +65,7 @@ pub fn ssm<R: Real>(scene: &Avoid) -> Option<SsmParams<R>> {
         human_speed_mps: R::from_f64(s.human_speed_mps),
         reaction_time_s: R::from_f64(s.reaction_time_s),
         stopping_time_s: R::from_f64(s.stopping_time_s),
-        margin_m: R::from_f64(s.intrusion_m + s.sensor_uncertainty_m + s.robot_uncertainty_m),
+        margin_m: R::from_f64(s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m),
         speed_cap_mps: R::from_f64(scene.speed_mps),
     })
 }
@@ -211,8 +211,32 @@ impl Setup {
                 )
             }
         };
+        if let Some(baud) = scene.baud {
+            let (bytes, tx) = link_time(fitter.grid.nx, fitter.grid.ny, baud)?;
+            if tx > scene.frame_period_s {
+                return Err(format!(
+                    "avoid.baud = {baud}: a {} x {} frame ({bytes} bytes, 10 bits a byte) takes {:.1} ms, longer than frame_period_s = {} s; the line needs at least {} baud",
+                    fitter.grid.nx,
+                    fitter.grid.ny,
+                    tx * 1e3,
+                    scene.frame_period_s,
+                    min_baud(bytes, scene.frame_period_s)
+                ));
+            }
+        }
         Ok(Setup { fitter, calibration, plane_weights })
     }
+}
+
+/// A frame's size in bytes and its time on a serial line at `baud` (8N1: 10 bits a byte), s.
+pub fn link_time(nx: usize, ny: usize, baud: u32) -> Result<(usize, f64), String> {
+    let bytes = fw::frame_len(nx, ny).ok_or_else(|| format!("grid {nx} x {ny}: no frame for it (1..=30 a side)"))?;
+    Ok((bytes, bytes as f64 * 10.0 / baud.max(1) as f64))
+}
+
+/// The lowest baud rate that carries one frame of `bytes` per `period_s` (8N1), rounded up.
+pub fn min_baud(bytes: usize, period_s: f64) -> u64 {
+    (bytes as f64 * 10.0 / period_s).ceil() as u64
 }
 
 /// The state of the scene at the moment of minimum clearance, for the plot.
@@ -261,31 +285,36 @@ impl Reason {
 }
 
 /// How a run ended. A run that ever put the tool inside the operator is a [`Status::Collision`]
-/// whatever happened afterwards: it is never reported as reached.
+/// whatever happened afterwards: it is never reported as reached; one that reached the goal but came
+/// closer than `clearance_m` is [`Status::TooClose`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Status {
     /// At the goal, never inside the operator.
     Reached,
     /// Stopped before the goal, never inside the operator.
     Stopped(Reason),
+    /// The tool reached the goal, never inside the operator, but its surface came closer to the
+    /// operator than `clearance_m` on the way.
+    TooClose,
     /// The tool entered the operator (signed distance < 0) at least once; `None`: it then reached
     /// the goal, `Some(reason)`: it then stopped for that reason.
     Collision(Option<Reason>),
 }
 
 impl Status {
-    /// `reached`, `stopped` or `collision`.
+    /// `reached`, `stopped`, `too_close` or `collision`.
     pub fn name(self) -> &'static str {
         match self {
             Status::Reached => "reached",
             Status::Stopped(_) => "stopped",
+            Status::TooClose => "too_close",
             Status::Collision(_) => "collision",
         }
     }
     /// Why it stopped (also after a collision), if it did not reach the goal.
     pub fn reason(self) -> Option<Reason> {
         match self {
-            Status::Reached | Status::Collision(None) => None,
+            Status::Reached | Status::TooClose | Status::Collision(None) => None,
             Status::Stopped(r) | Status::Collision(Some(r)) => Some(r),
         }
     }
@@ -324,6 +353,8 @@ pub struct PathResult {
     pub signed_distance_m: Vec<f64>,
     /// Smallest signed distance, m: negative is the depth the tool went into the operator.
     pub min_signed_distance_m: f64,
+    /// The clearance asked for (`clearance_m` of the scene), m.
+    pub clearance_m: f64,
     /// Every control step.
     pub rows: Vec<StepRow>,
     /// How the run ended.
@@ -361,9 +392,10 @@ pub fn fit_frame(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], r
 /// No obstacle pixel in view: the separation reported, m.
 pub const NOTHING_SENSED_M: f64 = 10.0;
 
-/// The field fitted to one frame, and the separation the sensor sees: the distance from the tool to
-/// the nearest pixel of the height map (after robot removal, before the raise) higher than
-/// `safety.sense_height_m`, less half a pixel; [`NOTHING_SENSED_M`] when there is none.
+/// The field fitted to one frame, and the separation the sensor sees: the distance from the tool's
+/// surface (the wrist disc) to the nearest pixel of the height map (after robot removal, before the
+/// raise) higher than `safety.sense_height_m`, less half a pixel; about [`NOTHING_SENSED_M`] when
+/// there is none.
 pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> (Field, f64) {
     let cam = scene.camera();
     let robot = scene.robot_shape();
@@ -376,11 +408,13 @@ pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2
     } else {
         preprocess(&img, &cam, 0.0, Some((&setup.calibration, tool)))
     };
-    let sep = if scene.robot.removal == "model" {
+    let from_centre = if scene.robot.removal == "model" {
         sensed_separation(&img, &cam, &robot, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
     } else {
         nearest_obstacle(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
     };
+    // From the tool's surface, as the signed distance is measured.
+    let sep = (from_centre - robot.wrist_radius_m).max(0.0);
     super::depth::raise(&mut map, scene.fit.offset_m);
     let mut w = setup.fitter.weights(&map);
     if scene.fit.remove_plane {
@@ -498,7 +532,6 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResu
 /// ends at the goal, when the tool leaves the camera's view, when the progress monitor trips
 /// (`progress_window_s`, `progress_m`) or at `max_time_s`; in each case the tool is stopped there.
 pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) -> Result<PathResult, String> {
-    let op = scene.operator_shape();
     let mut rng = Rng::new(scene.camera.seed);
     let dt = scene.dt_s;
     let steps = (scene.max_time_s / dt).ceil() as usize;
@@ -508,14 +541,19 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
 
     let mut p = scene.start_m;
     let mut points = vec![p];
-    let mut signed = vec![op.signed_distance(scene.hand_at(0.0), p)];
+    let mut signed = vec![scene.signed_distance_m(0.0, p)];
     let mut rows = Vec::with_capacity(steps.min(1 << 20));
     // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
     // capture). Each reaches the controller `latency_s` after capture.
     let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2])> = std::collections::VecDeque::new();
     let (f0, sep0) = fit_and_sense(scene, setup, p, scene.hand_at(0.0), &mut rng);
     let mut field = f0.clone();
-    in_flight.push_back((scene.latency_s, 0.0, f0, sep0, p));
+    // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
+    let delay = scene.latency_s + match scene.baud {
+        Some(b) => link_time(setup.fitter.grid.nx, setup.fitter.grid.ny, b)?.1,
+        None => 0.0,
+    };
+    in_flight.push_back((delay, 0.0, f0, sep0, p));
     let mut frames = 1;
     let mut seq: u32 = 0;
     let mut sensed: Option<Sensed<f64>> = None;
@@ -540,7 +578,7 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
             let (f, sep) = fit_and_sense(scene, setup, p, scene.hand_at(t_prev), &mut rng);
-            in_flight.push_back((t_prev + scene.latency_s, t_prev, f, sep, p));
+            in_flight.push_back((t_prev + delay, t_prev, f, sep, p));
             frames += 1;
             next_frame += scene.frame_period_s;
         }
@@ -565,7 +603,7 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         path_len += speed * dt;
         p = q;
         let hand = scene.hand_at(t);
-        let sd = op.signed_distance(hand, p);
+        let sd = scene.signed_distance_m(t, p);
         vmax = vmax.max(speed);
         if sd.min(*signed.last().unwrap_or(&sd)) < NEAR_OPERATOR_M {
             vmax_near = vmax_near.max(speed);
@@ -624,10 +662,12 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         }
     }
     let collided = min_s < 0.0;
+    // Stopped runs are judged against contact only: a person may walk up to a stopped robot.
     let status = match (collided, ended) {
+        (true, e) => Status::Collision(e),
+        (false, None) if min_s < scene.clearance_m => Status::TooClose,
         (false, None) => Status::Reached,
         (false, Some(r)) => Status::Stopped(r),
-        (true, e) => Status::Collision(e),
     };
     let window = (scene.stall_window_s / dt).round().max(1.0) as usize;
     let stalls = count_stalls(&points, goal, window, scene.stall_move_m, scene.goal_tolerance_m);
@@ -635,6 +675,7 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         points,
         signed_distance_m: signed,
         min_signed_distance_m: min_s,
+        clearance_m: scene.clearance_m,
         rows,
         status,
         time_inside_s: time_inside,
@@ -657,7 +698,7 @@ mod tests {
 
     /// The shipped scene made small and fast: 105 px at 1 cm, the hand static on the straight line.
     pub(crate) fn small_scene(repulsion: &str, hand: [f64; 2]) -> Avoid {
-        let text = include_str!("../../../scenes/avoid_operator_hand.toml");
+        let text = include_str!("../../../scenes/avoid_thesis_reach.toml");
         let mut s = Avoid::parse(text).unwrap();
         s.camera.width_px = 105;
         s.camera.height_px = 105;
@@ -680,8 +721,12 @@ mod tests {
         let res = simulate(&scene, &setup, Engine::Reference).unwrap();
         let t = res.time_to_goal_s.expect("reaches the goal");
         assert!(t < 6.0, "{t}");
-        assert!(res.min_signed_distance_m > 0.02, "never enters the operator: {}", res.min_signed_distance_m);
-        assert_eq!(res.status, Status::Reached);
+        // The thesis's model is the tool point: it clears the hand by more than 20 mm, but the
+        // 45 mm wrist round it overlaps the hand, and the report (from the tool's surface) says so.
+        let centre = res.min_signed_distance_m + scene.robot.wrist_radius_m;
+        assert!(centre > 0.02, "the tool point never enters the operator: {centre}");
+        assert!(res.min_signed_distance_m < 0.0, "{}", res.min_signed_distance_m);
+        assert_eq!(res.status, Status::Collision(None));
         assert_eq!(res.stalls, 0);
         // It went around: somewhere off the straight line by more than the hand's radius.
         let off = res.points.iter().map(|p| (p[1] - 0.5).abs()).fold(0.0, f64::max);
@@ -693,7 +738,7 @@ mod tests {
         blind.slow_height_m = 9.0;
         let straight = simulate(&blind, &setup, Engine::Reference).unwrap();
         // It goes through the hand: the signed distance says how deep, and it is never "reached".
-        assert!(straight.min_signed_distance_m < -0.015, "{}", straight.min_signed_distance_m);
+        assert!(straight.min_signed_distance_m < -0.015 - scene.robot.wrist_radius_m, "{}", straight.min_signed_distance_m);
         assert!(straight.time_inside_s > 0.1);
         assert_eq!(straight.status, Status::Collision(None));
         assert!(!straight.status.ok());

@@ -55,6 +55,17 @@ pub struct Avoid {
     /// (capture, fit and transmission; the thesis measured 81 ms), s.
     #[serde(default = "default_latency")]
     pub latency_s: f64,
+    /// The clearance asked for: the tool's surface (the wrist disc, `robot.wrist_radius_m` round the
+    /// tool point) must stay at least this far from the operator; a run that comes closer is not
+    /// `reached`. The monitor adds it to its protective separation, m.
+    #[serde(default = "default_clearance")]
+    pub clearance_m: f64,
+    /// The serial line's baud rate (8N1: 10 bits a byte), if modelled: each frame then reaches the
+    /// controller `latency_s` plus its transmission time after capture, and a line too slow for one
+    /// frame per `frame_period_s` is refused. Absent: the transmission is taken to be inside
+    /// `latency_s` (the thesis's 81 ms is capture to command).
+    #[serde(default)]
+    pub baud: Option<u32>,
     /// Speed and separation monitoring.
     #[serde(default)]
     pub safety: SafetyCfg,
@@ -83,6 +94,9 @@ fn default_stall_move() -> f64 {
 fn default_latency() -> f64 {
     0.081
 }
+fn default_clearance() -> f64 {
+    0.02
+}
 
 /// `[avoid.safety]`: speed and separation monitoring (ISO/TS 15066, 5.5.4) after the field.
 #[derive(Clone, Debug, Deserialize)]
@@ -97,13 +111,15 @@ pub struct SafetyCfg {
     pub reaction_time_s: f64,
     /// `T_s`, the robot's stopping time from the cruise speed, s.
     pub stopping_time_s: f64,
-    /// `C`, intrusion distance (ISO 13855, 5.3), m.
+    /// `C`, intrusion distance (ISO 13855, 5.3), m. The monitor uses the larger of this and what the
+    /// sensor's detection capability requires ([`SafetyCfg::required_intrusion_m`]).
     pub intrusion_m: f64,
     /// `Z_d`, the sensor's position uncertainty on the plane, m.
     pub sensor_uncertainty_m: f64,
     /// `Z_r`, the robot's position uncertainty, m.
     pub robot_uncertainty_m: f64,
-    /// A pixel higher than this above the plane, after robot removal, is an obstacle, m.
+    /// A pixel higher than this above the plane, after robot removal, is an obstacle, m. Anything
+    /// thinner is not seen: the intrusion distance the monitor uses grows with it (ISO 13855, 6.2).
     pub sense_height_m: f64,
 }
 
@@ -117,7 +133,10 @@ impl Default for SafetyCfg {
             intrusion_m: 0.0,
             sensor_uncertainty_m: 0.01,
             robot_uncertainty_m: 0.005,
-            sense_height_m: 0.03,
+            // ISO 13855's finger (d = 14 mm): every part of a body, a finger lying flat included, is
+            // thicker, so with pixels no larger than 10 mm no intrusion distance is needed. With the
+            // synthetic camera's 3 mm noise it is 4.7 standard deviations above the plane.
+            sense_height_m: 0.014,
         }
     }
 }
@@ -126,6 +145,35 @@ impl SafetyCfg {
     /// True when the monitor is on.
     pub fn on(&self) -> bool {
         self.mode == "ssm"
+    }
+
+    /// The sensor's detection capability `d` (ISO 13855: the smallest object it detects), m:
+    /// the larger of what it sees in height (`sense_height_m`: a body part lying thinner on the
+    /// plane is invisible) and on the plane (a disc of diameter `sqrt 2` pixels always covers a pixel
+    /// centre; anything narrower can fall between them).
+    pub fn detection_capability_m(&self, m_per_px: f64) -> f64 {
+        self.sense_height_m.max(std::f64::consts::SQRT_2 * m_per_px)
+    }
+
+    /// The intrusion distance `C` that detection capability `d` requires (ISO 13855:2010's formula for
+    /// electro-sensitive protective equipment of capability `d`, normal approach): 0 for `d <= 14 mm` (a finger is
+    /// detected), `8 (d - 14 mm)` up to 40 mm (fingers or a hand can reach that far unseen),
+    /// 850 mm above (an arm can reach in unseen), m.
+    pub fn required_intrusion_m(&self, m_per_px: f64) -> f64 {
+        let d_mm = self.detection_capability_m(m_per_px) * 1e3;
+        if d_mm <= 14.0 {
+            0.0
+        } else if d_mm <= 40.0 {
+            8.0 * (d_mm - 14.0) * 1e-3
+        } else {
+            0.85
+        }
+    }
+
+    /// The intrusion distance the monitor uses: the configured `intrusion_m`, never less than
+    /// [`Self::required_intrusion_m`], m.
+    pub fn intrusion_used_m(&self, m_per_px: f64) -> f64 {
+        self.intrusion_m.max(self.required_intrusion_m(m_per_px))
     }
 }
 
@@ -232,6 +280,10 @@ pub struct OperatorCfg {
     pub forearm_height_m: f64,
     /// Hand position over time: linear between key frames, held after the last.
     pub keyframes: Vec<Keyframe>,
+    /// Further static obstacles, `[[avoid.operator.obstacles]]`: `kind = "disc"` (`radius_m`) or
+    /// `"box"` (`size_m`), `center_m`, `height_m`.
+    #[serde(default)]
+    pub obstacles: Vec<super::depth::Obstacle>,
 }
 
 /// One key frame of the hand.
@@ -303,6 +355,12 @@ impl Avoid {
             }
         };
         range("latency_s", self.latency_s, 0.0, 10.0)?;
+        range("clearance_m", self.clearance_m, 0.0, 1.0)?;
+        if let Some(b) = self.baud {
+            if !(300..=20_000_000).contains(&b) {
+                return Err(format!("avoid.baud = {b}: must be 300..=20000000"));
+            }
+        }
         if !matches!(self.robot.removal.as_str(), "model" | "calibration") {
             return Err(format!("avoid.robot.removal = {:?}: expected \"model\" or \"calibration\"", self.robot.removal));
         }
@@ -356,6 +414,21 @@ impl Avoid {
         self.repulsion_law()?;
         if self.operator.keyframes.is_empty() {
             return Err("avoid.operator.keyframes: at least one key frame".into());
+        }
+        for (k, o) in self.operator.obstacles.iter().enumerate() {
+            let key = format!("operator.obstacles[{k}]");
+            match o.kind.as_str() {
+                "disc" => pos(&format!("{key}.radius_m"), o.radius_m)?,
+                "box" => {
+                    pos(&format!("{key}.size_m[0]"), o.size_m[0])?;
+                    pos(&format!("{key}.size_m[1]"), o.size_m[1])?;
+                }
+                other => return Err(format!("avoid.{key}.kind = {other:?}: expected \"disc\" or \"box\"")),
+            }
+            range(&format!("{key}.height_m"), o.height_m, 0.001, 2.0)?;
+            if !o.center_m.iter().all(|v| v.is_finite()) {
+                return Err(format!("avoid.{key}.center_m = {:?}: must be finite", o.center_m));
+            }
         }
         if self.operator.keyframes.windows(2).any(|k| k[1].t_s <= k[0].t_s) {
             return Err("avoid.operator.keyframes: t_s must increase".into());
@@ -426,7 +499,15 @@ impl Avoid {
             hand_height_m: o.hand_height_m,
             forearm_width_m: o.forearm_width_m,
             forearm_height_m: o.forearm_height_m,
+            obstacles: o.obstacles.clone(),
         }
+    }
+
+    /// Signed distance from the tool's surface (the wrist disc of `robot.wrist_radius_m` round the
+    /// tool point `p`) to the operator's true footprint at time `t`, m: negative is the depth of the
+    /// overlap.
+    pub fn signed_distance_m(&self, t: f64, p: [f64; 2]) -> f64 {
+        self.operator_shape().signed_distance(self.hand_at(t), p) - self.robot.wrist_radius_m
     }
 
     /// Hand position at time `t`.
@@ -453,7 +534,7 @@ impl Avoid {
 mod tests {
     use super::*;
 
-    const SHIPPED: &str = include_str!("../../../scenes/avoid_operator_hand.toml");
+    const SHIPPED: &str = include_str!("../../../scenes/avoid_thesis_reach.toml");
 
     #[test]
     fn shipped_scene_loads_and_errors_name_the_key() {
@@ -467,7 +548,7 @@ mod tests {
         assert!(bad("stop_height_m = 0.30", "stop_height_m = 0.01").contains("avoid.stop_height_m"));
         assert!(bad("goal_m = [0.93, 0.50]", "goal_m = [3.0, 0.50]").contains("avoid.goal_m"));
         let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nlatency_s = -0.1");
-        assert!(e.starts_with("line 21: avoid.latency_s = -0.1: must be a number in [0, 10]"), "{e}");
+        assert!(e.starts_with("line 24: avoid.latency_s = -0.1: must be a number in [0, 10]"), "{e}");
         let with_safety = |kv: &str| Avoid::parse(&format!("{SHIPPED}\n[avoid.safety]\n{kv}\n"));
         assert_eq!(with_safety("human_speed_mps = 2.0").unwrap().safety.human_speed_mps, 2.0);
         for (kv, key) in [("human_speed_mps = inf", "avoid.safety.human_speed_mps"), ("stopping_time_s = -1", "avoid.safety.stopping_time_s"), ("mode = \"fast\"", "avoid.safety.mode"), ("sense_height_m = 0", "avoid.safety.sense_height_m")] {
@@ -476,7 +557,7 @@ mod tests {
         }
         assert!(with_safety("speed = 1").unwrap_err().contains("speed"));
         let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_m = -1");
-        assert!(e.starts_with("line 21: avoid.progress_m = -1: must be > 0"), "{e}");
+        assert!(e.starts_with("line 24: avoid.progress_m = -1: must be > 0"), "{e}");
         assert!(bad("grid = 15", "grid = 40").starts_with("line "), "the line of a nested key");
         assert!(bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_window_s = nan").contains("progress_window_s"));
         let unknown = bad("dt_s = 0.01", "dt_s = 0.01\nspeeed = 1");
