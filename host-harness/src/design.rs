@@ -420,9 +420,7 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
     }
     if let Some(p) = &a.plot {
         draw(p, &t, &r)?;
-        if !a.json {
-            println!("  plot: {}", p.display());
-        }
+        crate::report::output::note(&format!("wrote {} (plot)", p.display()));
     }
     Ok(r.safe)
 }
