@@ -357,3 +357,19 @@ fn messages_go_to_stderr_and_csv_names_carry_their_unit() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn run_exits_0_on_a_not_safe_summary_as_the_conventions_say() {
+    let o = flinch().args(["run", "table14_hydraulic_surface", "--json"]).output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["safe"], false, "the scene is the NOT SAFE example");
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(flinch().args(["check", "table14_hydraulic_surface"]).output().unwrap().status.code(), Some(1));
+    let conv = std::fs::read_to_string(repo().join("docs/conventions.md")).unwrap();
+    assert!(conv.contains("a `flinch run` whose summary says NOT SAFE (`\"safe\": false`) exits 0"), "docs/conventions.md must state it");
+    // The contract lives in the repo: no source points at ../shared/.
+    for f in ["host-harness/src/scene/model.rs", "host-harness/src/main.rs", "README.md"] {
+        let t = std::fs::read_to_string(repo().join(f)).unwrap();
+        assert!(!t.contains("shared/SCENES.md") && !t.contains("shared/MODEL.md"), "{f} points outside the repo");
+    }
+}
