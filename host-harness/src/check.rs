@@ -26,14 +26,19 @@ pub(crate) fn um_down(x: f64) -> u32 {
 #[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct BudgetCheck {
     /// Stopping distance after detection, m (firmware formula, rounded up to the micrometre).
+    #[serde(rename = "stopping_distance_m")]
     pub stopping_distance: f64,
     /// Total stroke C (front stop to back stop), m.
+    #[serde(rename = "stroke_m")]
     pub stroke: f64,
     /// Switch travel d_sw, m.
+    #[serde(rename = "switch_travel_m")]
     pub switch_travel: f64,
     /// Stroke left at detection, C - d_sw, m.
+    #[serde(rename = "remaining_m")]
     pub remaining: f64,
     /// remaining - stopping_distance, m (negative: does not fit).
+    #[serde(rename = "margin_m")]
     pub margin: f64,
     /// The budget holds.
     pub fits: bool,

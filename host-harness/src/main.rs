@@ -285,7 +285,7 @@ fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
     let sc = load(&args.scene)?;
     let c = check::check(&sc).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
     let text = if args.json {
-        report::to_json(&report::Versioned::new(&c))
+        report::to_json(&report::Versioned::at(report::CHECK_SCHEMA_VERSION, &c))
     } else {
         check::human(&c)
     };

@@ -294,7 +294,13 @@ fn every_json_output_carries_its_schema_version() {
         let o = flinch().args(args).output().unwrap();
         no_panic(&o);
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}): {}", text(&o.stdout)));
-        assert_eq!(v["schema_version"], 1, "{args:?}: {}", text(&o.stdout));
+        // check is at 2: its lengths were renamed to carry their unit (docs/schema/check.json).
+        let want = if args[0] == "check" { 2 } else { 1 };
+        assert_eq!(v["schema_version"], want, "{args:?}: {}", text(&o.stdout));
+        // Every numeric field of the document carries its unit: no bare length left in check/design.
+        for bare in ["\"margin\"", "\"stroke\"", "\"stopping_distance\"", "\"speed\"", "\"dead_time\""] {
+            assert!(!text(&o.stdout).contains(bare), "{args:?}: {bare} without a unit");
+        }
         // Written first, so a reader can branch on it before the rest.
         assert!(text(&o.stdout).trim_start().starts_with("{\n  \"schema_version\""), "{args:?}");
     }
