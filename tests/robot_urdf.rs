@@ -451,7 +451,7 @@ fn robot_sweep_through_a_singularity_marks_it_refused() {
     let out = std::fs::read_to_string(&csv).unwrap();
     let rows: Vec<&str> = out.lines().skip(1).collect();
     assert_eq!(rows.len(), 181);
-    assert!(out.starts_with("elbow_rad,mass_kg,stiffness_npm,damping_nspm,mobility,status,reason\n"));
+    assert!(out.starts_with("elbow_rad,mass_kg,stiffness_n_per_m,damping_ns_per_m,mobility,status,reason\n"));
     let at_zero = rows.iter().find(|r| r.split(',').next().unwrap().parse::<f64>().unwrap().abs() < 1e-9).expect("elbow = 0 is a point");
     assert!(at_zero.contains(",,,,,refused,") && at_zero.contains("singular configuration"), "{at_zero}");
     let ok = rows.iter().filter(|r| r.contains(",ok,")).count();

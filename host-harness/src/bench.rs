@@ -19,7 +19,6 @@ pub mod fixed_point;
 
 use crate::scene::{self, Fidelity, Method, Scene, Simplify};
 use crate::sim::{self, Summary};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -274,43 +273,61 @@ fn opt(x: Option<f64>) -> String {
     x.map_or(String::new(), |v| format!("{v:.6e}"))
 }
 
+/// CSV text from records, quoted by the csv crate.
+fn csv_text(rows: impl IntoIterator<Item = Vec<String>>) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        // Writing to memory cannot fail.
+        let _ = w.write_record(&r);
+    }
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// The columns of `runs.csv` (docs/conventions.md: unit suffixes; the `err_*` are relative errors,
+/// dimensionless; booleans 0/1).
+pub const RUNS_COLUMNS: &[&str] = &[
+    "scene", "config", "family", "method", "rtol", "atol", "max_step_s", "fidelity", "simplified", "status", "reason", "steps", "rejected_steps", "rhs_evals",
+    "wall_median_s", "x_real_time", "peak_contact_force_n", "peak_robot_force_n", "t_detect_s", "object_final_velocity_mps", "mode", "err_peak_contact",
+    "err_peak_robot", "err_detect", "err_object_velocity", "mode_ok", "worst_err",
+];
+
 /// `runs.csv`: one line per scene and configuration.
 pub fn runs_csv(rows: &[Row]) -> String {
-    let mut s = String::from("scene,config,family,method,rtol,atol,max_step,fidelity,simplified,status,steps,rejected,rhs_evals,wall_median_s,x_real_time,peak_contact_N,peak_robot_N,t_detect_s,object_final_velocity,mode,err_peak_contact,err_peak_robot,err_detect,err_object_velocity,mode_ok,worst_err\n");
-    for r in rows {
+    let head = std::iter::once(RUNS_COLUMNS.iter().map(|c| c.to_string()).collect::<Vec<_>>());
+    let body = rows.iter().filter_map(|r| {
         let c = &r.config;
-        let _ = write!(s, "{},\"{}\",{},{:?},{:e},{:e},{},{:?},", r.scene, c.label, c.family, c.method, c.rtol, c.atol, c.max_step.map_or("none".into(), |h| format!("{h:e}")), c.fidelity);
+        let mut v = vec![r.scene.clone(), c.label.clone(), c.family.to_string(), format!("{:?}", c.method), format!("{:e}", c.rtol), format!("{:e}", c.atol), c.max_step.map_or(String::new(), |h| format!("{h:e}")), format!("{:?}", c.fidelity)];
         match (&r.result, &r.errors) {
-            (Ok(sm), Some(e)) => {
-                let _ = writeln!(
-                    s,
-                    "{},ok,{},{},{},{:.6e},{:.1},{:.9e},{:.9e},{},{},{},{:.3e},{:.3e},{},{},{},{:.3e}",
-                    sm.simplified.join("+"),
-                    sm.steps,
-                    sm.rejected_steps,
-                    sm.rhs_evals,
-                    r.wall_median,
-                    r.duration / r.wall_median,
-                    sm.peak_contact_force,
-                    sm.peak_robot_force,
-                    opt(sm.t_detect),
-                    opt(sm.object_final_velocity),
-                    sm.mode.map_or(String::new(), |m| m.to_string()),
-                    e.peak_contact,
-                    e.peak_robot,
-                    e.detect.map_or(String::new(), |v| format!("{v:.3e}")),
-                    e.object_velocity.map_or(String::new(), |v| format!("{v:.3e}")),
-                    e.mode_ok,
-                    e.worst()
-                );
-            }
+            (Ok(sm), Some(e)) => v.extend([
+                sm.simplified.join("+"),
+                "ok".into(),
+                String::new(),
+                sm.steps.to_string(),
+                sm.rejected_steps.to_string(),
+                sm.rhs_evals.to_string(),
+                format!("{:.6e}", r.wall_median),
+                format!("{:.1}", r.duration / r.wall_median),
+                format!("{:.9e}", sm.peak_contact_force),
+                format!("{:.9e}", sm.peak_robot_force),
+                opt(sm.t_detect),
+                opt(sm.object_final_velocity),
+                sm.mode.map_or(String::new(), |m| m.to_string()),
+                format!("{:.3e}", e.peak_contact),
+                format!("{:.3e}", e.peak_robot),
+                e.detect.map_or(String::new(), |v| format!("{v:.3e}")),
+                e.object_velocity.map_or(String::new(), |v| format!("{v:.3e}")),
+                u8::from(e.mode_ok).to_string(),
+                format!("{:.3e}", e.worst()),
+            ]),
             (Err(msg), _) => {
-                let _ = writeln!(s, ",\"failed: {}\",,,,,,,,,,,,,,,,", msg.replace('"', "'"));
+                v.extend([String::new(), "failed".into(), msg.clone()]);
+                v.resize(RUNS_COLUMNS.len(), String::new());
             }
-            _ => {}
+            _ => return None,
         }
-    }
-    s
+        Some(v)
+    });
+    csv_text(head.chain(body))
 }
 
 /// Per-configuration aggregate over the scenes.
@@ -374,31 +391,35 @@ pub fn aggregate(rows: &[Row]) -> Vec<Aggregate> {
     out
 }
 
+/// The columns of `summary.csv` (worst relative errors, dimensionless; `within_1pct` 0/1).
+pub const SUMMARY_COLUMNS: &[&str] = &[
+    "config", "family", "scenes_ok", "scenes_failed", "worst_err_peak_contact", "worst_err_peak_robot", "worst_err_detect", "worst_err_object_velocity", "mode_wrong",
+    "total_wall_s", "total_simulated_s", "x_real_time_overall", "x_real_time_worst_scene", "total_rhs_evals", "within_1pct",
+];
+
 /// `summary.csv`.
 pub fn summary_csv(aggs: &[Aggregate]) -> String {
-    let mut s = String::from("config,family,scenes_ok,scenes_failed,worst_err_peak_contact,worst_err_peak_robot,worst_err_detect,worst_err_object_velocity,mode_wrong,total_wall_s,total_simulated_s,x_real_time_overall,x_real_time_worst_scene,total_rhs_evals,within_1pct\n");
-    for a in aggs {
-        let _ = writeln!(
-            s,
-            "\"{}\",{},{},{},{:.3e},{:.3e},{:.3e},{:.3e},{},{:.6e},{:.3},{:.1},{:.1},{},{}",
-            a.config.label,
-            a.config.family,
-            a.ok,
-            a.failed,
-            a.worst[0],
-            a.worst[1],
-            a.worst[2],
-            a.worst[3],
-            a.mode_wrong,
-            a.wall,
-            a.simulated,
-            a.simulated / a.wall,
-            a.min_x_real_time,
-            a.rhs_evals,
-            a.failed == 0 && a.mode_wrong == 0 && a.worst_target() <= 0.01
-        );
-    }
-    s
+    let head = std::iter::once(SUMMARY_COLUMNS.iter().map(|c| c.to_string()).collect::<Vec<_>>());
+    let body = aggs.iter().map(|a| {
+        vec![
+            a.config.label.clone(),
+            a.config.family.to_string(),
+            a.ok.to_string(),
+            a.failed.to_string(),
+            format!("{:.3e}", a.worst[0]),
+            format!("{:.3e}", a.worst[1]),
+            format!("{:.3e}", a.worst[2]),
+            format!("{:.3e}", a.worst[3]),
+            a.mode_wrong.to_string(),
+            format!("{:.6e}", a.wall),
+            format!("{:.3}", a.simulated),
+            format!("{:.1}", a.simulated / a.wall),
+            format!("{:.1}", a.min_x_real_time),
+            a.rhs_evals.to_string(),
+            u8::from(a.failed == 0 && a.mode_wrong == 0 && a.worst_target() <= 0.01).to_string(),
+        ]
+    });
+    csv_text(head.chain(body))
 }
 
 /// The Pareto plot: worst error on the 1 % targets (over all scenes) against the total median
@@ -523,7 +544,7 @@ pub fn run(o: &Options, scenes: &[(String, Scene)]) -> Result<(), String> {
             a.config.label, a.failed, a.worst[0], a.worst[1], a.worst[2], a.worst[3], a.mode_wrong, a.simulated / a.wall, a.min_x_real_time
         );
     }
-    println!("wrote runs.csv, summary.csv, pareto.svg, fixed_point.csv under {}", o.out.display());
+    eprintln!("wrote runs.csv, summary.csv, pareto.svg, fixed_point.csv under {}", o.out.display());
     Ok(())
 }
 

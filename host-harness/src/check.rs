@@ -49,16 +49,21 @@ pub fn stopping_law(m: &crate::scene::Motion) -> String {
 pub struct BudgetCheck {
     /// Stopping distance after detection, m (firmware formula, or v DT + D(v) from the robot's
     /// stopping table; rounded up to the micrometre).
+    #[serde(rename = "stopping_distance_m")]
     pub stopping_distance: f64,
     /// How it was computed, for people ("v DT + v^2/2d" or the stopping table).
     pub stopping_law: String,
     /// Total stroke C (front stop to back stop), m.
+    #[serde(rename = "stroke_m")]
     pub stroke: f64,
     /// Switch travel d_sw, m.
+    #[serde(rename = "switch_travel_m")]
     pub switch_travel: f64,
     /// Stroke left at detection, C - d_sw, m.
+    #[serde(rename = "remaining_m")]
     pub remaining: f64,
     /// remaining - stopping_distance, m (negative: does not fit).
+    #[serde(rename = "margin_m")]
     pub margin: f64,
     /// The budget holds.
     pub fits: bool,

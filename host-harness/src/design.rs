@@ -57,8 +57,10 @@ pub struct DesignArgs {
 #[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct Trial {
     /// Speed, m/s.
+    #[serde(rename = "speed_mps")]
     pub speed: f64,
     /// Stroke, m.
+    #[serde(rename = "stroke_m")]
     pub stroke: f64,
     /// The run: its `safe`, `failures`, `stroke_left_min_m` and `closest_approach_m` are the one
     /// definition of crate::verdict.
@@ -73,10 +75,13 @@ pub struct DesignReport {
     /// "bistable" or "hydraulic".
     pub module: String,
     /// V_c, m/s.
+    #[serde(rename = "speed_mps")]
     pub speed: f64,
     /// DT, s.
+    #[serde(rename = "dead_time_s")]
     pub dead_time: f64,
     /// d_c, m/s^2 (with the robot's stopping table: its equivalent at V_c, plant/stopping.rs).
+    #[serde(rename = "decel_mps2")]
     pub decel: f64,
     /// How the stopping distance after detection is computed: "v DT + v^2/2d", or from the
     /// robot's stopping table (`motion.stopping`; DT is then the delay to the stop signal).
@@ -84,26 +89,35 @@ pub struct DesignReport {
     /// The stopping table's largest speed, m/s: no speed above it is answered (null without a table).
     pub stopping_table_max_speed_mps: Option<f64>,
     /// m_t, kg.
+    #[serde(rename = "tool_mass_kg")]
     pub tool_mass: f64,
     /// d_sw, m.
+    #[serde(rename = "switch_travel_m")]
     pub switch_travel: f64,
     /// C, m.
+    #[serde(rename = "stroke_m")]
     pub stroke: f64,
     /// v DT + v^2/2d (firmware formula, micrometre resolution), m.
+    #[serde(rename = "stopping_distance_m")]
     pub stopping_distance: f64,
     /// d_sw + stopping distance, m.
+    #[serde(rename = "stroke_needed_formula_m")]
     pub stroke_needed_formula: f64,
     /// Smallest stroke at which the simulated flange does not reach the target, m.
+    #[serde(rename = "stroke_needed_simulated_m")]
     pub stroke_needed_simulated: Option<f64>,
     /// Why the simulated stroke is missing, if it is.
     pub stroke_search_note: Option<String>,
     /// C - d_sw - stopping distance, m (the `flinch check` margin).
+    #[serde(rename = "margin_formula_m")]
     pub margin_formula: f64,
     /// The design point simulated.
     pub design: Trial,
     /// Speed at which the budget is exactly used, m/s.
+    #[serde(rename = "speed_limit_formula_mps")]
     pub speed_limit_formula: f64,
     /// Largest simulated speed with no stroke exhaustion, m/s.
+    #[serde(rename = "speed_limit_simulated_mps")]
     pub speed_limit_simulated: Option<f64>,
     /// Why the simulated speed limit is missing, if it is.
     pub speed_search_note: Option<String>,
@@ -487,9 +501,7 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
     }
     if let Some(p) = &a.plot {
         draw(p, &t, &r)?;
-        if !a.json {
-            println!("  plot: {}", p.display());
-        }
+        crate::report::output::note(&format!("wrote {} (plot)", p.display()));
     }
     Ok(r.safe)
 }

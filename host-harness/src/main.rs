@@ -16,8 +16,9 @@ use std::process::ExitCode;
 const AFTER_HELP: &str = "A SCENE is a TOML file, `-` for standard input, or the name of a shipped scene \
 (`flinch scenes list`). The scene contract (every key, unit and range) is docs/SCENES.md, the model \
 docs/MODEL.md, the output convention and exit codes docs/conventions.md, the JSON Schemas docs/schema/.\n\
-Exit codes: 0 ran (favourable verdict), 1 ran (unfavourable verdict: does not fit, not safe), 2 bad input, \
-3 runtime failure, 130 interrupted (Ctrl-C), 141 standard output closed by its reader.";
+Exit codes: 0 ran (favourable verdict), 1 ran (unfavourable verdict of check, design, avoid, or a hil fault \
+ending in go; run exits 0 on a NOT SAFE summary: read `safe`), 2 bad input, 3 runtime failure, \
+130 interrupted (Ctrl-C), 141 standard output closed by its reader.";
 
 #[derive(Parser)]
 #[command(name = "flinch", version, about = "Collision management for robot end-effectors: simulate, check, and run the firmware in the loop", after_help = AFTER_HELP)]
@@ -290,7 +291,7 @@ fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
     let sc = load(&args.scene)?;
     let c = check::check(&sc).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
     let text = if args.json {
-        report::to_json(&report::Versioned::new(&c))
+        report::to_json(&report::Versioned::at(report::CHECK_SCHEMA_VERSION, &c))
     } else {
         check::human(&c)
     };

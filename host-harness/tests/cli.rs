@@ -294,7 +294,13 @@ fn every_json_output_carries_its_schema_version() {
         let o = flinch().args(args).output().unwrap();
         no_panic(&o);
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}): {}", text(&o.stdout)));
-        assert_eq!(v["schema_version"], 1, "{args:?}: {}", text(&o.stdout));
+        // check is at 2: its lengths were renamed to carry their unit (docs/schema/check.json).
+        let want = if args[0] == "check" { 2 } else { 1 };
+        assert_eq!(v["schema_version"], want, "{args:?}: {}", text(&o.stdout));
+        // Every numeric field of the document carries its unit: no bare length left in check/design.
+        for bare in ["\"margin\"", "\"stroke\"", "\"stopping_distance\"", "\"speed\"", "\"dead_time\""] {
+            assert!(!text(&o.stdout).contains(bare), "{args:?}: {bare} without a unit");
+        }
         // Written first, so a reader can branch on it before the rest.
         assert!(text(&o.stdout).trim_start().starts_with("{\n  \"schema_version\""), "{args:?}");
     }
@@ -320,4 +326,56 @@ fn avoid_and_bench_take_shipped_names_from_any_directory() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o.stderr));
     }
     let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn messages_go_to_stderr_and_csv_names_carry_their_unit() {
+    let d = tmp("messages");
+    let runs: [&[&str]; 4] = [
+        &["design", "tables5-7_bistable", "--plot", "d.svg"],
+        &["avoid", "avoid_wall", "--plot", "a.svg", "--csv", "a.csv"],
+        &["robot", "robot_viper_standin", "--sweep-joint", "joint3", "--points", "5", "--plot", "r.svg", "--csv", "r.csv"],
+        &["bench", "tables5-7_bistable", "--quick", "--repeats", "1", "--out", "b"],
+    ];
+    for args in runs {
+        let o = flinch().current_dir(&d).args(args).output().unwrap();
+        no_panic(&o);
+        assert!(o.status.code().is_some_and(|c| c <= 1), "{args:?}: {}", text(&o.stderr));
+        let out = text(&o.stdout);
+        assert!(!out.contains("wrote") && !out.contains("plot:") && !out.contains("d.svg") && !out.contains("a.svg"), "{args:?}: a message on stdout: {out}");
+        assert!(text(&o.stderr).contains("wrote"), "{args:?}: {}", text(&o.stderr));
+    }
+    let header = |f: &str| std::fs::read_to_string(d.join(f)).unwrap().lines().next().unwrap().to_string();
+    assert_eq!(header("r.csv"), "joint3_rad,mass_kg,stiffness_n_per_m,damping_ns_per_m,mobility,status,reason");
+    let runs_csv = header("b/runs.csv");
+    for want in ["max_step_s", "peak_contact_force_n", "peak_robot_force_n", "object_final_velocity_mps", "status", "reason"] {
+        assert!(runs_csv.split(',').any(|c| c == want), "runs.csv lacks {want}: {runs_csv}");
+    }
+    assert!(!runs_csv.contains("_N,") && !runs_csv.contains("peak_contact_N"), "{runs_csv}");
+    // Booleans are 0/1, and the labels with spaces and '=' are quoted by the csv crate, not mangled.
+    let summary = std::fs::read_to_string(d.join("b/summary.csv")).unwrap();
+    let mut rd = summary.lines();
+    let cols: Vec<&str> = rd.next().unwrap().split(',').collect();
+    let within = cols.iter().position(|c| *c == "within_1pct").unwrap();
+    for l in rd {
+        let last = l.rsplit(',').next().unwrap();
+        assert!(last == "0" || last == "1", "within_1pct is 0/1: {l} ({within})");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn run_exits_0_on_a_not_safe_summary_as_the_conventions_say() {
+    let o = flinch().args(["run", "table14_hydraulic_surface", "--json"]).output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["safe"], false, "the scene is the NOT SAFE example");
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(flinch().args(["check", "table14_hydraulic_surface"]).output().unwrap().status.code(), Some(1));
+    let conv = std::fs::read_to_string(repo().join("docs/conventions.md")).unwrap();
+    assert!(conv.contains("a `flinch run` whose summary says NOT SAFE (`\"safe\": false`) exits 0"), "docs/conventions.md must state it");
+    // The contract lives in the repo: no source points at ../shared/.
+    for f in ["host-harness/src/scene/model.rs", "host-harness/src/main.rs", "README.md"] {
+        let t = std::fs::read_to_string(repo().join(f)).unwrap();
+        assert!(!t.contains("shared/SCENES.md") && !t.contains("shared/MODEL.md"), "{f} points outside the repo");
+    }
 }

@@ -304,7 +304,7 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             );
         }
         if let Some(p) = &args.plot {
-            println!("  plot              {}", p.display());
+            crate::report::output::note(&format!("wrote {} (plot)", p.display()));
         }
     }
     Ok(res.status.ok())

@@ -7,7 +7,6 @@ use crate::report::output::{self, Failure};
 use crate::scene::{self, UrdfRobot};
 use crate::shipped;
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::PathBuf;
 
 /// `flinch robot SCENE [--sweep-joint J [--from A --to B --points N] [--plot F] [--csv F]]`.
@@ -31,7 +30,7 @@ pub struct RobotArgs {
     /// Draw m_r, k_r, c_r against the joint (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
-    /// Write the sweep as CSV (`-`: standard output): q, mass_kg, stiffness_npm, damping_nspm,
+    /// Write the sweep as CSV (`-`: standard output): q, mass_kg, stiffness_n_per_m, damping_ns_per_m,
     /// mobility, status, reason.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
@@ -140,19 +139,21 @@ pub fn run(a: &RobotArgs) -> Result<bool, Failure> {
             let _ = writeln!(text, "    {refused} point(s) refused, as singular or outside the plant's ranges (the first at {name} = {first:.4} {u}); they are left out of the plot and marked in the CSV with the reason");
         }
         if let Some(p) = &a.csv {
-            let mut w = output::create(p)?;
-            let mut s = format!("{name}_{u},mass_kg,stiffness_npm,damping_nspm,mobility,status,reason\n");
+            // Names by docs/conventions.md (unit suffixes), quoting by the csv crate.
+            let mut w = csv::Writer::from_writer(output::create(p)?);
+            let io = |e: csv::Error| match e.into_kind() {
+                csv::ErrorKind::Io(e) => output::write_error(p, &e),
+                k => Failure::runtime(format!("{}: {k:?}", p.display())),
+            };
+            w.write_record([format!("{name}_{u}").as_str(), "mass_kg", "stiffness_n_per_m", "damping_ns_per_m", "mobility", "status", "reason"]).map_err(io)?;
             for (q, r) in &rows {
-                match r {
-                    Ok(r) => {
-                        let _ = writeln!(s, "{q},{},{},{},{},ok,", r.mass_kg, r.stiffness_npm, r.damping_nspm, r.mobility);
-                    }
-                    Err(e) => {
-                        let _ = writeln!(s, "{q},,,,,refused,\"{}\"", e.replace('"', "'"));
-                    }
-                }
+                let rec: Vec<String> = match r {
+                    Ok(r) => vec![q.to_string(), r.mass_kg.to_string(), r.stiffness_npm.to_string(), r.damping_nspm.to_string(), r.mobility.to_string(), "ok".into(), String::new()],
+                    Err(e) => vec![q.to_string(), String::new(), String::new(), String::new(), String::new(), "refused".into(), e.clone()],
+                };
+                w.write_record(&rec).map_err(io)?;
             }
-            w.write_all(s.as_bytes()).and_then(|_| w.flush()).map_err(|e| output::write_error(p, &e))?;
+            w.flush().map_err(|e| output::write_error(p, &e))?;
             if !output::is_stdout(p) {
                 output::note(&format!("wrote {} ({} rows)", p.display(), rows.len()));
             }

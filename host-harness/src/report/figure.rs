@@ -228,13 +228,19 @@ where
         let (y0, y1) = p.y_range.unwrap_or_else(|| if p.y_log { log_range(ys) } else { finite_range(ys) });
         match (x.log, p.y_log) {
             (false, false) => panel(&plot_area, x, p, x0..x1, y0..y1)?,
-            (true, false) => panel(&plot_area, x, p, (x0..x1).log_scale(), y0..y1)?,
-            (false, true) => panel(&plot_area, x, p, x0..x1, (y0..y1).log_scale())?,
-            (true, true) => panel(&plot_area, x, p, (x0..x1).log_scale(), (y0..y1).log_scale())?,
+            // Log axes labelled at round values only: 1-2-5 per decade, at least two labels
+            // (plotters' own key points put nine in every decade and none below the first power).
+            (true, false) => panel(&plot_area, x, p, (x0..x1).log_scale().with_key_points(log_ticks(x0, x1)), y0..y1)?,
+            (false, true) => panel(&plot_area, x, p, x0..x1, (y0..y1).log_scale().with_key_points(log_ticks(y0, y1)))?,
+            (true, true) => panel(&plot_area, x, p, (x0..x1).log_scale().with_key_points(log_ticks(x0, x1)), (y0..y1).log_scale().with_key_points(log_ticks(y0, y1)))?,
         }
         legend(&legend_area, p)?;
     }
     Ok(())
+}
+
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    crate::sweep::plot::ticks(lo, hi, true)
 }
 
 /// A time axis starts at its data (no padding before t = 0).
@@ -289,8 +295,14 @@ where
     for lv in &p.levels {
         let c = lv.color;
         chart.draw_series(DashedLineSeries::new(vec![(xa, lv.y), (xb, lv.y)], 8, 5, c.stroke_width(1)))?;
-        let pos = local(chart.backend_coord(&(xb, lv.y)));
-        area.draw(&Text::new(lv.label.clone(), (pos.0 - 8, pos.1 - 16), ("sans-serif", 12).into_font().color(&c).pos(plotters::style::text_anchor::Pos::new(plotters::style::text_anchor::HPos::Right, plotters::style::text_anchor::VPos::Top))))?;
+        // At the left end, on a white box: a trace (travel rising to the threshold) is usually at
+        // rest there, and it never hides the label.
+        let pos = local(chart.backend_coord(&(xa, lv.y)));
+        let font = ("sans-serif", 12).into_font();
+        let (tw, th) = area.estimate_text_size(&lv.label, &TextStyle::from(font.clone())).unwrap_or((6 * lv.label.len() as u32, 12));
+        let (x0, y0) = (pos.0 + 8, pos.1 - 4 - th as i32);
+        area.draw(&Rectangle::new([(x0 - 2, y0 - 1), (x0 + tw as i32 + 2, y0 + th as i32 + 1)], WHITE.mix(0.85).filled()))?;
+        area.draw(&Text::new(lv.label.clone(), (x0, y0), font.color(&c).pos(plotters::style::text_anchor::Pos::new(plotters::style::text_anchor::HPos::Left, plotters::style::text_anchor::VPos::Top))))?;
     }
     for m in &p.marks {
         chart.draw_series(LineSeries::new(vec![(m.x, ya), (m.x, yb)], m.color.stroke_width(1)))?;
@@ -331,7 +343,12 @@ where
         let (w, _) = area.dim_in_pixel();
         let right = pos.0 > (w as i32) * 2 / 3;
         let anchor = plotters::style::text_anchor::Pos::new(if right { plotters::style::text_anchor::HPos::Right } else { plotters::style::text_anchor::HPos::Left }, plotters::style::text_anchor::VPos::Center);
-        area.draw(&Text::new(n.text.clone(), (pos.0 + if right { -10 } else { 10 }, pos.1), ("sans-serif", 13).into_font().color(&c).pos(anchor)))?;
+        // On a white box, so a trace under it does not garble it.
+        let font = ("sans-serif", 13).into_font();
+        let (tw, th) = area.estimate_text_size(&n.text, &TextStyle::from(font.clone())).unwrap_or((7 * n.text.len() as u32, 13));
+        let x0 = if right { pos.0 - 10 - tw as i32 } else { pos.0 + 10 };
+        area.draw(&Rectangle::new([(x0 - 2, pos.1 - th as i32 / 2 - 1), (x0 + tw as i32 + 2, pos.1 + th as i32 / 2 + 1)], WHITE.mix(0.85).filled()))?;
+        area.draw(&Text::new(n.text.clone(), (pos.0 + if right { -10 } else { 10 }, pos.1), font.color(&c).pos(anchor)))?;
     }
     Ok(())
 }
@@ -381,4 +398,36 @@ where
         entry(&m.label, m.color, Style::Thin)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The text of every `<text>` element of an SVG.
+    fn texts(svg: &str) -> Vec<String> {
+        svg.split("<text").skip(1).filter_map(|t| t.split_once('>').and_then(|(_, r)| r.split_once("</text>")).map(|(x, _)| x.trim().to_string())).collect()
+    }
+
+    #[test]
+    fn log_axes_are_labelled_1_2_5_per_decade_with_the_lowest_decade() {
+        let dir = std::env::temp_dir().join(format!("flinch-logaxis-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("log.svg");
+        // x over 0.018..0.33 (as a log speed sweep), y over 2.6e5..1.04e7 (k_r against a joint).
+        let pts: Vec<(f64, f64)> = (0..50).map(|i| {
+            let u = i as f64 / 49.0;
+            (0.018 * (0.33f64 / 0.018).powf(u), 2.6e5 * (1.04e7f64 / 2.6e5).powf(u))
+        }).collect();
+        let p = Panel { caption: "k".into(), y_label: "k [N/m]".into(), y_log: true, series: vec![Series { name: "k".into(), points: pts, color: RGBColor(0, 0, 0), style: Style::Line }], ..Default::default() };
+        draw(&path, "log axes", &XAxis { label: "v [m/s]".into(), log: true }, &[p]).unwrap();
+        let t = texts(&std::fs::read_to_string(&path).unwrap());
+        let _ = std::fs::remove_dir_all(&dir);
+        for want in ["0.02", "0.05", "0.1", "0.2", "5e5", "1e6", "2e6", "5e6", "1e7"] {
+            assert!(t.iter().any(|x| x == want), "label {want} missing: {t:?}");
+        }
+        for not in ["0.03", "0.04", "0.09", "9e5", "8e5", "3e6", "9e6"] {
+            assert!(!t.iter().any(|x| x == not), "label {not} piles up between the round ones: {t:?}");
+        }
+    }
 }

@@ -24,6 +24,10 @@ use std::fmt::Write;
 /// renamed, removed or changes meaning; adding a field does not raise it.
 pub const SCHEMA_VERSION: u32 = 1;
 
+/// `flinch check --json`'s version: 2 since its lengths carry their unit (`margin` became
+/// `margin_m`, `stroke` `stroke_m`, ...; docs/schema/check.json).
+pub const CHECK_SCHEMA_VERSION: u32 = 2;
+
 fn ms(t: Option<f64>) -> String {
     t.map_or("-".into(), |t| format!("{:.1} ms", t * 1e3))
 }
@@ -132,6 +136,11 @@ impl<'a, T: JsonSchema> Versioned<'a, T> {
     /// `doc` at the current [`SCHEMA_VERSION`].
     pub fn new(doc: &'a T) -> Self {
         Self { schema_version: SCHEMA_VERSION, doc }
+    }
+
+    /// `doc` at its own schema version.
+    pub fn at(schema_version: u32, doc: &'a T) -> Self {
+        Self { schema_version, doc }
     }
 }
 

@@ -1,6 +1,6 @@
 //! The validated scene: plain Rust values in SI units, built by [`super::load`] from a TOML file.
 //!
-//! The names follow `shared/SCENES.md` (the public contract) and the thesis's symbols. Everything
+//! The names follow `docs/SCENES.md` (the public contract) and the thesis's symbols. Everything
 //! here has already been checked: a `Scene` that exists is physically meaningful, so the plant never
 //! re-validates. Optional elements are `Option`s: a scene models only what it needs.
 

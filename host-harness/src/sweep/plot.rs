@@ -106,22 +106,29 @@ pub fn ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
     if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
         return vec![lo];
     }
-    if log {
-        let mut out = Vec::new();
+    if log && lo > 0.0 {
+        // The sparsest of 1 / 1-2-5 / 1-2-3-5-7 / 1..9 per decade that labels at least two values
+        // (1 alone only over more than four decades); within less than a decade, linear round
+        // values.
         let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
-        let per: &[f64] = if b - a > 4 { &[1.0] } else if b - a > 1 { &[1.0, 2.0, 5.0] } else { &[1.0, 1.5, 2.0, 3.0, 5.0, 7.0] };
-        for e in a..=b {
-            for m in per {
-                let v = m * 10f64.powi(e);
-                if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
-                    out.push(v);
+        let sets: [&[f64]; 4] = [&[1.0], &[1.0, 2.0, 5.0], &[1.0, 2.0, 3.0, 5.0, 7.0], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]];
+        let first = if b - a > 4 { 0 } else { 1 };
+        for per in &sets[first..] {
+            let mut out = Vec::new();
+            for e in a..=b {
+                for m in per.iter() {
+                    let v = m * 10f64.powi(e);
+                    if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
+                        out.push(v);
+                    }
                 }
             }
+            if out.len() >= 2 {
+                return out;
+            }
         }
-        if out.len() < 2 {
-            return vec![lo, hi];
-        }
-        return out;
+        let lin = ticks(lo, hi, false);
+        return if lin.len() >= 2 { lin } else { vec![lo, hi] };
     }
     let raw = (hi - lo) / 6.0;
     let mag = 10f64.powf(raw.log10().floor());
@@ -154,9 +161,11 @@ where
     let frac = |z: f64| if h.z_log { (z.ln() - zlo.ln()) / (zhi.ln() - zlo.ln()) } else { (z - zlo) / (zhi - zlo) };
     match (h.x.log, h.y.log) {
         (false, false) => cells(&main, h, x0..x1, y0..y1, &ex, &ey, &frac)?,
-        (true, false) => cells(&main, h, (x0..x1).log_scale(), y0..y1, &ex, &ey, &frac)?,
-        (false, true) => cells(&main, h, x0..x1, (y0..y1).log_scale(), &ex, &ey, &frac)?,
-        (true, true) => cells(&main, h, (x0..x1).log_scale(), (y0..y1).log_scale(), &ex, &ey, &frac)?,
+        // Log axes labelled at round values only (plotters' own key points start at the first power
+        // of ten and put nine labels in every decade).
+        (true, false) => cells(&main, h, (x0..x1).log_scale().with_key_points(ticks(x0, x1, true)), y0..y1, &ex, &ey, &frac)?,
+        (false, true) => cells(&main, h, x0..x1, (y0..y1).log_scale().with_key_points(ticks(y0, y1, true)), &ex, &ey, &frac)?,
+        (true, true) => cells(&main, h, (x0..x1).log_scale().with_key_points(ticks(x0, x1, true)), (y0..y1).log_scale().with_key_points(ticks(y0, y1, true)), &ex, &ey, &frac)?,
     }
     colour_bar(&side, h, zlo, zhi)?;
     Ok(())
@@ -235,7 +244,9 @@ where
         for s in &segs {
             chart.draw_series(LineSeries::new(s.to_vec(), BLACK.stroke_width(2)))?;
         }
-        // Label each mode region at the cell nearest its centroid, so the label sits inside it.
+        // Label each mode region at the cell nearest its centroid, so the label sits inside it; a
+        // label that would touch one already placed moves down (then up) by a label's height.
+        let mut placed: Vec<(i32, i32)> = Vec::new();
         for mode in 1..=3u8 {
             let cells: Vec<(usize, usize)> = (0..nx).flat_map(|i| (0..ny).map(move |j| (i, j))).filter(|&(i, j)| m(i, j) == Some(mode)).collect();
             if cells.is_empty() {
@@ -253,7 +264,12 @@ where
             let centre = |e: &[f64], k: usize, log: bool| if log { (e[k] * e[k + 1]).sqrt() } else { 0.5 * (e[k] + e[k + 1]) };
             let at = chart.backend_coord(&(centre(ex, i, h.x.log), centre(ey, j, h.y.log)));
             let (l, t) = (area.get_base_pixel().0, area.get_base_pixel().1);
-            let at = (at.0 - l, at.1 - t);
+            let mut at = (at.0 - l, at.1 - t);
+            let clear = |p: (i32, i32), placed: &[(i32, i32)]| placed.iter().all(|q| (q.0 - p.0).abs() >= 80 || (q.1 - p.1).abs() >= 30);
+            if let Some(free) = (0..12).map(|k| (at.0, at.1 + if k % 2 == 0 { 1 } else { -1 } * 30 * (k / 2 + 1))).find(|&p| clear(p, &placed)).filter(|_| !clear(at, &placed)) {
+                at = free;
+            }
+            placed.push(at);
             area.draw(&Rectangle::new([(at.0 - 36, at.1 - 12), (at.0 + 36, at.1 + 12)], WHITE.mix(0.85).filled()))?;
             area.draw(&Text::new(format!("mode {mode}"), at, ("sans-serif", 16).into_font().color(&BLACK).pos(Pos::new(HPos::Center, VPos::Center))))?;
         }
@@ -426,5 +442,22 @@ mod tests {
         assert_eq!(shown(ticks(2.96, 43.9, false)), "10 20 30 40");
         assert_eq!(shown(ticks(3.0, 40.0, true)), "5 10 20");
         assert_eq!(ticks(1e6, 1e8, true), vec![1e6, 2e6, 5e6, 1e7, 2e7, 5e7, 1e8]);
+    }
+
+    #[test]
+    fn log_ticks_are_thin_and_never_fewer_than_two() {
+        let shown = |v: Vec<f64>| v.into_iter().map(fmt_num).collect::<Vec<_>>().join(" ");
+        // The lowest decade gets its label (plotters' key points started at 0.1).
+        assert_eq!(shown(ticks(0.018, 0.33, true)), "0.02 0.05 0.1 0.2");
+        // 1-2-5 per decade, not nine labels a decade (`1e6 9e5 8e5 ...` piled up).
+        assert_eq!(shown(ticks(2.4e5, 1.1e7, true)), "5e5 1e6 2e6 5e6 1e7");
+        // Over many decades, the powers of ten only.
+        assert_eq!(ticks(1e-3, 1e3, true).len(), 7);
+        // Narrow ranges still get two labels.
+        for (lo, hi) in [(0.07, 0.1), (0.12, 0.18), (3.0, 4.0), (101.0, 102.0), (0.95, 1.05)] {
+            let t = ticks(lo, hi, true);
+            assert!(t.len() >= 2 && t.len() <= 12, "{lo}..{hi}: {t:?}");
+            assert!(t.iter().all(|&v| v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9)), "{lo}..{hi}: {t:?}");
+        }
     }
 }
