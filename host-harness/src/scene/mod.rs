@@ -75,6 +75,7 @@ mod check;
 mod contact;
 mod controller;
 mod decoupler;
+pub mod doc;
 mod friction;
 mod model;
 mod motion_law;
