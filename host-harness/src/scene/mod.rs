@@ -186,7 +186,9 @@ pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
         Ok(doc) => doc,
         Err(e) => {
             let line = Some(line_at(text, e.span().map_or(0, |s| s.start)));
-            let message = format!("not valid TOML: {}", e.message().trim());
+            // One line: every line of a refusal starts with the file (toml_edit's message can
+            // run over two lines, the second then lacking it; found by tests/fuzz.rs).
+            let message = format!("not valid TOML: {}", e.message().trim().replace('\n', "; "));
             return Err(SceneError {
                 file: file.to_string(),
                 issues: vec![SceneIssue {
