@@ -68,7 +68,8 @@ pub struct Summary {
     pub t_brake: Option<f64>,
     /// t_detect - t_contact, s.
     pub detection_delay: Option<f64>,
-    /// t_brake - t_contact, s.
+    /// t_brake - t_contact, s; null (with `reaction_time_null_reason`) when braking started
+    /// before the contact.
     pub reaction_time: Option<f64>,
     /// Largest contact force, N.
     pub peak_contact_force: f64,
@@ -140,6 +141,9 @@ pub struct Summary {
     /// Why `detection_delay` is null: no contact, no detection, or a detection before the contact
     /// (the sensor fired on something else than the collision; t_detect is still reported).
     pub detection_delay_null_reason: Option<String>,
+    /// Why `reaction_time` is null: no contact, no braking, or braking that started before the
+    /// contact (the sensor fired on something else; t_brake is still reported).
+    pub reaction_time_null_reason: Option<String>,
     /// Smallest travel left before the back end-stop while the tool touched the target, m:
     /// negative when the tool was pushed into the back end-stop while touching it (then
     /// `stroke_exhausted`), 0 for a rigid tool (docs/verdicts.md). Null when the tool never
@@ -811,6 +815,7 @@ impl Run {
         let object_final = object.then(|| if s.in_contact { k.vp } else { s.object_velocity_at_separation.unwrap_or(k.vp) });
         let (achieved, achieved_null_reason) = achieved_restitution(s.v_in_first, s.v_out_first);
         let (detection_delay, detection_delay_null_reason) = detection_delay(s.t_contact, s.t_detect);
+        let (reaction_time, reaction_time_null_reason) = reaction_time(s.t_contact, t_brake);
         let mut warnings = s.warnings.clone();
         if let Some(why) = s.plant.motion.adjusted {
             warnings.push(format!("motion.stopping: {why}"));
@@ -835,7 +840,8 @@ impl Run {
             t_detect: s.t_detect,
             t_brake,
             detection_delay,
-            reaction_time: s.t_contact.zip(t_brake).map(|(c, b)| b - c),
+            reaction_time,
+            reaction_time_null_reason,
             peak_contact_force: s.peak_contact,
             peak_robot_force: s.peak_robot,
             object_final_velocity: object_final,
@@ -941,6 +947,18 @@ pub fn detection_delay(t_contact: Option<f64>, t_detect: Option<f64>) -> (Option
         (Some(_), None) => (None, Some("nothing detected the collision within the run".into())),
         (Some(c), Some(d)) if d < c => (None, Some(format!("the sensor fired at t_detect = {d} s, before the first contact at t_contact = {c} s: not a detection of the collision"))),
         (Some(c), Some(d)) => (Some(d - c), None),
+    }
+}
+
+/// `t_brake - t_contact`, or null with the reason: braking that started before the contact is not a
+/// reaction to it (a tool lagging as the flange accelerates can trip the travel switch first: with
+/// `spring_rate = 1` and `decel = 0.001` this was reported as -0.629 s).
+pub fn reaction_time(t_contact: Option<f64>, t_brake: Option<f64>) -> (Option<f64>, Option<String>) {
+    match (t_contact, t_brake) {
+        (None, _) => (None, Some("no tool-target contact in the run".into())),
+        (Some(_), None) => (None, Some("the robot was never commanded to brake".into())),
+        (Some(c), Some(b)) if b < c => (None, Some(format!("braking started at t_brake = {b} s, before the first contact at t_contact = {c} s: not a reaction to the collision"))),
+        (Some(c), Some(b)) => (Some(b - c), None),
     }
 }
 

@@ -13,6 +13,8 @@
 //!   6. avoidance step cost: `firmware/avoid-cost` in QEMU, at most 5,000 instructions per step on
 //!      a 15 x 15 grid for every number type (issue 4).
 //!
+//!   8. loader fuzz: tests/fuzz.rs for `FLINCH_FUZZ_SECS` seconds (default 60), the cases run
+//!      printed (issue 18).
 //!   7. no fontconfig: the `flinch` binary built with `PKG_CONFIG_PATH` pointing nowhere and
 //!      `FONTCONFIG_FILE` empty draws a PNG and an SVG, and `ldd` lists only the C runtime (issue 16).
 //!
@@ -85,6 +87,7 @@ fn test() -> ExitCode {
     let mut results: Vec<(&str, Outcome)> = Vec::new();
 
     results.push(("host tests", host_tests()));
+    results.push(("loader fuzz", loader_fuzz()));
 
     let have_target = target_installed();
     let built = if have_target {
@@ -242,6 +245,29 @@ fn host_tests() -> Outcome {
         Ok(s) if s.success() => Outcome::Pass("cargo test --workspace".into()),
         Ok(s) => Outcome::Fail(format!("cargo test --workspace exited with {s}")),
         Err(e) => Outcome::Fail(format!("could not run cargo: {e}")),
+    }
+}
+
+/// The loader fuzzed for a bounded time (tests/fuzz.rs, issue 18): `FLINCH_FUZZ_SECS` seconds
+/// (default 60) of mutated and random scenes; prints the cases run. Killed after twice that plus
+/// ten minutes of build.
+fn loader_fuzz() -> Outcome {
+    let secs: u64 = env::var("FLINCH_FUZZ_SECS").ok().and_then(|s| s.parse().ok()).unwrap_or(60);
+    let mut cmd = cargo();
+    cmd.args(["test", "-p", "flinch-tests", "--test", "fuzz", "--", "--ignored", "--nocapture"])
+        .env("FLINCH_FUZZ_SECS", secs.to_string())
+        .current_dir(repo_root());
+    match run_captured(cmd, "the loader fuzz", Duration::from_secs(2 * secs + 600)) {
+        Ok((out, status)) => {
+            let line = out.lines().find(|l| l.starts_with("fuzz: ")).unwrap_or("no summary line").to_string();
+            print!("{out}");
+            if status.success() {
+                Outcome::Pass(line)
+            } else {
+                Outcome::Fail(format!("{line} (exit {status})"))
+            }
+        }
+        Err(e) => Outcome::Fail(e),
     }
 }
 

@@ -322,6 +322,7 @@ impl Avoid {
     /// `file:line: avoid.key = value: what is allowed`.
     pub fn load(path: &Path) -> Result<Self, String> {
         let (file, text) = crate::shipped::read(path).map_err(|e| e.0)?;
+        crate::scene::avoid::check(&text, &file)?; // ranges: scene/avoid.rs
         Self::parse(&text).map_err(|e| match e.strip_prefix("line ") {
             Some(rest) => format!("{file}:{rest}"),
             None => format!("{file}: {e}"),
@@ -331,6 +332,7 @@ impl Avoid {
     /// Parse and validate scene text. A validation error starts with `line N: ` when the key it
     /// names is written in the text.
     pub fn parse(text: &str) -> Result<Self, String> {
+        crate::scene::avoid::check(text, "")?; // every number's range and the work caps: scene/avoid.rs
         let f: File = toml::from_str(text).map_err(|e| e.to_string().trim_end().to_string())?;
         f.avoid.validate().map_err(|e| locate(text, e))?;
         Ok(f.avoid)
@@ -543,12 +545,12 @@ mod tests {
         assert_eq!(s.hand_at(0.6), [0.49, 0.26]);
         assert_eq!(s.hand_at(99.0), [0.53, 0.44]);
         let bad = |from: &str, to: &str| Avoid::parse(&SHIPPED.replacen(from, to, 1)).unwrap_err();
-        assert!(bad("grid = 15", "grid = 40").contains("avoid.fit.grid = 40"));
+        assert!(bad("grid = 15", "grid = 40").contains("avoid.fit.grid: must be an integer in [1, 30], got 40"));
         assert!(bad("repulsion = \"vortex\"", "repulsion = \"swirl\"").contains("avoid.repulsion"));
         assert!(bad("stop_height_m = 0.30", "stop_height_m = 0.01").contains("avoid.stop_height_m"));
         assert!(bad("goal_m = [0.93, 0.50]", "goal_m = [3.0, 0.50]").contains("avoid.goal_m"));
         let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nlatency_s = -0.1");
-        assert!(e.starts_with("line 24: avoid.latency_s = -0.1: must be a number in [0, 10]"), "{e}");
+        assert!(e.starts_with("line 24: avoid.latency_s: allowed range [0, 1] s"), "{e}");
         let with_safety = |kv: &str| Avoid::parse(&format!("{SHIPPED}\n[avoid.safety]\n{kv}\n"));
         assert_eq!(with_safety("human_speed_mps = 2.0").unwrap().safety.human_speed_mps, 2.0);
         for (kv, key) in [("human_speed_mps = inf", "avoid.safety.human_speed_mps"), ("stopping_time_s = -1", "avoid.safety.stopping_time_s"), ("mode = \"fast\"", "avoid.safety.mode"), ("sense_height_m = 0", "avoid.safety.sense_height_m")] {
@@ -557,7 +559,7 @@ mod tests {
         }
         assert!(with_safety("speed = 1").unwrap_err().contains("speed"));
         let e = bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_m = -1");
-        assert!(e.starts_with("line 24: avoid.progress_m = -1: must be > 0"), "{e}");
+        assert!(e.starts_with("line 24: avoid.progress_m: allowed range (0, 1] m"), "{e}");
         assert!(bad("grid = 15", "grid = 40").starts_with("line "), "the line of a nested key");
         assert!(bad("stall_move_m = 0.005", "stall_move_m = 0.005\nprogress_window_s = nan").contains("progress_window_s"));
         let unknown = bad("dt_s = 0.01", "dt_s = 0.01\nspeeed = 1");

@@ -74,11 +74,13 @@
 //!   model explicitly (`sim::simplified`; their measured cost is in docs/accuracy.md).
 //! - `[controller]` (firmware in the loop): `scan_cycle` (s > 0), `phase` in [0, 1),
 //!   `firmware_tick` (s > 0), all required when the table is present.
+pub mod avoid;
 mod budget;
 mod check;
 mod contact;
 mod controller;
 mod decoupler;
+pub mod doc;
 mod friction;
 mod model;
 mod motion_law;
@@ -132,6 +134,9 @@ const ROOT: &[Key] = &[
     controller::TABLE,
 ];
 
+/// `KeyTable::when` of the avoidance scene's tables.
+pub const AVOID_SCENE: &str = "avoidance scene";
+
 /// Every table of a scene and its keys: the one source the validator, the docs and the property
 /// tests read.
 pub fn key_tables() -> &'static [KeyTable] {
@@ -155,6 +160,14 @@ pub fn key_tables() -> &'static [KeyTable] {
         KeyTable { path: "sensor", when: "kind = \"force\"", keys: sensor::FORCE_KEYS },
         KeyTable { path: "solver", when: "", keys: solver::KEYS },
         KeyTable { path: "controller", when: "", keys: controller::KEYS },
+        // Avoidance scenes (`flinch avoid`, docs/avoidance.md): checked by `avoid::check`.
+        KeyTable { path: "avoid", when: AVOID_SCENE, keys: avoid::KEYS },
+        KeyTable { path: "avoid.safety", when: AVOID_SCENE, keys: avoid::SAFETY_KEYS },
+        KeyTable { path: "avoid.camera", when: AVOID_SCENE, keys: avoid::CAMERA_KEYS },
+        KeyTable { path: "avoid.fit", when: AVOID_SCENE, keys: avoid::FIT_KEYS },
+        KeyTable { path: "avoid.robot", when: AVOID_SCENE, keys: avoid::ROBOT_KEYS },
+        KeyTable { path: "avoid.operator", when: AVOID_SCENE, keys: avoid::OPERATOR_KEYS },
+        KeyTable { path: "avoid.operator.keyframes[]", when: AVOID_SCENE, keys: avoid::KEYFRAME_KEYS },
     ];
     TABLES
 }
@@ -181,7 +194,9 @@ pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
         Ok(doc) => doc,
         Err(e) => {
             let line = Some(line_at(text, e.span().map_or(0, |s| s.start)));
-            let message = format!("not valid TOML: {}", e.message().trim());
+            // One line: every line of a refusal starts with the file (toml_edit's message can
+            // run over two lines, the second then lacking it; found by tests/fuzz.rs).
+            let message = format!("not valid TOML: {}", e.message().trim().replace('\n', "; "));
             return Err(SceneError {
                 file: file.to_string(),
                 issues: vec![SceneIssue {

@@ -53,6 +53,9 @@ pub const KEYS: &[Key] = &[
     end_stop::BACK,
 ];
 
+/// The largest orifice damping over the tool mass, D / m_t, 1/m (see `hydraulic`).
+pub const MAX_ORIFICE_LOCK: f64 = 1e9;
+
 /// Reads a hydraulic decoupler: the orifice inside the piston, the gas never driven to zero volume.
 pub(in super::super) fn hydraulic(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<Hydraulic> {
     let stroke = cx.number(t, &STROKE);
@@ -76,6 +79,29 @@ pub(in super::super) fn hydraulic(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>)
                 format!(
                     "must be < decoupler.piston_radius = {} m, got {}",
                     num(rp),
+                    num(ro)
+                ),
+            );
+            return None;
+        }
+    }
+    // The orifice's flow force is D v^2 with D = rho A_p^3 / (2 c0^2 A_o^2) (eq 49-50): a tiny
+    // orifice under a wide piston locks it, and the rate 2 D v / m_t outgrows anything the
+    // integrator can span (R_o = 1e-5 m under Table 14's piston hit the step limit at 0.33 s; R_p =
+    // 0.1 m over R_o = 5e-4 m too). Measured (release): D / m_t = 2e8 1/m ran in 2.4e6 steps, 2.1e9 ran, 5.2e10
+    // failed; the cap is 1e9 (the shipped modules: 51).
+    if let (Some(rp), Some(ro), Some(rho), Some(c0), Some(mt)) = (piston_radius, orifice_radius, liquid_density, discharge_coefficient, tool_mass) {
+        let (ap, ao) = (std::f64::consts::PI * rp * rp, std::f64::consts::PI * ro * ro);
+        let d = rho * ap.powi(3) / (2.0 * c0 * c0 * ao * ao);
+        if d / mt > MAX_ORIFICE_LOCK {
+            cx.bad(
+                t,
+                ORIFICE_RADIUS.name,
+                format!(
+                    "the orifice locks the piston: its flow force D v^2 has D = liquid_density A_p^3 / (2 c0^2 A_o^2) = {} N s^2/m^2, {} 1/m over the tool mass, beyond the {} 1/m the integrator can span (the shipped modules: 51); enlarge orifice_radius or model the module as rigid, got {}",
+                    approx(d),
+                    approx(d / mt),
+                    num(MAX_ORIFICE_LOCK),
                     num(ro)
                 ),
             );

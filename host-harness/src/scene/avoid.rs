@@ -1,0 +1,508 @@
+//! The numbers of an avoidance scene (`[avoid]`, thesis Ch. 5, docs/avoidance.md): every numeric
+//! key's physical range with its source, fixed-length points, and the caps on the work a scene can
+//! ask for (image size, calibration grid, mask growth, frames), checked with the impact loader's
+//! machinery before `avoid::scene` deserialises the file: `file:line: key: allowed range (source),
+//! got value`, every problem at once.
+//!
+//! `avoid::scene` (serde) still owns the structure (unknown keys, strings, booleans, the seed) and
+//! the checks that need the whole scene (a start inside the image, increasing key frames). A key this
+//! table does not list is left to it.
+use super::check::{approx, num, Bound::*, Ctx, Key, SceneError, SceneIssue, Tab, Ty};
+use toml_edit::{ImDocument, Value};
+
+/// Where points may lie: the plane one camera sees.
+const PLANE: &str = "a point on the work plane one ceiling camera sees, at most 10 m across (the thesis's plane: 1.05 m)";
+/// Heights above the work plane.
+const HEIGHT: &str = "a height above the work plane, below a ceiling camera (the thesis's camera: 1.2 m up)";
+/// Sizes of the robot's and the operator's parts.
+const PART: &str = "a part of an arm or a hand seen from above: up to 0.5 m across (shipped: 0.045-0.07 m)";
+
+const fn point(name: &'static str, doc: &'static str) -> Key {
+    Key::number(name, "m", Incl(-10.0), Incl(10.0), PLANE, doc)
+}
+
+const fn height(name: &'static str, doc: &'static str) -> Key {
+    Key::number(name, "m", Excl(0.0), Incl(2.0), HEIGHT, doc)
+}
+
+const fn part(name: &'static str, doc: &'static str) -> Key {
+    Key::number(name, "m", Excl(0.0), Incl(0.5), PART, doc)
+}
+
+/// Keys holding `[x, y]` (two numbers, each in the key's range), not one number.
+pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m"];
+
+const START: Key = point("start_m", "[x, y] start of the tool");
+const GOAL: Key = point("goal_m", "[x, y] goal of the tool");
+const SPEED: Key = Key::number(
+    "speed_mps",
+    "m/s",
+    Excl(0.0),
+    Incl(3.0),
+    "k_a of eq 74, the cruise speed: above the top tool speed of collaborative arms (about 1-3 m/s); shipped 0.25 m/s",
+    "k_a of eq 74, cruise speed",
+);
+const K_REP: Key = Key::number(
+    "k_rep",
+    "m/s",
+    Incl(0.0),
+    Incl(100.0),
+    "k_r of eq 75/76 per unit gradient of f*: shipped 0.6, and 50 in avoid_extreme_gain.toml, the unsafe extreme studied",
+    "k_r of eq 75/76, m/s per unit gradient",
+);
+const DT: Key = Key::number(
+    "dt_s",
+    "s",
+    Incl(1e-4),
+    Incl(0.1),
+    "eq 79's control period: robot controllers run at 1-8 ms, the thesis's MATLAB loop took 81 ms (5.3)",
+    "control period dt of eq 79",
+);
+const FRAME: Key = Key::number(
+    "frame_period_s",
+    "s",
+    Incl(0.005),
+    Incl(1.0),
+    "depth cameras give 1-200 frames/s (the thesis's Kinect: 30 Hz)",
+    "camera frame period (a new fit every frame)",
+);
+const MAX_TIME: Key = Key::number(
+    "max_time_s",
+    "s",
+    Excl(0.0),
+    Incl(600.0),
+    "a crossing of the workspace takes seconds (shipped 4-12 s); 600 s bounds the run time",
+    "give up after this long",
+);
+const GOAL_TOL: Key = Key::number(
+    "goal_tolerance_m",
+    "m",
+    Excl(0.0),
+    Incl(0.1),
+    "a positioning tolerance, up to 10 cm (shipped 1 cm)",
+    "goal reached within this distance",
+);
+const CAPTURE: Key = Key::number(
+    "capture_radius_m",
+    "m",
+    Excl(0.0),
+    Incl(1.0),
+    "within the plane one camera sees (shipped 3 cm)",
+    "attraction falls off linearly inside this radius",
+);
+const LATCH: Key = Key::number("latch_height_m", "m", Incl(0.0), Incl(2.0), HEIGHT, "vortex sign latched while f* is above this").default(0.02);
+const SLOW: Key = Key::number("slow_height_m", "m", Incl(0.0), Incl(2.0), HEIGHT, "speed scaling starts at this height of f*");
+const STOP: Key = height("stop_height_m", "speed is zero at this height of f* (above slow_height_m)");
+const STALL_WINDOW: Key = Key::number(
+    "stall_window_s",
+    "s",
+    Excl(0.0),
+    Incl(60.0),
+    "a stall is judged over a fraction of a second to seconds (default 0.5 s)",
+    "stall window",
+)
+.default(0.5);
+const STALL_MOVE: Key = Key::number("stall_move_m", "m", Excl(0.0), Incl(1.0), "a distance on the plane, up to 1 m (default 5 mm)", "stall: moved less than this in stall_window_s").default(0.005);
+const PROGRESS_WINDOW: Key = Key::number(
+    "progress_window_s",
+    "s",
+    Excl(0.0),
+    Incl(600.0),
+    "at most max_time_s's bound (default 2 s)",
+    "progress monitor window",
+)
+.default(2.0);
+const PROGRESS: Key = Key::number("progress_m", "m", Excl(0.0), Incl(1.0), "a distance on the plane, up to 1 m (default 2 cm)", "progress monitor: the least gain towards the goal per window").default(0.02);
+const LATENCY: Key = Key::number(
+    "latency_s",
+    "s",
+    Incl(0.0),
+    Incl(1.0),
+    "capture to command: the thesis measured 0.081 +- 0.008 s (5.3); 1 s is 12 times that",
+    "capture-to-command latency",
+)
+.default(0.081);
+const SAFETY: Key = Key::of("safety", Ty::Table("speed and separation monitoring"), "[avoid.safety]").optional("the defaults");
+const CAMERA: Key = Key::of("camera", Ty::Table("the synthetic depth camera"), "[avoid.camera]");
+const FIT: Key = Key::of("fit", Ty::Table("the RBF fit"), "[avoid.fit]");
+const ROBOT: Key = Key::of("robot", Ty::Table("the robot as the camera sees it"), "[avoid.robot]");
+const OPERATOR: Key = Key::of("operator", Ty::Table("the operator and its motion"), "[avoid.operator]");
+
+/// `[avoid]`'s numbers.
+pub const KEYS: &[Key] = &[
+    START, GOAL, SPEED, K_REP, DT, FRAME, MAX_TIME, GOAL_TOL, CAPTURE, LATCH, SLOW, STOP, STALL_WINDOW, STALL_MOVE, PROGRESS_WINDOW, PROGRESS, LATENCY,
+];
+
+/// `[avoid.safety]` (ISO/TS 15066 5.5.4): the ranges the loader already enforced.
+pub const SAFETY_KEYS: &[Key] = &[
+    Key::number("human_speed_mps", "m/s", Incl(0.0), Incl(10.0), "v_h: ISO 13855 6.2 uses 1.6 and 2.0 m/s; 10 m/s bounds a swing", "v_h, the human's approach speed").default(1.6),
+    Key::number("reaction_time_s", "s", Incl(0.0), Incl(10.0), "T_r: a control period plus the drive's delay, milliseconds; 10 s bounds it", "T_r").default(0.02),
+    Key::number("stopping_time_s", "s", Incl(0.0), Incl(10.0), "T_s: a robot stops from cruise within a second; 10 s bounds it", "T_s").default(0.1),
+    Key::number("intrusion_m", "m", Incl(0.0), Incl(1.0), "C of ISO 13855 5.3: up to 0.85 m (a reach over a barrier)", "C, intrusion distance").default(0.0),
+    Key::number("sensor_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_d: a few pixels; 1 m bounds it", "Z_d").default(0.01),
+    Key::number("robot_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_r: millimetres for an industrial arm; 1 m bounds it", "Z_r").default(0.005),
+    Key::number("sense_height_m", "m", Incl(0.001), Incl(1.0), "above the depth noise (mm), below a person's hand over the plane", "obstacle above this height").default(0.03),
+];
+
+const WIDTH: Key = Key::integer("width_px", 8, 2000, "depth cameras have 320-1280 columns; the thesis's image is 210 px", "image columns");
+const HEIGHT_PX: Key = Key::integer("height_px", 8, 2000, "depth cameras have 240-1024 rows; the thesis's image is 210 px", "image rows");
+const M_PER_PX: Key = Key::number(
+    "m_per_px",
+    "m",
+    Incl(2e-4),
+    Incl(0.05),
+    "a depth camera 0.5-4.5 m above the plane gives about 1-10 mm per pixel (the thesis: 5 mm)",
+    "pixel size on the plane",
+);
+const CAMERA_HEIGHT: Key = Key::number(
+    "camera_height_m",
+    "m",
+    Incl(0.3),
+    Incl(5.0),
+    "the working range of Kinect-class depth cameras, 0.5-4.5 m (the thesis: 1.2 m)",
+    "camera above the plane",
+);
+
+/// `[avoid.camera]`'s numbers (`seed` is any integer).
+pub const CAMERA_KEYS: &[Key] = &[
+    WIDTH,
+    HEIGHT_PX,
+    M_PER_PX,
+    CAMERA_HEIGHT,
+    Key::number("noise_mm", "mm", Incl(0.0), Incl(100.0), "depth noise of Kinect-class cameras: about 1 mm at 0.5 m to 40 mm at 4 m", "depth noise standard deviation"),
+    Key::number("null_fraction", "", Incl(0.0), Incl(0.9), "a fraction of the pixels; a frame with more than 90 % null carries nothing", "fraction of null pixels"),
+];
+
+const OFFSET: Key = Key::number("offset_m", "m", Incl(0.0), Incl(0.5), "the thesis raises the image by about 0.065 m (5.2)", "raise before fitting");
+
+/// `[avoid.fit]`'s numbers.
+pub const FIT_KEYS: &[Key] = &[
+    Key::integer("grid", 1, 30, "the thesis's 15 x 15 and 30 x 30 grids; the firmware holds at most 30 per axis (MAX_AXIS)", "centres across the width"),
+    Key::number("sigma_factor", "", Incl(0.1), Incl(10.0), "1 is eq 70 (sigma = spacing / 2); a tenth to ten times that", "fit sigma in units of eq 70"),
+    Key::number("eval_sigma_factor", "", Incl(0.1), Incl(10.0), "Fig. 90 widens by 1.5; a tenth to ten times the fit's", "evaluation sigma in units of the fit sigma"),
+    OFFSET,
+];
+
+const STEP: Key = Key::number(
+    "calibration_step_m",
+    "m",
+    Incl(0.005),
+    Incl(0.5),
+    "d of Fig. 84: a zig-zag of 5 mm to 0.5 m steps (shipped 0.05 m)",
+    "zig-zag step d of Fig. 84",
+);
+const THRESHOLD: Key = height("calibration_threshold_m", "cut height of the interpolated robot (Fig. 85), above fit.offset_m");
+const DILATE: Key = Key::number(
+    "calibration_dilate_m",
+    "m",
+    Incl(0.0),
+    Incl(0.5),
+    "0 is the thesis's plain cut; about d / sqrt 2 covers the robot between positions; at most calibration_step_m",
+    "growth of each mask",
+)
+.default(0.0);
+
+/// `[avoid.robot]`'s numbers.
+pub const ROBOT_KEYS: &[Key] = &[
+    point("base_m", "[x, y] robot base"),
+    part("wrist_radius_m", "wrist/tool radius"),
+    height("wrist_height_m", "wrist/tool top above the plane"),
+    part("link_width_m", "link width"),
+    height("link_height_m", "link top above the plane"),
+    STEP,
+    THRESHOLD,
+    DILATE,
+    Key::number("removal_margin_m", "m", Incl(0.0), Incl(1.0), "a height margin over the robot's model, up to 1 m (default 2 cm)", "model removal margin").default(0.02),
+];
+
+/// `[avoid.operator]`'s numbers.
+pub const OPERATOR_KEYS: &[Key] = &[
+    point("entry_m", "[x, y] where the forearm enters the image"),
+    part("hand_radius_m", "hand radius"),
+    height("hand_height_m", "hand top"),
+    part("forearm_width_m", "forearm width"),
+    height("forearm_height_m", "forearm top"),
+];
+
+/// One key frame of `avoid.operator.keyframes`.
+pub const KEYFRAME_KEYS: &[Key] = &[
+    Key::number("t_s", "s", Incl(0.0), Incl(600.0), "within max_time_s's bound", "time of the key frame"),
+    point("hand_m", "[x, y] hand centre"),
+];
+
+
+/// Largest image extent on the plane, m: [`PLANE`].
+pub const MAX_EXTENT_M: f64 = 10.0;
+/// Largest work of the calibration pass, snapshot positions x pixels: each position renders, fits
+/// and rasters the whole image. The shipped scene: 441 x 44,100 = 1.9e7 (3.8 s of CPU in release).
+pub const MAX_CALIBRATION_PIXELS: f64 = 1e8;
+/// Largest work of growing the masks, positions x pixels x offsets in the growth disc (an upper
+/// bound: only the robot's pixels are grown). The shipped scene: 441 x 44,100 x 149 = 2.9e9.
+pub const MAX_DILATION_WORK: f64 = 1e10;
+/// Largest work of the run's frames, frames x pixels (render and fit every frame). The shipped
+/// scene: 364 x 44,100 = 1.6e7.
+pub const MAX_FRAME_PIXELS: f64 = 2e8;
+/// Most control steps of a run, max_time_s / dt_s (the loader's previous bound).
+pub const MAX_STEPS: f64 = 1e6;
+
+/// Checks every number of an avoidance scene; `file` names it in the messages (empty: `line N:`).
+/// A text that is not TOML or has no `[avoid]` table passes: the deserialiser reports it.
+pub fn check(text: &str, file: &str) -> Result<(), String> {
+    let Ok(doc) = ImDocument::parse(text) else { return Ok(()) };
+    let mut cx = Ctx { text, file, issues: Vec::new() };
+    let root = Tab { path: String::new(), t: doc.as_table(), line: Some(1) };
+    const AVOID: Key = Key::of("avoid", Ty::Table("the avoidance scene"), "");
+    if let Some(Some(avoid)) = cx.maybe_table(&root, &AVOID) {
+        scene(&mut cx, &avoid);
+    }
+    if cx.issues.is_empty() {
+        return Ok(());
+    }
+    cx.issues.sort_by_key(|i| i.line);
+    if file.is_empty() {
+        let line = |i: &SceneIssue| i.line.map_or(String::new(), |l| format!("line {l}: "));
+        Err(cx.issues.iter().map(|i| format!("{}{}: {}", line(i), i.key, i.message)).collect::<Vec<_>>().join("\n"))
+    } else {
+        Err(SceneError { file: file.to_string(), issues: cx.issues }.to_string())
+    }
+}
+
+/// Reads every key of `keys` in `tab`: numbers, integers and points. `None` for a key absent or
+/// refused (reported).
+fn read(cx: &mut Ctx, tab: &Tab, keys: &[Key]) -> Vec<Option<f64>> {
+    keys.iter()
+        .map(|k| match k.ty {
+            Ty::Integer { .. } => cx.integer(tab, k).map(f64::from),
+            Ty::Number(_) if POINTS.contains(&k.name) => xy(cx, tab, k).map(|p| p[0]),
+            Ty::Number(_) => cx.number(tab, k),
+            _ => None,
+        })
+        .collect()
+}
+
+/// A point `[x, y]`: exactly two finite numbers in the key's range.
+fn xy(cx: &mut Ctx, tab: &Tab, key: &Key) -> Option<[f64; 2]> {
+    let span = key.span()?;
+    let Some(item) = tab.t.get(key.name) else {
+        cx.missing(tab, key.name, &format!("[x, y], two numbers {}", span.describe()));
+        return None;
+    };
+    let Some(arr) = item.as_value().and_then(Value::as_array) else {
+        cx.bad(tab, key.name, format!("must be [x, y], two numbers {}, got {}", span.describe(), item.type_name()));
+        return None;
+    };
+    if arr.len() != 2 {
+        cx.bad(tab, key.name, format!("must be [x, y], exactly two numbers, got {} values", arr.len()));
+        return None;
+    }
+    let mut p = [0.0; 2];
+    for (i, v) in arr.iter().enumerate() {
+        let x = match v {
+            Value::Integer(n) => *n.value() as f64,
+            Value::Float(f) => *f.value(),
+            other => {
+                cx.bad(tab, key.name, format!("must be [x, y], two numbers, got {} at position {}", other.type_name(), i + 1));
+                return None;
+            }
+        };
+        if !x.is_finite() || !span.contains(x) {
+            let coord = if i == 0 { "x" } else { "y" };
+            cx.bad(tab, key.name, format!("{coord}: {}", span.refuse(x)));
+            return None;
+        }
+        p[i] = x;
+    }
+    Some(p)
+}
+
+fn get(keys: &[Key], vals: &[Option<f64>], name: &str) -> Option<f64> {
+    keys.iter().position(|k| k.name == name).and_then(|i| vals[i])
+}
+
+fn scene(cx: &mut Ctx, avoid: &Tab) {
+    let top = read(cx, avoid, KEYS);
+    if let Some(Some(t)) = cx.maybe_table(avoid, &SAFETY) {
+        read(cx, &t, SAFETY_KEYS);
+    }
+    let camera = cx.maybe_table(avoid, &CAMERA).flatten();
+    let cam = camera.as_ref().map(|t| read(cx, t, CAMERA_KEYS));
+    let fit_t = cx.maybe_table(avoid, &FIT).flatten();
+    let fit = fit_t.as_ref().map(|t| read(cx, t, FIT_KEYS));
+    let robot_t = cx.maybe_table(avoid, &ROBOT).flatten();
+    let robot = robot_t.as_ref().map(|t| read(cx, t, ROBOT_KEYS));
+    let op_t = cx.maybe_table(avoid, &OPERATOR).flatten();
+    let op = op_t.as_ref().map(|t| read(cx, t, OPERATOR_KEYS));
+    if let Some(t) = &op_t {
+        keyframes(cx, t);
+    }
+    if !cx.issues.is_empty() {
+        return;
+    }
+    // Cross-key checks: every value is in its range here.
+    let (Some(cam), Some(camera), Some(fit), Some(robot), Some(robot_t)) = (cam, camera, fit, robot, robot_t) else { return };
+    let c = |n| get(CAMERA_KEYS, &cam, n);
+    let (Some(w), Some(h), Some(px), Some(cam_h)) = (c("width_px"), c("height_px"), c("m_per_px"), c("camera_height_m")) else { return };
+    let pixels = w * h;
+    if w.max(h) * px > MAX_EXTENT_M {
+        cx.bad(&camera, M_PER_PX.name, format!(
+            "the image covers {} m x {} m on the plane (width_px x m_per_px); allowed at most {MAX_EXTENT_M} m across ({PLANE}), got m_per_px = {}",
+            approx(w * px), approx(h * px), num(px)
+        ));
+    }
+    // Every height below the camera.
+    let empty = Vec::new();
+    let op_vals = op.as_ref().unwrap_or(&empty);
+    let op_tab = op_t.as_ref().unwrap_or(avoid);
+    for (tab, keys, vals) in [(&robot_t, ROBOT_KEYS, &robot), (avoid, KEYS, &top), (op_tab, OPERATOR_KEYS, op_vals)] {
+        for (k, v) in keys.iter().zip(vals.iter()) {
+            // `vals` is empty when the table is absent (reported by the deserialiser).
+            if let (Some(v), Ty::Number(s)) = (v, k.ty) {
+                if s.source == HEIGHT && *v >= cam_h {
+                    cx.bad(tab, k.name, format!("must be below the camera (camera.camera_height_m = {} m): a height above the work plane, got {}", num(cam_h), num(*v)));
+                }
+            }
+        }
+    }
+    let (Some(dt), Some(max_time), Some(frame)) = (get(KEYS, &top, "dt_s"), get(KEYS, &top, "max_time_s"), get(KEYS, &top, "frame_period_s")) else { return };
+    if max_time / dt > MAX_STEPS {
+        cx.bad(avoid, DT.name, format!(
+            "max_time_s / dt_s = {} control steps; allowed at most {} (bounds the run time), got dt_s = {}",
+            approx(max_time / dt), num(MAX_STEPS), num(dt)
+        ));
+    }
+    let frames = (max_time / frame).ceil() + 1.0;
+    if frames * pixels > MAX_FRAME_PIXELS {
+        cx.bad(avoid, FRAME.name, format!(
+            "{} frames (max_time_s / frame_period_s) of {} px each: {} pixels rendered and fitted; allowed at most {} (bounds the run time: the shipped scene does 1.6e7), got frame_period_s = {}",
+            approx(frames), num(pixels), approx(frames * pixels), num(MAX_FRAME_PIXELS), num(frame)
+        ));
+    }
+    let r = |n| get(ROBOT_KEYS, &robot, n);
+    let (Some(step), Some(threshold)) = (r("calibration_step_m"), r("calibration_threshold_m")) else { return };
+    let dilate = r("calibration_dilate_m").unwrap_or(0.0);
+    if let Some(offset) = get(FIT_KEYS, &fit, "offset_m") {
+        if threshold <= offset {
+            cx.bad(&robot_t, THRESHOLD.name, format!(
+                "must be above fit.offset_m = {} m: the image is raised by it before the fit, so a lower cut marks the whole plane as robot; got {}",
+                num(offset), num(threshold)
+            ));
+        }
+    }
+    if dilate > step {
+        cx.bad(&robot_t, DILATE.name, format!(
+            "must be at most calibration_step_m = {} m: the nearest stored position is within d / sqrt 2 of the robot, so a larger growth only clears more of what is near it; got {}",
+            num(step), num(dilate)
+        ));
+    }
+    if step < px {
+        cx.bad(&robot_t, STEP.name, format!("must be at least one pixel (camera.m_per_px = {} m), got {}", num(px), num(step)));
+    }
+    if !cx.issues.is_empty() {
+        return;
+    }
+    // The zig-zag of `avoid::calib::zigzag` from d/2 to extent - d/2: this is the work of the
+    // calibration pass, which runs with robot.removal = "calibration" and with `--thesis`.
+    let count = |extent: f64| ((extent - step) / step).floor().max(0.0) + 1.0;
+    let positions = count(w * px) * count(h * px);
+    let why = "the calibration pass runs with robot.removal = \"calibration\" and with --thesis";
+    if positions * pixels > MAX_CALIBRATION_PIXELS {
+        cx.bad(&robot_t, STEP.name, format!(
+            "the calibration zig-zag has {} positions of {} px each ({} pixels rendered and fitted); allowed at most {} ({why}; the shipped scene does 1.9e7), got calibration_step_m = {}",
+            num(positions), num(pixels), approx(positions * pixels), num(MAX_CALIBRATION_PIXELS), num(step)
+        ));
+        return;
+    }
+    let rad = (dilate / px).round();
+    let disc = std::f64::consts::PI * rad * rad + 1.0;
+    if positions * pixels * disc > MAX_DILATION_WORK {
+        cx.bad(&robot_t, DILATE.name, format!(
+            "growing {} masks of {} px by {} px ({} m) is up to {} pixel writes; allowed at most {} ({why}; the shipped scene: 2.9e9), got calibration_dilate_m = {}",
+            num(positions), num(pixels), num(rad), num(dilate), approx(positions * pixels * disc), num(MAX_DILATION_WORK), num(dilate)
+        ));
+    }
+}
+
+/// `avoid.operator.keyframes`: each `{ t_s, hand_m }` in range.
+fn keyframes(cx: &mut Ctx, op: &Tab) {
+    let Some(item) = op.t.get("keyframes") else { return };
+    let path = op.key("keyframes");
+    let tables: Vec<&dyn toml_edit::TableLike> = if let Some(a) = item.as_array_of_tables() {
+        a.iter().map(|t| t as &dyn toml_edit::TableLike).collect()
+    } else if let Some(a) = item.as_value().and_then(Value::as_array) {
+        a.iter().filter_map(|v| v.as_inline_table().map(|t| t as &dyn toml_edit::TableLike)).collect()
+    } else {
+        return;
+    };
+    for (i, t) in tables.into_iter().enumerate() {
+        let line = t.iter().next().and_then(|(k, _)| t.get_key_value(k)).and_then(|(k, _)| k.span()).map(|s| super::check::line_at(cx.text, s.start));
+        let tab = Tab { path: format!("{path}[{i}]"), t, line: line.or(op.line) };
+        read(cx, &tab, KEYFRAME_KEYS);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SHIPPED: &str = include_str!("../../../scenes/avoid_thesis_reach.toml");
+
+    fn refused(from: &str, to: &str) -> String {
+        let mut text = SHIPPED.to_string();
+        for (f, t) in from.split(';').zip(to.split(';')) {
+            assert!(text.contains(f), "{f} not in the scene");
+            text = text.replacen(f, t, 1);
+        }
+        check(&text, "s.toml").expect_err(to)
+    }
+
+    #[test]
+    fn shipped_avoid_scenes_pass() {
+        for f in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes")).unwrap() {
+            let p = f.unwrap().path();
+            if p.file_name().unwrap().to_string_lossy().starts_with("avoid_") {
+                let text = std::fs::read_to_string(&p).unwrap();
+                check(&text, "x").unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            }
+        }
+    }
+
+    #[test]
+    fn refusals_name_file_line_key_range_and_source() {
+        let e = refused("k_rep = 0.6 ", "k_rep = 1e9 ");
+        assert!(e.starts_with("s.toml:12: avoid.k_rep: allowed range [0, 100] m/s (k_r of eq 75/76"), "{e}");
+        assert!(e.ends_with("got 1e9"), "{e}");
+        let e = refused("start_m = [0.12, 0.50]", "start_m = [0.12, 0.50, 0.3]");
+        assert!(e.starts_with("s.toml:9: avoid.start_m: must be [x, y], exactly two numbers, got 3 values"), "{e}");
+        let e = refused("hand_radius_m = 0.05", "hand_radius_m = nan");
+        assert!(e.contains("avoid.operator.hand_radius_m: must be a finite number; allowed range (0, 0.5] m") && e.contains("got NaN"), "{e}");
+        // Every problem at once, in line order.
+        let text = SHIPPED.replacen("speed_mps = 0.25 ", "speed_mps = 1e9 ", 1).replacen("noise_mm = 3.0", "noise_mm = nan", 1).replacen("t_s = 1.2", "t_s = -1", 1);
+        let all = check(&text, "s.toml").unwrap_err();
+        assert_eq!(all.lines().count(), 3, "{all}");
+        assert!(all.lines().next().unwrap().starts_with("s.toml:11: avoid.speed_mps: allowed range (0, 3] m/s"), "{all}");
+        assert!(all.lines().nth(2).unwrap().contains("avoid.operator.keyframes[1].t_s: allowed range [0, 600] s"), "{all}");
+        // Without a file name, `line N:` as `avoid::scene::Avoid::parse` reports.
+        let e = check(&SHIPPED.replacen("dt_s = 0.01", "dt_s = 1e9", 1), "").unwrap_err();
+        assert!(e.starts_with("line 14: avoid.dt_s: allowed range [1e-4, 0.1] s"), "{e}");
+    }
+
+    #[test]
+    fn work_caps_refuse_what_would_crash_or_hang() {
+        for (from, to, key) in [
+            ("m_per_px = 0.005", "m_per_px = 1e9", "avoid.camera.m_per_px: allowed range"),
+            ("m_per_px = 0.005", "m_per_px = 0.05", "avoid.camera.m_per_px: the image covers 10.5 m x 10.5 m"),
+            ("calibration_step_m = 0.05", "calibration_step_m = 1e-9", "avoid.robot.calibration_step_m: allowed range"),
+            ("calibration_step_m = 0.05;calibration_dilate_m = 0.035", "calibration_step_m = 0.005;calibration_dilate_m = 0.004", "avoid.robot.calibration_step_m: the calibration zig-zag has"),
+            ("calibration_dilate_m = 0.035", "calibration_dilate_m = 1e9", "avoid.robot.calibration_dilate_m: allowed range"),
+            ("calibration_dilate_m = 0.035", "calibration_dilate_m = -1", "avoid.robot.calibration_dilate_m: allowed range"),
+            ("calibration_dilate_m = 0.035", "calibration_dilate_m = 0.35", "avoid.robot.calibration_dilate_m: must be at most calibration_step_m"),
+            ("calibration_threshold_m = 0.10", "calibration_threshold_m = 0.05", "avoid.robot.calibration_threshold_m: must be above fit.offset_m"),
+            ("max_time_s = 12.0", "max_time_s = 600", "avoid.frame_period_s: 18183 frames"),
+            ("max_time_s = 12.0;dt_s = 0.01", "max_time_s = 200;dt_s = 0.0001", "avoid.dt_s: max_time_s / dt_s = 2e6 control steps"),
+            ("camera_height_m = 1.2", "camera_height_m = 0.3", "avoid.robot.wrist_height_m: must be below the camera"),
+        ] {
+            let e = refused(from, to);
+            assert!(e.contains(key), "{to}: {e}");
+        }
+    }
+}
