@@ -9,7 +9,7 @@ use flinch_tests::scene_path;
 use std::time::Instant;
 
 fn shipped() -> String {
-    std::fs::read_to_string(scene_path("avoid_operator_hand.toml")).unwrap()
+    std::fs::read_to_string(scene_path("avoid_thesis_reach.toml")).unwrap()
 }
 
 /// The shipped scene with `from` replaced by `to`, loaded from a file as `flinch avoid` does.

@@ -213,6 +213,25 @@ impl Candidates<'_> {
     }
 }
 
+/// The validator's reason for the first candidate it refuses, as "; first refused: ...", for a
+/// search that found no answer (empty when it refused none).
+fn first_refusal(e: &str, cand: &Candidates, xs: &[f64], at: impl Fn(f64) -> (f64, f64)) -> String {
+    if !e.contains("refuses every candidate") {
+        return String::new();
+    }
+    xs.iter()
+        .find_map(|&x| {
+            let (v, c) = at(x);
+            cand.scene(v, c).err()
+        })
+        .map_or_else(String::new, |r| {
+            let r = r.to_string();
+            // The validator's own words, without the candidate's raw numbers before them.
+            let why = r.split_once("refuses it: ").map_or(r.as_str(), |(_, w)| w);
+            format!("; the first candidate is refused because {why}")
+        })
+}
+
 /// Runs a scene (its verdict is in the summary).
 fn trial_of(s: &Scene, v: f64, c: f64) -> Result<Trial, String> {
     let (summary, _) = crate::sim::run(s, false).map_err(|e| format!("V_c = {}, C = {}: {e}", crate::verdict::mps(v), crate::verdict::mm(c)))?;
@@ -314,7 +333,7 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     let unsafe_at = |cc: f64| cand.safe(v, cc).map(|s| !s);
     let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, 14, crate::verdict::mm) {
         Ok((_, first_safe)) => (Some(first_safe), None),
-        Err(e) => (None, Some(format!("stroke search over {:.2}..{:.2} mm ({} C1:C2 scaled together): {e}", strokes[0] * 1e3, strokes[15] * 1e3, module.name()))),
+        Err(e) => (None, Some(format!("stroke search over {:.2}..{:.2} mm ({} C1:C2 scaled together): {e}{}", strokes[0] * 1e3, strokes[15] * 1e3, module.name(), first_refusal(&e, &cand, &strokes, |x| (v, x))))),
     };
     // Largest safe speed for this stroke, simulated: scan 0.1..3 x the formula's, then bisect.
     let (v_formula, formula_capped) = speed_for_room(&base.motion, c - d_sw, dt);
@@ -335,7 +354,16 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
                 notes.push(format!("simulated safe up to the stopping table's largest speed {}: faster is not in the robot's data", crate::verdict::mps(top)));
                 (Some(top), None, cand.trial(top, c).ok())
             }
-            Err(e) => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}", speeds[0], speeds[19])), None),
+            // Safe at every candidate the validator accepts (no boundary above the formula's
+            // limit, up to 3x it): the simulation confirms the budget's limit, which is the answer.
+            Err(e) if e.starts_with("no boundary") => match speeds.iter().rev().copied().find(|&x| safe_at(x) == Some(true)) {
+                Some(top) => {
+                    notes.push(format!("simulated safe at every candidate speed up to {}: the budget's limit stands", crate::verdict::mps(top)));
+                    (Some(top), None, cand.trial(top, c).ok())
+                }
+                None => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}", speeds[0], speeds[19])), None),
+            },
+            Err(e) => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}{}", speeds[0], speeds[19], first_refusal(&e, &cand, &speeds, |x| (x, c)))), None),
         }
     };
     Ok(DesignReport {

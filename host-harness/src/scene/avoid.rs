@@ -122,6 +122,16 @@ const LATENCY: Key = Key::number(
     "capture-to-command latency",
 )
 .default(0.081);
+const CLEARANCE: Key = Key::number(
+    "clearance_m",
+    "m",
+    Incl(0.0),
+    Incl(1.0),
+    "the clearance asked for between the tool's surface and a person: centimetres; 1 m is beyond any cell's separation",
+    "a reached goal must have kept at least this from the operator; added to the protective separation",
+)
+.default(0.02);
+const BAUD: Key = Key::number("baud", "bit/s", Incl(300.0), Incl(2e7), "UART rates of MCUs: 300 baud to 20 Mbaud (8N1, 10 bits a byte)", "serial line rate, a whole number; a frame takes its bytes' time to arrive").optional("not modelled");
 const SAFETY: Key = Key::of("safety", Ty::Table("speed and separation monitoring"), "[avoid.safety]").optional("the defaults");
 const CAMERA: Key = Key::of("camera", Ty::Table("the synthetic depth camera"), "[avoid.camera]");
 const FIT: Key = Key::of("fit", Ty::Table("the RBF fit"), "[avoid.fit]");
@@ -130,7 +140,7 @@ const OPERATOR: Key = Key::of("operator", Ty::Table("the operator and its motion
 
 /// `[avoid]`'s numbers.
 pub const KEYS: &[Key] = &[
-    START, GOAL, SPEED, K_REP, DT, FRAME, MAX_TIME, GOAL_TOL, CAPTURE, LATCH, SLOW, STOP, STALL_WINDOW, STALL_MOVE, PROGRESS_WINDOW, PROGRESS, LATENCY,
+    START, GOAL, SPEED, K_REP, DT, FRAME, MAX_TIME, GOAL_TOL, CAPTURE, LATCH, SLOW, STOP, STALL_WINDOW, STALL_MOVE, PROGRESS_WINDOW, PROGRESS, LATENCY, CLEARANCE, BAUD,
 ];
 
 /// `[avoid.safety]` (ISO/TS 15066 5.5.4): the ranges the loader already enforced.
@@ -138,10 +148,10 @@ pub const SAFETY_KEYS: &[Key] = &[
     Key::number("human_speed_mps", "m/s", Incl(0.0), Incl(10.0), "v_h: ISO 13855 6.2 uses 1.6 and 2.0 m/s; 10 m/s bounds a swing", "v_h, the human's approach speed").default(1.6),
     Key::number("reaction_time_s", "s", Incl(0.0), Incl(10.0), "T_r: a control period plus the drive's delay, milliseconds; 10 s bounds it", "T_r").default(0.02),
     Key::number("stopping_time_s", "s", Incl(0.0), Incl(10.0), "T_s: a robot stops from cruise within a second; 10 s bounds it", "T_s").default(0.1),
-    Key::number("intrusion_m", "m", Incl(0.0), Incl(1.0), "C of ISO 13855 5.3: up to 0.85 m (a reach over a barrier)", "C, intrusion distance").default(0.0),
+    Key::number("intrusion_m", "m", Incl(0.0), Incl(1.0), "C of ISO 13855 5.3: up to 0.85 m (a reach over a barrier); the monitor never uses less than the sensor's detection capability requires", "C, intrusion distance").default(0.0),
     Key::number("sensor_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_d: a few pixels; 1 m bounds it", "Z_d").default(0.01),
     Key::number("robot_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_r: millimetres for an industrial arm; 1 m bounds it", "Z_r").default(0.005),
-    Key::number("sense_height_m", "m", Incl(0.001), Incl(1.0), "above the depth noise (mm), below a person's hand over the plane", "obstacle above this height").default(0.03),
+    Key::number("sense_height_m", "m", Incl(0.001), Incl(1.0), "above the depth noise (mm), below a person's hand over the plane; d of ISO 13855 sets the intrusion distance the monitor adds", "obstacle above this height").default(0.014),
 ];
 
 const WIDTH: Key = Key::integer("width_px", 8, 2000, "depth cameras have 320-1280 columns; the thesis's image is 210 px", "image columns");
