@@ -75,6 +75,13 @@ fn a_free_object_pushed_away_is_explained_and_the_budget_still_fails_safe() {
     assert!(!c.fits && c.simulated.safe);
     assert!(!c.safe, "the budget's verdict stands: fail safe");
     assert!(c.explanations.iter().any(|e| e.contains("free object") && e.contains("pushed away")), "{:?}", c.explanations);
+    // The explanation must not contradict the verdict it explains: the budget's verdict stands.
+    let why = c.explanations.iter().find(|e| e.contains("free object")).unwrap();
+    assert!(why.contains("fail-safe: the budget's verdict stands") && !why.contains("is what applies"), "{why}");
+    // A tool that ran past its stroke is not said to have travelled "only" so far.
+    let c = check(&scene("table13_bistable_object.toml")).unwrap();
+    assert!(c.simulated.stroke_exhausted && !c.safe);
+    assert!(c.explanations.iter().all(|e| !e.contains("travelled only")), "{:?}", c.explanations);
 }
 
 #[test]

@@ -149,11 +149,16 @@ pub fn explain(scene: &Scene, b: &Budget, s: &Summary) -> Vec<String> {
     };
     if let Some(mass) = free_mass {
         out.push(format!(
-            "the target is a free object (m_p = {mass} kg): the budget assumes a fixed obstacle and counts the robot's whole stopping distance ({}) as travel, but the object was pushed away (up to {}), so the tool travelled only {}; the simulation's stroke left ({}) is what applies",
+            "the target is a free object (m_p = {mass} kg): the budget assumes a fixed obstacle and counts the robot's whole stopping distance ({}) as travel, but the object was pushed away (up to {}) and the tool travelled {}, keeping {} of stroke while touching it; {}",
             mm(b.stopping_distance),
             mps(s.object_peak_velocity.unwrap_or(0.0)),
             mm(s.max_travel),
-            s.stroke_left_min_m.map_or("-".into(), mm_signed)
+            s.stroke_left_min_m.map_or("-".into(), mm_signed),
+            if fits {
+                "the simulation confirms the budget"
+            } else {
+                "fail-safe: the budget's verdict stands for check and design (an object that is held, or heavier, is not pushed away), while the run's own verdict is the simulation's"
+            }
         ));
     }
     if s.max_travel > b.stroke + 1e-6 {
