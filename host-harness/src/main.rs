@@ -289,7 +289,10 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
 
 fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
     let sc = load(&args.scene)?;
-    let c = check::check(&sc).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
+    let c = check::check(&sc).map_err(|e| {
+        let m = format!("{}: {e}", args.scene.display());
+        if refuses_the_scene_kind(&e) { Failure::bad_input(m) } else { Failure::runtime(m) }
+    })?;
     let text = if args.json {
         report::to_json(&report::Versioned::at(report::CHECK_SCHEMA_VERSION, &c))
     } else {
@@ -338,7 +341,14 @@ fn bench_cmd(a: &BenchArgs) -> Result<bool, Failure> {
 /// anything after that a runtime failure.
 fn classify(scene_ok: Result<(), String>, r: Result<bool, String>) -> Result<bool, Failure> {
     scene_ok.map_err(Failure::bad_input)?;
-    r.map_err(Failure::runtime)
+    r.map_err(|e| if refuses_the_scene_kind(&e) { Failure::bad_input(e) } else { Failure::runtime(e) })
+}
+
+/// `check` and `design` need a module with a stroke and a travel switch: a scene without them
+/// (a rigid tool, a linear spring, a force sensor) is the wrong input for the command (exit 2),
+/// not a failure while running it.
+fn refuses_the_scene_kind(e: &str) -> bool {
+    e.contains("decoupler.kind: flinch ") || e.contains("sensor.kind: flinch ")
 }
 
 fn main() -> ExitCode {

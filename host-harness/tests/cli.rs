@@ -122,6 +122,13 @@ fn exit_codes_say_what_happened() {
     // 1: an unfavourable verdict (the hydraulic's 23 mm stroke cannot absorb 33 mm).
     let o = flinch().args(["check", "table14_hydraulic_surface"]).output().unwrap();
     assert_eq!(o.status.code(), Some(1), "{}", text(&o.stdout));
+    // 2: check and design on a scene without a stroke or a travel switch (a rigid tool, a force
+    // sensor): the wrong input for the command, said as such.
+    for cmd in ["check", "design"] {
+        let o = flinch().args([cmd, "tables5-7_rigid"]).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{cmd}: {}", text(&o.stderr));
+        assert!(text(&o.stderr).contains(".kind: flinch"), "{}", text(&o.stderr));
+    }
     // 0.
     assert_eq!(flinch().args(["check", "tables5-7_bistable"]).output().unwrap().status.code(), Some(0));
 }
