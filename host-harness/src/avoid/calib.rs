@@ -225,7 +225,9 @@ mod tests {
             let kept = preprocess(&img, &cam, 0.065, None);
             let removed = preprocess(&img, &cam, 0.065, Some((&cal, p)));
             let (before, after) = (field_max(&kept), field_max(&removed));
-            // What is left is the 65 mm raise and the filter's residue, not the robot.
+            // Without removal the robot stands in the field (so the test can tell); what is left
+            // after it is the 65 mm raise and the filter's residue, not the robot.
+            assert!(before >= 0.1, "robot at {p:?} not in the field before removal: {before} m");
             assert!(after < 0.1, "robot at {p:?} left {after} m after removal");
         }
         // Save and load give the same calibration; a damaged file is refused with its name.

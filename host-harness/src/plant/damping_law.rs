@@ -34,36 +34,7 @@ pub fn alpha(law: DampingLaw, e: f64) -> f64 {
 /// undamped peak u = 1). Integrated with RK4 at a fixed step fine enough for 1e-6 in e; ends when u
 /// returns to 0 or the contact force vanishes and u' < 0 (the clamp of a non-adhesive contact).
 pub fn achieved_restitution(alpha: f64) -> f64 {
-    let f = |u: f64, w: f64| -> f64 {
-        let u = u.max(0.0);
-        let force = 1.25 * u * u.sqrt() * (1.0 + alpha * w);
-        -force.max(0.0)
-    };
-    let h = 1e-4 / (1.0 + alpha).sqrt();
-    let (mut u, mut w) = (0.0_f64, 1.0_f64);
-    let mut t = 0.0;
-    // Bounded: the undamped impact lasts about 3.2 time units; heavy damping stretches it.
-    while t < 1e3 {
-        let (k1u, k1w) = (w, f(u, w));
-        let (k2u, k2w) = (w + 0.5 * h * k1w, f(u + 0.5 * h * k1u, w + 0.5 * h * k1w));
-        let (k3u, k3w) = (w + 0.5 * h * k2w, f(u + 0.5 * h * k2u, w + 0.5 * h * k2w));
-        let (k4u, k4w) = (w + h * k3w, f(u + h * k3u, w + h * k3w));
-        let un = u + h / 6.0 * (k1u + 2.0 * k2u + 2.0 * k3u + k4u);
-        let wn = w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
-        t += h;
-        if un <= 0.0 {
-            // Interpolate the crossing on the velocity (linear is enough at this step).
-            let frac = u / (u - un);
-            return -(w + frac * (wn - w));
-        }
-        // Once the force has vanished on the way out, the bodies separate at constant speed.
-        if wn < 0.0 && 1.0 + alpha * wn <= 0.0 {
-            return -wn;
-        }
-        u = un;
-        w = wn;
-    }
-    0.0
+    impact(|u, w| 1.25 * u * u.sqrt() * (1.0 + alpha * w), 1e-4 / (1.0 + alpha).sqrt())
 }
 
 /// One isolated impact of a pushing-only contact law, dimensionless: u'' = -g(u, u'), u(0) = 0,
