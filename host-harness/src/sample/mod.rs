@@ -291,14 +291,48 @@ impl Plan {
     pub fn header(&self) -> Vec<String> {
         let mut h = vec!["sample".to_string()];
         h.extend(self.vary.iter().map(|v| v.column.clone()));
-        h.extend(["stroke_exhausted", "mode", "peak_contact_force_n", "peak_robot_force_n", "stroke_left_min_m", "safe", "status", "reason"].map(String::from));
+        h.extend(["stroke_exhausted", "mode", "peak_contact_force_n", "peak_robot_force_n", "stroke_left_min_m", "safe"].map(String::from));
+        if self.body() {
+            h.push("body_limits_pass".into());
+        }
+        h.extend(["status", "reason"].map(String::from));
         h
+    }
+
+    /// The scene's target is a human body region: the CSV has `body_limits_pass` and the report
+    /// estimates `body_limit_exceeded`.
+    pub fn body(&self) -> bool {
+        matches!(self.template.base.target.kind, TargetKind::BodyRegion(_))
     }
 
     /// Runs the plan's range on `pool` (None: the global rayon pool, all cores), in blocks of
     /// [`BLOCK`], writing each block's rows to `csv` in index order; stops after the block in
     /// which `stop` is raised. The report covers the samples that ran.
     pub fn run(&self, progress: Progress, csv: Option<&mut dyn Write>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
+        let body = self.body();
+        let mut w = csv.map(csv::Writer::from_writer);
+        if let Some(w) = w.as_mut() {
+            w.write_record(self.header())?;
+        }
+        let report = self.run_rows(
+            progress,
+            &mut |r: &Row| match w.as_mut() {
+                Some(w) => w.write_record(r.record_with(body)).map_err(io::Error::from),
+                None => Ok(()),
+            },
+            stop,
+            pool,
+        )?;
+        if let Some(w) = w.as_mut() {
+            w.flush()?;
+        }
+        Ok(report)
+    }
+
+    /// As [`Plan::run`], handing every row to `sink` in index order instead of writing CSV (the
+    /// Python package builds its columns so). `sink` runs on the calling thread, after each block;
+    /// it may raise `stop`.
+    pub fn run_rows(&self, progress: Progress, sink: &mut dyn FnMut(&Row) -> io::Result<()>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
         use std::io::IsTerminal;
         let (first, end) = self.range;
         let bar = if progress == Progress::Auto && io::stderr().is_terminal() {
@@ -310,10 +344,6 @@ impl Plan {
         } else {
             ProgressBar::hidden()
         };
-        let mut w = csv.map(csv::Writer::from_writer);
-        if let Some(w) = w.as_mut() {
-            w.write_record(self.header())?;
-        }
         let mut tally = Tally::default();
         let mut at = first;
         while at < end && !stop.load(Ordering::SeqCst) {
@@ -324,19 +354,19 @@ impl Plan {
                 None => block(),
             };
             for r in &rows {
-                if let Some(w) = w.as_mut() {
-                    w.write_record(r.record())?;
-                }
+                sink(r)?;
                 tally.add(r);
             }
             at += len as u64;
             bar.inc(len as u64);
         }
-        if let Some(w) = w.as_mut() {
-            w.flush()?;
-        }
         bar.finish_and_clear();
         Ok(self.report(tally, (first, at)))
+    }
+
+    /// Which of [`FAILURES`] apply to this study's scene (a body-region limit only to a body region).
+    pub fn applies(&self) -> Vec<bool> {
+        FAILURES.iter().map(|k| (k.applies)(&self.template.base)).collect()
     }
 
     fn report(&self, t: Tally, done: (u64, u64)) -> SampleReport {
@@ -376,7 +406,7 @@ impl Plan {
             confidence: CONFIDENCE,
             estimates: Vec::new(),
         };
-        r.finish(&t.failures);
+        r.finish(&t.failures, &self.applies());
         r
     }
 }
@@ -393,14 +423,27 @@ pub struct FailureKind {
     pub what: &'static str,
     /// True when the run has this failure.
     pub test: fn(&Summary) -> bool,
+    /// True when the failure can happen in this scene (estimated only then).
+    pub applies: fn(&Scene) -> bool,
 }
 
-/// The failures estimated, each from the run's summary. A body-region limit joins this list once
-/// the summary carries one.
+fn always(_: &Scene) -> bool {
+    true
+}
+
+/// The failures estimated, each from the run's summary. The body-region limit is estimated only
+/// for a scene whose target is a body region (elsewhere it cannot happen, and "0 of N" would read
+/// as evidence).
 pub const FAILURES: &[FailureKind] = &[
-    FailureKind { name: "stroke_exhausted", what: "stroke exhausted (the tool in the back end-stop while touching the target; docs/verdicts.md)", test: |s| s.stroke_exhausted },
-    FailureKind { name: "mode_3", what: "working mode 3 (the tool hits the back end-stop while the robot still brakes; Fig. 46)", test: |s| s.mode == Some(3) },
-    FailureKind { name: "not_safe", what: "not safe by the one definition (docs/verdicts.md: the summary's `failures` is not empty)", test: |s| !s.safe },
+    FailureKind { name: "stroke_exhausted", what: "stroke exhausted (the tool in the back end-stop while touching the target; docs/verdicts.md)", test: |s| s.stroke_exhausted, applies: always },
+    FailureKind { name: "mode_3", what: "working mode 3 (the tool hits the back end-stop while the robot still brakes; Fig. 46)", test: |s| s.mode == Some(3), applies: always },
+    FailureKind { name: "not_safe", what: "not safe by the one definition (docs/verdicts.md: the summary's `failures` is not empty)", test: |s| !s.safe, applies: always },
+    FailureKind {
+        name: "body_limit_exceeded",
+        what: "a body-region limit exceeded (ISO/TS 15066 Table A.2 force or pressure, or a transient contact the TS does not permit; the summary's body_limits_pass is false)",
+        test: |s| s.body_limits_pass == Some(false),
+        applies: |sc| matches!(sc.target.kind, TargetKind::BodyRegion(_)),
+    },
 ];
 
 /// The fields of a run's summary a sample keeps.
@@ -418,6 +461,8 @@ pub struct Brief {
     pub stroke_left_min_m: Option<f64>,
     /// The one definition.
     pub safe: bool,
+    /// ISO/TS 15066 limits kept (a body-region target only).
+    pub body_limits_pass: Option<bool>,
     /// Per [`FAILURES`].
     pub failed: Vec<bool>,
 }
@@ -431,6 +476,7 @@ impl Brief {
             peak_robot_force_n: s.peak_robot_force,
             stroke_left_min_m: s.stroke_left_min_m,
             safe: s.safe,
+            body_limits_pass: s.body_limits_pass,
             failed: FAILURES.iter().map(|f| (f.test)(s)).collect(),
         }
     }
@@ -468,8 +514,15 @@ fn bit(b: bool) -> String {
 }
 
 impl Row {
-    /// The CSV record (booleans 0/1, empty cells where a sample did not run).
+    /// The CSV record (booleans 0/1, empty cells where a sample did not run), without a
+    /// `body_limits_pass` column.
     pub fn record(&self) -> Vec<String> {
+        self.record_with(false)
+    }
+
+    /// The CSV record, with the `body_limits_pass` column when `body` (a body-region scene).
+    pub fn record_with(&self, body: bool) -> Vec<String> {
+        let blanks = if body { 7 } else { 6 };
         let mut r = vec![self.index.to_string()];
         r.extend(self.values.iter().map(f64::to_string));
         match &self.outcome {
@@ -481,17 +534,19 @@ impl Row {
                     b.peak_robot_force_n.to_string(),
                     b.stroke_left_min_m.map_or(String::new(), |x| x.to_string()),
                     bit(b.safe),
-                    "ok".into(),
-                    String::new(),
                 ]);
+                if body {
+                    r.push(b.body_limits_pass.map_or(String::new(), bit));
+                }
+                r.extend(["ok".into(), String::new()]);
             }
             Outcome::Refused { reason, .. } => {
-                r.extend((0..6).map(|_| String::new()));
+                r.extend((0..blanks).map(|_| String::new()));
                 r.push("refused".into());
                 r.push(reason.clone());
             }
             Outcome::Failed(why) => {
-                r.extend((0..6).map(|_| String::new()));
+                r.extend((0..blanks).map(|_| String::new()));
                 r.push("failed".into());
                 r.push(why.clone());
             }
@@ -671,6 +726,19 @@ mod tests {
         assert!(parse_chunk("0/3").is_err() && parse_chunk("4/3").is_err() && parse_chunk("x").is_err());
         assert_eq!(parse_chunk("2/3").unwrap(), (2, 3));
     }
+    /// A report read back (`--merge`) has the numbers written, to the last bit: a far tail's
+    /// probability (the outside probability of a normal draw 25 standard deviations from a bound)
+    /// once came back one unit in the last place off, and the merged report differed from the
+    /// whole run's.
+    #[test]
+    fn reports_read_back_have_the_numbers_written() {
+        for x in [3.9262455345639715e-138, 0.1 + 0.2, 1.0 / 3.0, 5e-324, 1.7976931348623157e308, 2.2250738585072014e-308] {
+            let text = serde_json::to_string(&x).unwrap();
+            let back: f64 = serde_json::from_str(&text).unwrap();
+            assert_eq!(back.to_bits(), x.to_bits(), "{text}");
+        }
+    }
+
     /// docs/schema/sample.json is generated: `FLINCH_BLESS=1 cargo test -p flinch-harness --lib
     /// sample::tests::schema` rewrites it.
     #[test]

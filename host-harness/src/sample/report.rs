@@ -32,7 +32,7 @@ pub struct VaryReport {
 /// The estimate of one failure's probability.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Estimate {
-    /// Which failure (`stroke_exhausted`, `mode_3`, `not_safe`).
+    /// Which failure (`stroke_exhausted`, `mode_3`, `not_safe`; `body_limit_exceeded` for a body-region target).
     pub failure: String,
     /// What it is.
     pub what: String,
@@ -130,10 +130,17 @@ pub struct SampleReport {
 }
 
 impl SampleReport {
-    pub(super) fn finish(&mut self, failures: &[u64]) {
+    /// Sets `complete` and the estimates from the failure counts (per [`FAILURES`]) of the kinds
+    /// that `applies`.
+    pub(super) fn finish(&mut self, failures: &[u64], applies: &[bool]) {
         self.complete = self.ranges.len() == 1 && self.ranges[0] == [0, self.samples];
         let unrun = self.refused + self.solver_failed;
-        self.estimates = FAILURES.iter().enumerate().map(|(i, k)| estimate(k, failures.get(i).copied().unwrap_or(0), self.ran, unrun)).collect();
+        self.estimates = FAILURES
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| applies.get(*i).copied().unwrap_or(false))
+            .map(|(i, k)| estimate(k, failures.get(i).copied().unwrap_or(0), self.ran, unrun))
+            .collect();
     }
 
     /// What the human summary prints.
@@ -157,9 +164,10 @@ impl SampleReport {
             t.push_str(&format!("  {} ~ {}{within}{outside}\n", v.key, v.dist));
         }
         t.push_str(&format!("  probability (95 % interval, over the {} runs):\n", self.ran));
+        let width = self.estimates.iter().map(|e| e.failure.len()).max().unwrap_or(0).max(17);
         for e in &self.estimates {
             let p = e.p.map_or("-".to_string(), sig);
-            t.push_str(&format!("    {:<17} {:>8} of {:<8} p = {p:<9} [{}, {}] {}\n", e.failure, e.failures, e.runs, sig(e.low), sig(e.high), if e.interval == "wilson" { "Wilson" } else { "Clopper-Pearson" }));
+            t.push_str(&format!("    {:<width$} {:>8} of {:<8} p = {p:<9} [{}, {}] {}\n", e.failure, e.failures, e.runs, sig(e.low), sig(e.high), if e.interval == "wilson" { "Wilson" } else { "Clopper-Pearson" }));
         }
         t.push_str(&format!("  working modes: 1: {}, 2: {}, 3: {}, none: {}\n", self.modes.mode_1, self.modes.mode_2, self.modes.mode_3, self.modes.no_mode));
         for g in &self.refusals {
@@ -259,7 +267,8 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
             failures[i] += r.estimates.iter().find(|e| e.failure == k.name).map_or(0, |e| e.failures);
         }
     }
-    out.finish(&failures);
+    let applies: Vec<bool> = FAILURES.iter().map(|k| first.estimates.iter().any(|e| e.failure == k.name)).collect();
+    out.finish(&failures, &applies);
     Ok(out)
 }
 
