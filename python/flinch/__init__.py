@@ -108,7 +108,7 @@ def sweep(scene: Scene, vary, *, log: Iterable[str] = (), strict: bool = False, 
     import io
 
     df = pd.read_csv(io.StringIO(csv), keep_default_na=False, na_values=[""])
-    df["reason"] = df["reason"].fillna("")
+    df["reason"] = df["reason"].astype(object).fillna("")
     if failed:
         raise SolverError(f"the solver failed at {failed} of {points} points (status and reason columns)", result=df)
     return df

@@ -50,10 +50,14 @@ def test_refused_samples_and_a_dict_scene_on_dask(client):
     assert on_dask.report == one.report and one.report["refused"] > 0
 
 
-def test_bad_input_raises_on_the_client_before_any_task(client):
-    before = len(client.who_has())
+def test_bad_input_raises_on_the_client_before_any_task(client, monkeypatch):
+    def no_task(*a, **k):
+        raise AssertionError("a task was submitted for bad input")
+
+    monkeypatch.setattr(client, "submit", no_task)
     with pytest.raises(flinch.InputError, match="unknown distribution"):
         flinch.dask.sample("tables5-7_bistable_v025", 100, {"motion.speed": "gauss:1:2"}, client)
     with pytest.raises(flinch.SceneError):
         flinch.dask.sample("no_such_scene_here", 100, FOUR, client)
-    assert len(client.who_has()) == before
+    with pytest.raises(flinch.InputError, match="motion.speed"):
+        flinch.dask.sample("tables5-7_bistable_v025", 100, {"motion.sped": "normal:0.25:0.01"}, client)

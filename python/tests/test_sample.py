@@ -35,6 +35,7 @@ def test_the_report_and_rows_are_the_command_lines(tmp_path, cli):
     want = json.loads(out)
     assert r.report == want
     csv = pd.read_csv(tmp_path / "rows.csv", keep_default_na=False, na_values=[""])
+    csv["reason"] = csv["reason"].astype(object).fillna("")
     assert list(r.rows.columns) == list(csv.columns)
     for c in csv.columns:
         if c in ("status", "reason"):

@@ -15,7 +15,7 @@ def test_a_sweep_is_the_command_lines_csv(cli):
     code, out, err = cli("sweep", "tables5-7_bistable", "--vary", "motion.speed=0.1:0.4:4", "--csv", "-")
     assert code == 0, err
     want = pd.read_csv(io.StringIO(out), keep_default_na=False, na_values=[""])
-    want["reason"] = want["reason"].fillna("")
+    want["reason"] = want["reason"].astype(object).fillna("")
     pd.testing.assert_frame_equal(df, want)
 
 

@@ -17,11 +17,15 @@
 //!      printed (issue 18).
 //!   7. no fontconfig: the `flinch` binary built with `PKG_CONFIG_PATH` pointing nowhere and
 //!      `FONTCONFIG_FILE` empty draws a PNG and an SVG, and `ldd` lists only the C runtime (issue 16).
+//!   9. python: a fresh venv (`python3 -m venv --clear`), `pip install ./python pytest dask
+//!      distributed pandas numpy` (the extension built by maturin), then pytest on python/tests
+//!      with the `flinch` binary to compare with (issue 14). A failed install is a failure.
 //!
 //!   Exits non-zero if any stage failed; skipped stages do not fail the run, except in CI (`CI` set):
 //!   there a missing target, QEMU or tool is a failure, never a quiet pass.
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
+//! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
 //! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stage
 //!   "board ELF in QEMU" of `cargo xtask test`).
 
@@ -54,6 +58,13 @@ fn main() -> ExitCode {
             println!("{}", check_board_vectors(&elf_path("board"))?);
             Ok(())
         }),
+        Some("python") => single(|| match python_stage() {
+            Outcome::Pass(m) => {
+                println!("{m}");
+                Ok(())
+            }
+            Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+        }),
         Some("size") => single(|| {
             build_firmware()?;
             let s = elf_size(&elf_path("board"))?;
@@ -61,7 +72,7 @@ fn main() -> ExitCode {
             check_size(&s)
         }),
         _ => {
-            eprintln!("usage: cargo xtask <test|qemu|size>");
+            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|python>");
             ExitCode::from(2)
         }
     }
@@ -193,6 +204,8 @@ fn test() -> ExitCode {
         Ok(m) => Outcome::Pass(m),
         Err(e) => Outcome::Fail(e),
     }));
+
+    results.push(("python", python_stage()));
 
     // In CI nothing is skipped quietly: a missing target or tool fails the run.
     if env::var_os("CI").is_some_and(|v| !v.is_empty() && v != "false" && v != "0") {
@@ -661,9 +674,86 @@ fn no_fontconfig() -> Result<String, String> {
     Ok(format!("built without pkg-config, PNG and SVG drawn without fontconfig, ldd lists only the C runtime ({} libraries), {:.1} s", listing.lines().count(), start.elapsed().as_secs_f64()))
 }
 
+/// The Python package (issue 14): a fresh venv in the target folder, `pip install ./python` with
+/// the test dependencies (maturin builds the extension, in `target/python`), then pytest on
+/// python/tests with FLINCH_BIN set to the dev `flinch` binary (the tests compare with it). Skipped
+/// without python3 (a failure in CI); any other problem fails.
+fn python_stage() -> Outcome {
+    let Some(python) = which("python3") else {
+        return Outcome::Skip("python3 not found (the Python package needs CPython >= 3.9 with venv and pip)".into());
+    };
+    match python_tests(&python) {
+        Ok(m) => Outcome::Pass(m),
+        Err(e) => Outcome::Fail(e),
+    }
+}
+
+fn python_tests(python: &Path) -> Result<String, String> {
+    let start = Instant::now();
+    let root = repo_root();
+    let venv = target_dir().join("python-venv");
+    let run = |mut cmd: Command, what: &str| -> Result<(), String> {
+        let status = cmd.current_dir(&root).stdin(Stdio::null()).status().map_err(|e| format!("could not run {what}: {e}"))?;
+        if status.success() {
+            Ok(())
+        } else {
+            Err(format!("{what} exited with {status}"))
+        }
+    };
+    let mut venv_cmd = Command::new(python);
+    venv_cmd.args(["-m", "venv", "--clear"]).arg(&venv);
+    run(venv_cmd, "python3 -m venv")?;
+    let py = venv.join("bin").join("python");
+    let mut pip = Command::new(&py);
+    pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "./python", "pytest", "dask", "distributed", "pandas", "numpy"])
+        .env("CARGO_TARGET_DIR", target_dir().join("python"));
+    run(pip, "pip install ./python pytest dask distributed pandas numpy")?;
+    let installed = start.elapsed().as_secs_f64();
+    let mut build = cargo();
+    build.args(["build", "--quiet", "-p", "flinch-harness", "--bin", "flinch"]);
+    run(build, "cargo build -p flinch-harness --bin flinch")?;
+    let bin = target_dir().join("debug").join("flinch");
+    let mut pytest = Command::new(&py);
+    pytest.args(["-m", "pytest", "python/tests", "-p", "no:cacheprovider", "-p", "no:logging", "-q"]).env("FLINCH_BIN", &bin);
+    let (out, status) = run_captured(pytest.current_dir(&root), "pytest", Duration::from_secs(1200))?;
+    print!("{out}");
+    let verdict = check_pytest(&out, status.code())?;
+    Ok(format!("{verdict}; venv and pip install {installed:.0} s, total {:.0} s", start.elapsed().as_secs_f64()))
+}
+
+/// pytest's closing line: Ok with it when pytest exited 0 having passed at least one test and
+/// skipped none (a skip hides a comparison the tests should make).
+fn check_pytest(out: &str, code: Option<i32>) -> Result<String, String> {
+    let last = out.lines().rev().map(str::trim).find(|l| !l.is_empty()).unwrap_or("").trim_matches('=').trim().to_string();
+    match code {
+        Some(0) => {}
+        Some(5) => return Err(format!("pytest collected no tests: {last}")),
+        c => return Err(format!("pytest exited with {c:?}: {last}")),
+    }
+    let count = |word: &str| last.split(", ").find_map(|p| p.strip_suffix(word).and_then(|n| n.split_whitespace().last()).and_then(|n| n.parse::<u32>().ok())).unwrap_or(0);
+    if count(" passed") == 0 {
+        return Err(format!("pytest passed no test: {last}"));
+    }
+    if count(" skipped") > 0 {
+        return Err(format!("pytest skipped tests: {last}"));
+    }
+    Ok(format!("pytest: {last}"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pytest_must_pass_tests_and_skip_none() {
+        assert_eq!(check_pytest("....\n24 passed, 1 warning in 30.12s\n", Some(0)), Ok("pytest: 24 passed, 1 warning in 30.12s".into()));
+        assert!(check_pytest("===== 24 passed in 3s =====\n", Some(0)).is_ok());
+        assert!(check_pytest("19 passed, 5 skipped, 1 warning in 11.66s\n", Some(0)).unwrap_err().contains("skipped"));
+        assert!(check_pytest("no tests ran in 0.01s\n", Some(5)).unwrap_err().contains("no tests"));
+        assert!(check_pytest("1 failed, 23 passed in 9s\n", Some(1)).is_err());
+        assert!(check_pytest("0 passed\n", Some(0)).is_err());
+        assert!(check_pytest("", None).is_err());
+    }
 
     /// Run `.ci/run` with fake `rustup` (exiting `rustup_status`) and `cargo` (recording its
     /// arguments and `CI`) first on PATH; returns the script's exit status and what cargo recorded.
