@@ -714,8 +714,8 @@ fn python_tests(python: &Path) -> Result<String, String> {
     run(build, "cargo build -p flinch-harness --bin flinch")?;
     let bin = target_dir().join("debug").join("flinch");
     let mut pytest = Command::new(&py);
-    pytest.args(["-m", "pytest", "python/tests", "-p", "no:cacheprovider", "-p", "no:logging", "-q"]).env("FLINCH_BIN", &bin);
-    let (out, status) = run_captured(pytest.current_dir(&root), "pytest", Duration::from_secs(1200))?;
+    pytest.args(["-m", "pytest", "python/tests", "-p", "no:cacheprovider", "-p", "no:logging", "-q"]).env("FLINCH_BIN", &bin).current_dir(&root);
+    let (out, status) = run_captured(pytest, "pytest", Duration::from_secs(1200))?;
     print!("{out}");
     let verdict = check_pytest(&out, status.code())?;
     Ok(format!("{verdict}; venv and pip install {installed:.0} s, total {:.0} s", start.elapsed().as_secs_f64()))
@@ -730,11 +730,19 @@ fn check_pytest(out: &str, code: Option<i32>) -> Result<String, String> {
         Some(5) => return Err(format!("pytest collected no tests: {last}")),
         c => return Err(format!("pytest exited with {c:?}: {last}")),
     }
-    let count = |word: &str| last.split(", ").find_map(|p| p.strip_suffix(word).and_then(|n| n.split_whitespace().last()).and_then(|n| n.parse::<u32>().ok())).unwrap_or(0);
-    if count(" passed") == 0 {
+    // "24 passed, 2 skipped, 1 warning in 3.1s": the number before each word.
+    let count = |word: &str| {
+        last.split(", ")
+            .find_map(|p| {
+                let t: Vec<&str> = p.split_whitespace().collect();
+                (t.len() >= 2 && t[1] == word).then(|| t[0].parse::<u32>().ok()).flatten()
+            })
+            .unwrap_or(0)
+    };
+    if count("passed") == 0 {
         return Err(format!("pytest passed no test: {last}"));
     }
-    if count(" skipped") > 0 {
+    if count("skipped") > 0 {
         return Err(format!("pytest skipped tests: {last}"));
     }
     Ok(format!("pytest: {last}"))
