@@ -22,11 +22,11 @@ import numpy as np
 import pandas as pd
 
 from . import _flinch
-from .errors import FlinchError, InputError, SceneError, SolverError
+from .errors import FlinchError, InputError, RefusalWarning, SceneError, SolverError
 
 __all__ = [
     "run", "sweep", "sample", "merge", "scene", "scenes", "check", "Sample",
-    "FlinchError", "SceneError", "InputError", "SolverError", "BLOCK",
+    "FlinchError", "SceneError", "InputError", "SolverError", "RefusalWarning", "BLOCK",
 ]
 
 __version__ = _flinch.VERSION
@@ -216,9 +216,21 @@ def sample(
     when every sample was refused and SolverError (with ``.result``) when the solver failed at any
     sample, as the command line exits 2 and 3."""
     file, text = _resolve(scene)
-    report, cols = _flinch.sample(file, text, _sample_specs(vary), _count(n), int(seed), bool(truncate), _chunk(chunk), jobs, bool(rows))
+    specs = _sample_specs(vary)
+    _notes(file, text, specs, _count(n), int(seed), bool(truncate))
+    report, cols = _flinch.sample(file, text, specs, _count(n), int(seed), bool(truncate), _chunk(chunk), jobs, bool(rows))
     result = Sample(json.loads(report), _frame(cols) if cols is not None else None)
     return _raise_for(result)
+
+
+def _notes(file: str, text: str, specs: List[str], n: int, seed: int, truncate: bool) -> None:
+    """Checks a study before it runs (raising what ``flinch sample`` refuses) and warns, as its
+    notes do, of distributions that put draws outside their keys' accepted ranges."""
+    import warnings
+
+    _, notes = _flinch.sample_check(file, text, specs, n, seed, truncate)
+    for note in notes:
+        warnings.warn(note, RefusalWarning, stacklevel=3)
 
 
 def _count(n: Any) -> int:

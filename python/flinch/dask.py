@@ -10,14 +10,12 @@ client changes (docs/python.md).
 
 from __future__ import annotations
 
-import json
 import uuid
 from typing import Any, Dict, List, Optional, Tuple
 
 import pandas as pd
 
-from . import Sample, Scene, _chunk_report, _count, _raise_for, _resolve, _sample_specs, merge
-from . import _flinch
+from . import Sample, Scene, _chunk_report, _count, _notes, _raise_for, _resolve, _sample_specs, merge
 
 
 def _total_threads(client) -> int:
@@ -54,7 +52,7 @@ def sample(
     specs = _sample_specs(vary)
     n = _count(n)
     # Checks the study where the user is: a bad key or distribution is an error here, not in a worker.
-    _flinch.sample_check(file, text, specs, n, int(seed), bool(truncate))
+    _notes(file, text, specs, n, int(seed), bool(truncate))
     m = int(chunks) if chunks is not None else 4 * _total_threads(client)
     m = max(1, min(m, n))
     token = uuid.uuid4().hex[:8]

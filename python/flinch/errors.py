@@ -33,3 +33,8 @@ class SolverError(FlinchError, RuntimeError):
     def __init__(self, message: str, result=None):
         super().__init__(message)
         self.result = result
+
+
+class RefusalWarning(UserWarning):
+    """A distribution puts draws outside its key's accepted range: those samples will be refused
+    and counted (the note ``flinch sample`` prints before running)."""

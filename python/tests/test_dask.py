@@ -45,8 +45,10 @@ def test_two_workers_give_the_single_process_result(client):
 def test_refused_samples_and_a_dict_scene_on_dask(client):
     sc = flinch.scene("tables5-7_bistable_v025")
     vary = {"motion.dead_time": "normal:0.002:0.002"}
-    one = flinch.sample(sc, 400, vary, seed=2, rows=False)
-    on_dask = flinch.dask.sample(sc, 400, vary, client, seed=2)
+    with pytest.warns(flinch.RefusalWarning):
+        one = flinch.sample(sc, 400, vary, seed=2, rows=False)
+    with pytest.warns(flinch.RefusalWarning):
+        on_dask = flinch.dask.sample(sc, 400, vary, client, seed=2)
     assert on_dask.report == one.report and one.report["refused"] > 0
 
 

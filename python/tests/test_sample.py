@@ -75,7 +75,8 @@ def test_chunks_merge_into_the_whole_study_and_merging_refuses_other_studies():
 
 def test_refused_samples_are_counted_with_their_reason_never_dropped():
     # A dead time of mean 2 ms and sd 2 ms: about 16 % of draws are below 0, which the validator refuses.
-    r = flinch.sample(SCENE, 500, {"motion.dead_time": "normal:0.002:0.002"}, seed=1)
+    with pytest.warns(flinch.RefusalWarning, match="outside the accepted range"):
+        r = flinch.sample(SCENE, 500, {"motion.dead_time": "normal:0.002:0.002"}, seed=1)
     refused = r.rows[r.rows["status"] == "refused"]
     assert len(r.rows) == 500
     assert r.report["refused"] == len(refused) > 40
@@ -96,7 +97,7 @@ def test_refused_samples_are_counted_with_their_reason_never_dropped():
 def test_every_sample_refused_raises_with_the_result():
     # 99.9 % of the draws are below 0 s: each of these 20 is (a distribution entirely outside is
     # refused before running instead).
-    with pytest.raises(flinch.InputError, match="refused all 20 samples") as e:
+    with pytest.raises(flinch.InputError, match="refused all 20 samples") as e, pytest.warns(flinch.RefusalWarning):
         flinch.sample(SCENE, 20, {"motion.dead_time": "normal:-0.006:0.002"})
     assert e.value.result.report["refused"] == 20
     with pytest.raises(flinch.InputError, match="every sample would be refused"):
