@@ -123,6 +123,7 @@ fn sweep(py: Python<'_>, file: &str, text: &str, vary: Vec<String>, log: Vec<Str
 }
 
 /// The plan of a sample study, checked as `flinch sample` checks it.
+#[allow(clippy::too_many_arguments)]
 fn plan(py: Python<'_>, file: &str, text: &str, vary: &[String], samples: u64, seed: u64, truncate: bool, chunk: Option<(u64, u64)>) -> PyResult<Plan> {
     let t = template(py, file, text)?;
     if let Some((k, m)) = chunk {
@@ -267,7 +268,7 @@ fn sample<'py>(py: Python<'py>, file: &str, text: &str, vary: Vec<String>, sampl
                 c.add(r);
             }
             // After each block: Ctrl-C raises KeyboardInterrupt (only on the main thread).
-            if (r.index + 1 - p.range.0) % sampling::BLOCK as u64 == 0 {
+            if (r.index + 1 - p.range.0).is_multiple_of(sampling::BLOCK as u64) {
                 if let Err(e) = Python::attach(|py| py.check_signals()) {
                     interrupted = Some(e);
                     stop.store(true, Ordering::SeqCst);
