@@ -732,7 +732,7 @@ mod tests {
     /// whole run's.
     #[test]
     fn reports_read_back_have_the_numbers_written() {
-        for x in [3.9262455345639715e-138, 0.1 + 0.2, 1.0 / 3.0, 5e-324, 1.7976931348623157e308, 2.2250738585072014e-308] {
+        for x in [3.9262455345639715e-138_f64, 0.1 + 0.2, 1.0 / 3.0, 5e-324, 1.7976931348623157e308, 2.2250738585072014e-308] {
             let text = serde_json::to_string(&x).unwrap();
             let back: f64 = serde_json::from_str(&text).unwrap();
             assert_eq!(back.to_bits(), x.to_bits(), "{text}");
