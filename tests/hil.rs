@@ -15,8 +15,8 @@ fn bistable() -> Scene {
 }
 
 fn hil_at(scene: &Scene, phase: f64) -> hil::HilReport {
-    let ctl = Controller { scan_cycle: SCAN, phase, firmware_tick: 1e-4 };
-    hil::run(scene, &ctl, hil::DEFAULT_STEP, false).unwrap_or_else(|e| panic!("{e}")).0
+    let ctl = Controller::new(SCAN, phase, 1e-4);
+    hil::run(scene, &ctl, false).unwrap_or_else(|e| panic!("{e}")).0
 }
 
 #[test]
@@ -76,25 +76,25 @@ fn dead_time_spans_latency_to_one_scan_cycle_uniformly_over_phases() {
 fn a_stroke_too_short_for_the_stopping_distance_escalates_to_category_0() {
     // V_c = 0.25 m/s with a 70 ms scan cycle: v DT + v^2/2d = 17.5 + 15.6 mm > 30 - 5 mm left.
     let sc = scene::load(&scene_path("tables5-7_bistable_v025.toml")).unwrap();
-    let ctl = Controller { scan_cycle: 0.07, phase: 0.0, firmware_tick: 1e-4 };
-    let h = hil::run(&sc, &ctl, hil::DEFAULT_STEP, false).unwrap().0;
+    let ctl = Controller::new(0.07, 0.0, 1e-4);
+    let h = hil::run(&sc, &ctl, false).unwrap().0;
     assert!(h.firmware.category0, "{:?}", h.firmware);
 }
 
 #[test]
 fn a_rigid_tool_is_refused_with_a_reason() {
     let sc = scene::load(&scene_path("tables5-7_rigid.toml")).unwrap();
-    let ctl = Controller { scan_cycle: SCAN, phase: 0.0, firmware_tick: 1e-4 };
-    let e = hil::run(&sc, &ctl, hil::DEFAULT_STEP, false).unwrap_err();
+    let ctl = Controller::new(SCAN, 0.0, 1e-4);
+    let e = hil::run(&sc, &ctl, false).unwrap_err();
     assert!(e.contains("sensor.kind") && e.contains("travel"), "{e}");
 }
 
 // ---- Single faults in the loop (issue 10): each ends in stop until a person resets ---------------
 
 fn with_faults(scene: &Scene, two_channels: bool, faults: Vec<hil::Injection>) -> hil::HilReport {
-    let ctl = Controller { scan_cycle: SCAN, phase: 0.3, firmware_tick: 1e-3 };
-    let opts = hil::HilOptions { faults, two_channels };
-    hil::run_with(scene, &ctl, hil::DEFAULT_STEP, false, &opts).unwrap_or_else(|e| panic!("{e}")).0
+    let ctl = Controller::new(SCAN, 0.3, 1e-3);
+    let opts = hil::HilOptions { faults, two_channels, ..Default::default() };
+    hil::run_with(scene, &ctl, false, &opts).unwrap_or_else(|e| panic!("{e}")).0
 }
 
 /// The reason a run must end with when `kind` is injected at `at_s` (the switch fires at `t_sw`).
