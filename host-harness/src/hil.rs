@@ -627,6 +627,12 @@ fn run_loop<S: flinch_firmware::Sensor>(
     plant.sim.probe = None;
     plant.sim.sink = None;
     let mut summary = plant.summary();
+    if let Some(off) = power_removed {
+        warnings.push(format!(
+            "category 0: the firmware's escalation removed drive power at {off} s; the robot coasted and its brakes acted from {} s ({brake_source}); t_brake is the controller's controlled stop, which the power removal overrides, and t_stop is the brakes' standstill",
+            off + brake.delay
+        ));
+    }
     summary.warnings.extend(warnings);
     let switch_time = summary.t_detect;
     let firmware_detect = rig.detected_at_s();

@@ -6,7 +6,10 @@
 //! From the instant power is removed, t_off, with the flange moving at v_0:
 //!
 //! * for `delay` seconds the arm coasts at v_0 (no drive torque; the holding brakes are not yet
-//!   engaged; joint friction and gravity are neglected, which for a stop is the longer case);
+//!   engaged). Joint friction is neglected (it would shorten the stop); so is gravity along the
+//!   motion, which would lengthen a downward stop: give brake figures for the worst pose, as
+//!   manufacturers measure category-0 stops (ISO 10218-1 Annex B: full extension, full speed, full
+//!   payload, moving down);
 //! * then it decelerates at `decel` to standstill, and stays there.
 //!
 //! x(tau) = v_0 tau for tau <= delay, then v_0 delay + v_0 tau' - decel tau'^2 / 2 with
