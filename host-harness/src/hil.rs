@@ -255,14 +255,14 @@ fn describe_filter(f: Filter) -> String {
     match f {
         Filter::None => "none".into(),
         Filter::Consecutive(n) => format!("consecutive:{n}"),
-        Filter::MinDuration(us) => format!("min-duration:{}", us as f64 * 1e-6),
+        Filter::MinDuration(us) => format!("min-duration:{}", us as f64 / 1e6),
     }
 }
 
 fn describe_reset(r: ResetPolicy) -> String {
     match r {
         ResetPolicy::Input => "input".into(),
-        ResetPolicy::Auto { hold_us } => format!("auto:{}", hold_us as f64 * 1e-6),
+        ResetPolicy::Auto { hold_us } => format!("auto:{}", hold_us as f64 / 1e6),
     }
 }
 
