@@ -572,8 +572,8 @@ fn check_hil_and_a_joint_sweep_take_the_urdf_scene() {
     let s = flinch_harness::scene::load(&scene_path("robot_two_link.toml")).unwrap();
     let c = flinch_harness::check::check(&s).unwrap();
     assert!(c.fits, "the example module's stroke absorbs the stop");
-    let ctl = flinch_harness::scene::Controller { scan_cycle: 0.016, phase: 0.0, firmware_tick: 1e-4 };
-    let (rep, _) = flinch_harness::hil::run(&s, &ctl, flinch_harness::hil::DEFAULT_STEP, false).unwrap();
+    let ctl = flinch_harness::scene::Controller::new(0.016, 0.0, 1e-4);
+    let (rep, _) = flinch_harness::hil::run(&s, &ctl, false).unwrap();
     assert!(rep.firmware.switch_time.is_some(), "the switch fires and the firmware sees it");
 
     let text = scene_text().replace("shoulder = 0.3, elbow = 1.2", "shoulder = 0.0, elbow = 1.2");

@@ -46,6 +46,7 @@ use std::sync::Arc;
 use embedded_hal::digital::{ErrorKind, ErrorType, InputPin, OutputPin, StatefulOutputPin};
 use flinch_firmware::{Adc, Clock, Micros};
 
+pub mod latency;
 mod rig;
 pub use rig::{SimRig, SIM_LOG};
 pub mod serial;

@@ -1,22 +1,39 @@
 //! Firmware in the loop (`flinch hil`): the plant and the very same firmware library that runs on
-//! the MCU, stepped in lockstep through `hal-sim`'s stateful fakes.
+//! the MCU, coupled through `hal-sim`'s stateful fakes.
 //!
-//! Each loop step (10 us by default) the plant is integrated to t, the firmware's ticks up to t
-//! run, and the plant's travel drives the switch pin (edges reach the firmware's interrupt path at
-//! once). The robot controller model samples the stop output once per scan cycle, at
-//! `phase * scan_cycle + k * scan_cycle`, and brakes at the first sample that sees it: the dead
-//! time is what comes out, between the firmware latency and one scan cycle more (Ch. 3.1.2: "in
-//! the worst case ... it is necessary to wait a full scan cycle").
+//! # How the two are stepped
+//!
+//! The plant takes the steps its solver takes in a plain run (one at a time, to the step the solver
+//! proposes), and after each one the firmware catches up: the plant's dense output gives the travel
+//! at every firmware tick inside the step, and a switch edge between two of those instants is
+//! located on the dense output (bisection, to 1e-12 s) and handed to the firmware's interrupt path
+//! at that instant. The plant is not restarted at every tick: it lands only where the firmware can
+//! change it, at the controller's samples until the stop has been seen, and where drive power is
+//! removed (category 0). So a `hil` run costs about what `flinch run` costs (docs/accuracy.md,
+//! "Firmware in the loop").
+//!
+//! # What the robot sees
+//!
+//! The stop output reaches the controller `hal_sim::latency::edge_to_stop_s()` (7.25 us, the
+//! measured QEMU worst case at the board's clock) after the edge, or `tick_to_output_s()` after a
+//! tick that confirms a filtered trip. The robot controller model samples it once per scan cycle, at
+//! `phase * scan_cycle + k * scan_cycle`, and starts its controlled stop at the first sample that
+//! sees it: the dead time is what comes out, between the firmware latency and one scan cycle more
+//! (Ch. 3.1.2: "in the worst case ... it is necessary to wait a full scan cycle"). The escalation
+//! output (category 0, IEC 60204-1 9.2.2) acts on the drives' power directly, not through the scan
+//! cycle: `tick_to_output_s()` after the firmware's decision, drive power is removed and the robot's
+//! brakes stop it (`plant/brake.rs`: `[controller] brake_delay`, `brake_decel`, or a category-0
+//! `motion.stopping` table).
 
 use crate::check::{um_down, um_up};
+use crate::plant::brake::PowerOffBrake;
 use crate::scene::{Controller, Decoupler, Scene, Sensor};
 use crate::sim::{Run, Sample, Summary};
-use flinch_firmware::{Boot, BudgetConfig, Config, DigitalSwitch, DualSwitch, ResetCause, ResetPolicy, State, SwitchKind};
-use flinch_hal_sim::{PinFault, SimPin, SimRig};
+use flinch_firmware::{Boot, BudgetConfig, Config, DigitalSwitch, DualSwitch, Filter, ResetCause, ResetPolicy, State, SwitchKind};
+use flinch_hal_sim::{latency, PinFault, SimPin, SimRig};
 use serde::Serialize;
-
-/// Default lockstep interval between plant and firmware, s.
-pub const DEFAULT_STEP: f64 = 1e-5;
+use std::cell::RefCell;
+use std::rc::Rc;
 
 /// One entry of the firmware's event log, in simulation seconds.
 #[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
@@ -64,14 +81,33 @@ pub struct FirmwareFigures {
     pub observed_dead_time: Option<f64>,
     /// The firmware asked for a category-0 stop (stroke budget exceeded).
     pub category0: bool,
+    /// Drive power removed (the escalation output, plus its latency), s; null without category 0.
+    #[serde(rename = "power_removed_s")]
+    pub power_removed: Option<f64>,
+    /// The robot's brakes acting after the power removal, s (plant/brake.rs).
+    #[serde(rename = "brakes_engaged_s")]
+    pub brakes_engaged: Option<f64>,
+    /// Where the category-0 brake's figures came from.
+    pub brake_source: String,
+    /// The firmware's edge-to-stop latency the plant was given, s (hal_sim::latency: the measured
+    /// QEMU worst case at the board's clock).
+    #[serde(rename = "edge_to_stop_latency_s")]
+    pub edge_to_stop_latency: f64,
+    /// The latency of an output written on a tick or by the edge's bookkeeping (a filtered trip,
+    /// the escalation), s.
+    #[serde(rename = "tick_to_output_latency_s")]
+    pub tick_to_output_latency: f64,
+    /// The firmware's glitch filter (`--filter`).
+    pub filter: String,
+    /// How a trip is cleared (`--reset-policy`).
+    pub reset_policy: String,
     /// The firmware's event log.
     pub event_log: Vec<LoggedEvent>,
     /// The injected faults (`--fault`) and whether each ended in a stop.
     pub faults: Vec<FaultOutcome>,
-    /// The stop output's level over the run as the firmware drove it: `(t_s, stop_requested)` at
-    /// t = 0 (the end of the self-test, armed: go) and at every change after (a change inside a
-    /// lockstep step is placed at the firmware's logged time when it logged one). For the CSV and
-    /// the plot; not part of the JSON.
+    /// The stop output's level over the run as the robot controller's input sees it:
+    /// `(t_s, stop_requested)` at t = 0 (the end of the self-test, armed: go) and at every change
+    /// after, the firmware's write plus its latency. For the CSV and the plot; not part of the JSON.
     #[serde(skip)]
     #[schemars(skip)]
     pub stop_output: Vec<(f64, bool)>,
@@ -161,12 +197,73 @@ pub fn parse_faults(spec: &str) -> Result<Vec<Injection>, String> {
 }
 
 /// Options of a firmware-in-the-loop run beyond the controller.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct HilOptions {
     /// Faults to inject.
     pub faults: Vec<Injection>,
     /// Two-channel (antivalent) travel switch instead of one channel.
     pub two_channels: bool,
+    /// The firmware's glitch filter (`Config::filter`; default none: the edge stops directly).
+    pub filter: Filter,
+    /// How a trip is cleared (`Config::reset`; default a reset input, never pressed in the run).
+    pub reset: ResetPolicy,
+}
+
+impl Default for HilOptions {
+    fn default() -> Self {
+        Self { faults: Vec::new(), two_channels: false, filter: Filter::None, reset: ResetPolicy::Input }
+    }
+}
+
+/// Parse `--filter`: `none`, `consecutive:N` (N tick samples, 1..=255) or `min-duration:S`
+/// (seconds, whole microseconds up to 1 s).
+pub fn parse_filter(spec: &str) -> Result<Filter, String> {
+    let allowed = "none, consecutive:N (1 to 255 tick samples) or min-duration:SECONDS (1e-6 to 1 s)";
+    match spec.split_once(':') {
+        None if spec == "none" => Ok(Filter::None),
+        Some(("consecutive", n)) => match n.parse::<u8>() {
+            Ok(n) if n >= 1 => Ok(Filter::Consecutive(n)),
+            _ => Err(format!("--filter consecutive:N: N from 1 to 255, got {n:?}")),
+        },
+        Some(("min-duration", s)) => match s.parse::<f64>() {
+            Ok(x) if (1e-6..=1.0).contains(&x) && whole_us(x) => Ok(Filter::MinDuration(um(x))),
+            _ => Err(format!("--filter min-duration:SECONDS: 1e-6 to 1 s in whole microseconds, got {s:?}")),
+        },
+        _ => Err(format!("--filter: one of {allowed}, got {spec:?}")),
+    }
+}
+
+/// Parse `--reset-policy`: `input` (a reset press; none comes during a run, so a trip stays
+/// latched) or `auto:S` (cleared once the tool has been back on its front stop for S seconds).
+pub fn parse_reset_policy(spec: &str) -> Result<ResetPolicy, String> {
+    match spec.split_once(':') {
+        None if spec == "input" => Ok(ResetPolicy::Input),
+        Some(("auto", s)) => match s.parse::<f64>() {
+            Ok(x) if (1e-6..=10.0).contains(&x) && whole_us(x) => Ok(ResetPolicy::Auto { hold_us: um(x) }),
+            _ => Err(format!("--reset-policy auto:SECONDS: 1e-6 to 10 s in whole microseconds, got {s:?}")),
+        },
+        _ => Err(format!("--reset-policy: input, or auto:SECONDS (back on the front stop that long), got {spec:?}")),
+    }
+}
+
+/// True when `x` seconds is a whole number of microseconds (the firmware's clock counts them).
+pub fn whole_us(x: f64) -> bool {
+    ((x * 1e6) - (x * 1e6).round()).abs() <= 1e-6 * (x * 1e6).abs().max(1.0)
+}
+
+fn describe_filter(f: Filter) -> String {
+    match f {
+        Filter::None => "none".into(),
+        Filter::Consecutive(n) => format!("consecutive:{n}"),
+        Filter::MinDuration(us) => format!("min-duration:{}", us as f64 / 1e6),
+    }
+}
+
+fn describe_reset(r: ResetPolicy) -> String {
+    match r {
+        ResetPolicy::Input => "input".into(),
+        ResetPolicy::Auto { hold_us } => format!("auto:{}", hold_us as f64 / 1e6),
+    }
 }
 
 /// What became of one injected fault. JSON names carry their unit.
@@ -187,10 +284,35 @@ pub struct FaultOutcome {
 /// Discrepancy time of the two-channel switch in `flinch hil --channels 2`, us: 20 ms.
 pub const DISCREPANCY_US: u32 = 20_000;
 
-/// Runs `scene` with the firmware in the loop and the controller `ctl`; `step` is the lockstep
-/// interval in seconds. `record` keeps the time history.
-pub fn run(scene: &Scene, ctl: &Controller, step: f64, record: bool) -> Result<(HilReport, Vec<Sample>), String> {
-    run_with(scene, ctl, step, record, &HilOptions::default())
+/// What the firmware had done by a recorded sample's instant, for its CSV row.
+pub struct RowSignals<'a> {
+    /// The stop output as the controller's input sees it (see [`FirmwareFigures::stop_output`]).
+    pub stop_output: &'a [(f64, bool)],
+    /// The controller sample that saw the stop, once there was one.
+    pub stop_seen: Option<f64>,
+}
+
+/// Where the recorded time history goes.
+pub enum Record<'a> {
+    /// Nowhere.
+    Nothing,
+    /// Kept and returned (tests, short runs).
+    History,
+    /// Handed over sample by sample, once the firmware has caught up with its instant (a streamed
+    /// CSV, a decimated plot: memory stays bounded whatever the duration).
+    Stream(&'a mut dyn FnMut(&Sample, &RowSignals<'_>)),
+}
+
+/// Runs `scene` with the firmware in the loop and the controller `ctl`. `record` keeps the time
+/// history.
+pub fn run(scene: &Scene, ctl: &Controller, record: bool) -> Result<(HilReport, Vec<Sample>), String> {
+    run_with(scene, ctl, record, &HilOptions::default())
+}
+
+/// [`run`] with faults injected, the sensor's channel count, filter and reset policy chosen. A
+/// fault list that the configuration cannot take (channel B of a one-channel switch) is refused.
+pub fn run_with(scene: &Scene, ctl: &Controller, record: bool, opts: &HilOptions) -> Result<(HilReport, Vec<Sample>), String> {
+    run_recording(scene, ctl, opts, if record { Record::History } else { Record::Nothing })
 }
 
 fn apply_common<S: flinch_firmware::Sensor>(rig: &mut SimRig<S>, kind: FaultKind) {
@@ -212,16 +334,30 @@ fn channel_fault(kind: FaultKind, sw: SwitchKind) -> Option<PinFault> {
     }
 }
 
-/// [`run`] with faults injected and the sensor's channel count chosen. A fault list that the
-/// configuration cannot take (channel B of a one-channel switch) is refused.
-pub fn run_with(scene: &Scene, ctl: &Controller, step: f64, record: bool, opts: &HilOptions) -> Result<(HilReport, Vec<Sample>), String> {
-    let threshold = match (&scene.sensor, &scene.decoupler) {
-        (Some(Sensor::Travel { threshold }), Decoupler::Bistable(_) | Decoupler::Hydraulic(_) | Decoupler::Linear(_)) => *threshold,
+/// Why `flinch hil` cannot run this scene's module, if it cannot: the firmware reads a travel
+/// switch and budgets the module's stroke.
+pub fn refusal(scene: &Scene) -> Option<String> {
+    match (&scene.sensor, &scene.decoupler) {
         (Some(Sensor::Force { .. }), _) | (_, Decoupler::Rigid) => {
-            return Err("sensor.kind: flinch hil needs a travel switch (sensor.kind = \"travel\") on a decoupler; a rigid tool's force sensor is not read by this firmware".into())
+            Some("sensor.kind: flinch hil needs a travel switch (sensor.kind = \"travel\") on a decoupler; a rigid tool's force sensor is not read by this firmware".into())
         }
-        (None, _) => return Err("[sensor]: flinch hil needs a travel switch; the scene has no [sensor]".into()),
-    };
+        (None, _) => Some("[sensor]: flinch hil needs a travel switch; the scene has no [sensor]".into()),
+        (_, Decoupler::Linear(_)) => Some(
+            "decoupler.kind: flinch hil cannot run a \"linear\" spring-damper: it has no end-stops (eq 17, 23), so no stroke, and the firmware's stroke budget (stopping distance against the stroke left at detection, BudgetConfig::stroke_um) has nothing to budget; its travel is not bounded, so no stroke budget would be honest. Use a \"bistable\" or \"hydraulic\" module, or `flinch run` for the linear one".into(),
+        ),
+        _ => None,
+    }
+}
+
+/// [`run_with`], with the history going where `record` says.
+pub fn run_recording(scene: &Scene, ctl: &Controller, opts: &HilOptions, record: Record<'_>) -> Result<(HilReport, Vec<Sample>), String> {
+    if let Some(why) = refusal(scene) {
+        return Err(why);
+    }
+    let Some(Sensor::Travel { threshold }) = scene.sensor else { return Err("[sensor]: flinch hil needs a travel switch".into()) };
+    if !whole_us(ctl.firmware_tick) {
+        return Err(format!("controller.firmware_tick: a whole number of microseconds (the firmware's clock counts them), got {} s", ctl.firmware_tick));
+    }
     // Inductive on the bi-stable slide (ON at the front stop), magnetic on the hydraulic piston, wired
     // low-on-trip so that a cut wire reads as a trip (fail-safe) for both.
     let kind = if matches!(scene.decoupler, Decoupler::Hydraulic(_)) { SwitchKind::Magnetic { trip_high: false } } else { SwitchKind::Inductive };
@@ -233,8 +369,9 @@ pub fn run_with(scene: &Scene, ctl: &Controller, step: f64, record: bool, opts: 
         stroke_um: um_down(stroke(scene)) as i32,
     };
     let mut cfg = Config::new(um(ctl.firmware_tick).max(1), budget);
-    cfg.reset = ResetPolicy::Input; // latched for the whole run
-    let refused = |e| format!("[controller]: the firmware refused its configuration: {e:?}");
+    cfg.filter = opts.filter;
+    cfg.reset = opts.reset;
+    let refused = |e: flinch_firmware::ConfigError| format!("the firmware refused its configuration: {}", e.message());
     if opts.two_channels {
         // Antivalent pair: channel A as the single switch, channel B its complement (NO).
         let kind_b = SwitchKind::Magnetic { trip_high: !kind.trip_level_high() };
@@ -246,7 +383,7 @@ pub fn run_with(scene: &Scene, ctl: &Controller, step: f64, record: bool, opts: 
             (_, Some(pf)) => rig.inject_pin_fault(&a, pf),
             (_, None) => apply_common(rig, f),
         };
-        run_loop(scene, ctl, step, record, threshold, &mut rig, opts, apply)
+        run_loop(scene, ctl, record, threshold, &mut rig, opts, apply)
     } else {
         if opts.faults.iter().any(|f| f.kind == FaultKind::StuckRestB) {
             return Err("--fault stuck-rest-b: needs a two-channel switch (--channels 2); this run has one channel".into());
@@ -257,7 +394,102 @@ pub fn run_with(scene: &Scene, ctl: &Controller, step: f64, record: bool, opts: 
             (_, Some(pf)) => rig.inject_switch_fault(pf),
             (_, None) => apply_common(rig, f),
         };
-        run_loop(scene, ctl, step, record, threshold, &mut rig, opts, apply)
+        run_loop(scene, ctl, record, threshold, &mut rig, opts, apply)
+    }
+}
+
+/// What the firmware must be given, in time order, found on the plant's dense output.
+#[derive(Debug, Clone, Copy)]
+enum Input {
+    /// The switch changes level at `t` (travel `um` just past it).
+    Edge { t: f64, um: i32 },
+    /// A firmware tick is due at `t` (travel `um` then).
+    Tick { t: f64, um: i32 },
+}
+
+/// Reads the switch between the plant's steps: the travel at each firmware tick, and the instant
+/// of every level change, located on the step's dense output.
+struct SwitchProbe {
+    tick_us: i64,
+    /// The next tick, as a count of ticks from sim time 0.
+    next_tick: i64,
+    threshold_um: i32,
+    /// Tripped at the last instant looked at, and that instant.
+    level: bool,
+    last_t: f64,
+    inputs: Vec<Input>,
+}
+
+impl SwitchProbe {
+    /// Travel (m) and tripped (the plant's own switch signal: > 0 as its event) at `t` of a step.
+    fn read(plant: &crate::plant::Plant, t: f64, dense: &dyn Fn(f64) -> crate::plant::State) -> (f64, bool) {
+        let k = plant.kinematics(t, &dense(t));
+        let tripped = plant.detector.is_some_and(|d| d.signal(k.s, 0.0) > 0.0);
+        (plant.travel(&k), tripped)
+    }
+
+    /// Travel in whole micrometres on the side of the threshold the plant says it is.
+    fn um_for(&self, travel: f64, tripped: bool) -> i32 {
+        let floor = (travel * 1e6).floor().clamp(i32::MIN as f64, i32::MAX as f64) as i32;
+        if tripped { floor.max(self.threshold_um) } else { floor.min(self.threshold_um.saturating_sub(1)) }
+    }
+
+    fn look(&mut self, plant: &crate::plant::Plant, t: f64, dense: &dyn Fn(f64) -> crate::plant::State) -> (f64, bool) {
+        let (travel, tripped) = Self::read(plant, t, dense);
+        if tripped != self.level {
+            // Bisect [last_t, t] for the first instant on the new side.
+            let (mut a, mut b) = (self.last_t, t);
+            let mut at_b = (travel, tripped);
+            for _ in 0..60 {
+                if b - a <= 1e-12 {
+                    break;
+                }
+                let m = 0.5 * (a + b);
+                let r = Self::read(plant, m, dense);
+                if r.1 == tripped {
+                    b = m;
+                    at_b = r;
+                } else {
+                    a = m;
+                }
+            }
+            let um = self.um_for(at_b.0, tripped);
+            self.inputs.push(Input::Edge { t: b, um });
+            self.level = tripped;
+        }
+        self.last_t = t;
+        (travel, tripped)
+    }
+
+    fn on_step(&mut self, plant: &crate::plant::Plant, t0: f64, t1: f64, dense: &dyn Fn(f64) -> crate::plant::State) {
+        if t1 < t0 {
+            return;
+        }
+        loop {
+            let tk = (self.next_tick * self.tick_us) as f64 * 1e-6;
+            if tk > t1 {
+                break;
+            }
+            let (travel, tripped) = self.look(plant, tk.max(t0), dense);
+            let um = self.um_for(travel, tripped);
+            self.inputs.push(Input::Tick { t: tk, um });
+            self.next_tick += 1;
+        }
+        self.look(plant, t1, dense);
+    }
+}
+
+/// Which firmware path wrote an output: its latency differs.
+#[derive(Clone, Copy, PartialEq)]
+enum Path {
+    Edge,
+    Tick,
+}
+
+fn latency_of(p: Path) -> f64 {
+    match p {
+        Path::Edge => latency::edge_to_stop_s(),
+        Path::Tick => latency::tick_to_output_s(),
     }
 }
 
@@ -265,8 +497,7 @@ pub fn run_with(scene: &Scene, ctl: &Controller, step: f64, record: bool, opts: 
 fn run_loop<S: flinch_firmware::Sensor>(
     scene: &Scene,
     ctl: &Controller,
-    step: f64,
-    record: bool,
+    mut record: Record<'_>,
     threshold: f64,
     rig: &mut SimRig<S>,
     opts: &HilOptions,
@@ -275,67 +506,134 @@ fn run_loop<S: flinch_firmware::Sensor>(
     rig.boot(1_000_000).map_err(|s| format!("the firmware did not arm after 1 s of self-test (stuck in {s:?})"))?;
     let mut pending: std::collections::VecDeque<Injection> = opts.faults.iter().copied().collect();
     let mut outcomes: Vec<FaultOutcome> = Vec::new();
+    let (brake, brake_source) = cat0_brake(scene, ctl);
 
-    let mut plant = Run::new(scene, true, record);
+    let keep = !matches!(record, Record::Nothing);
+    let mut plant = Run::new(scene, true, keep);
+    // Recorded samples wait here until the firmware has caught up with their instant.
+    let rows: Rc<RefCell<Vec<Sample>>> = Rc::new(RefCell::new(Vec::new()));
+    if let Record::Stream(_) = record {
+        let buf = Rc::clone(&rows);
+        plant.sim.sink = Some(Box::new(move |s: &Sample| buf.borrow_mut().push(*s)));
+    }
+    let tick_us = i64::from(um(ctl.firmware_tick).max(1));
+    let probe = Rc::new(RefCell::new(SwitchProbe { tick_us, next_tick: 0, threshold_um: um(threshold) as i32, level: false, last_t: 0.0, inputs: Vec::new() }));
+    {
+        let (k, _) = plant.now();
+        let tripped = plant.sim.plant.detector.is_some_and(|d| d.signal(k.s, 0.0) > 0.0);
+        let mut p = probe.borrow_mut();
+        p.level = tripped;
+        let um0 = p.um_for(plant.travel(), tripped);
+        drop(p);
+        rig.set_travel_um(um0);
+    }
+    let pr = Rc::clone(&probe);
+    plant.sim.probe = Some(Box::new(move |pl, t0, t1, dense| pr.borrow_mut().on_step(pl, t0, t1, dense)));
+
     let scan = ctl.scan_cycle;
     let mut next_sample = ctl.phase * scan;
-    let mut stop_seen = None;
+    let mut stop_seen: Option<f64> = None;
     let mut category0 = false;
-    let threshold_um = um(threshold) as i32;
-    // Floor to whole micrometres: the switch must not trip before the travel reaches d_sw.
-    let travel_um = |m: f64| (m * 1e6).floor().clamp(i32::MIN as f64, i32::MAX as f64) as i32;
-    let mut edge_given = false;
-    let mut t = 0.0_f64;
-    // The stop output's level as the firmware drives it, recorded at each change.
+    let mut power_removed: Option<f64> = None;
+    let mut warnings: Vec<String> = Vec::new();
     let mut stop_output = vec![(0.0, rig.stop_requested())];
-    let mut note_level = |rig: &SimRig<S>, at: f64| {
-        let level = rig.stop_requested();
-        let (since, last) = stop_output.last().copied().unwrap_or((0.0, !level));
-        if level != last {
-            // The firmware's own timestamp of the change, when it logged one inside this step.
-            let logged = rig.events().last().map(|e| rig.seconds_at(e.at)).filter(|&l| l > since && l <= at + 1e-9);
-            stop_output.push((logged.unwrap_or(at).max(since), level));
-        }
-    };
-    // Lockstep: every `step`, and exactly at each controller sample.
+    let mut esc_level = rig.category0_requested();
+    let mut t = 0.0_f64;
+    let max_step = scene.solver.max_step;
     while t < scene.duration_s {
-        let next_fault = pending.front().map_or(f64::INFINITY, |f| f.at_s);
-        let t_next = (t + step).min(next_sample).min(scene.duration_s).min(next_fault.max(t));
-        plant.advance_to(t_next).map_err(|e| e.to_string())?;
-        // The plant located the threshold crossing inside this step: give the firmware its edge at
-        // that instant, not at the end of the step.
-        if let (false, Some(t_sw)) = (edge_given, plant.switch_time()) {
-            edge_given = true;
-            rig.advance_to(t_sw);
-            rig.set_travel_um(threshold_um.max(travel_um(plant.travel())));
-            note_level(rig, t_sw);
+        // The step the solver would take anyway; until the controller has seen the stop, not past
+        // its next sample (braking starts there if it sees the stop).
+        let h = plant.next_step();
+        let mut target = (t + if h > 0.0 { h } else { max_step }).min(scene.duration_s);
+        if stop_seen.is_none() {
+            target = target.min(next_sample.max(t));
         }
-        rig.advance_to(t_next);
-        rig.set_travel_um(travel_um(plant.travel()));
-        note_level(rig, t_next);
-        while let Some(f) = pending.front().copied().filter(|f| f.at_s <= t_next) {
-            pending.pop_front();
-            apply(rig, f.kind);
-            note_level(rig, t_next);
-            let name = FAULTS.iter().find(|(_, k, _)| *k == f.kind).map_or("?", |(n, _, _)| *n);
-            outcomes.push(FaultOutcome { fault: name.into(), at_s: f.at_s, stopped_s: None, ended_in_go: false, reason: String::new() });
+        if target <= t {
+            target = (t + max_step).min(scene.duration_s);
         }
-        for o in outcomes.iter_mut().filter(|o| o.stopped_s.is_none()) {
-            if rig.stop_requested() {
-                o.stopped_s = Some(t_next);
+        plant.advance_to(target).map_err(|e| e.to_string())?;
+        let now = plant.time();
+        // The firmware catches up with the plant.
+        let inputs = std::mem::take(&mut probe.borrow_mut().inputs);
+        let mut note = |rig: &mut SimRig<S>, at: f64, path: Path, plant: &mut Run, outcomes: &mut Vec<FaultOutcome>| {
+            let level = rig.stop_requested();
+            let last = stop_output.last().map_or(!level, |l| l.1);
+            if level != last {
+                let seen_at = (at + latency_of(path)).max(stop_output.last().map_or(0.0, |l| l.0));
+                stop_output.push((seen_at, level));
+            }
+            if level {
+                for o in outcomes.iter_mut().filter(|o| o.stopped_s.is_none() && o.at_s <= at + 1e-12) {
+                    o.stopped_s = Some(at);
+                }
+            }
+            let esc = rig.category0_requested();
+            if esc && !esc_level {
+                category0 = true;
+                if power_removed.is_none() {
+                    // The escalation output drops the drives' power directly (a safety relay, STO),
+                    // not through the controller's scan cycle.
+                    let off = at + latency::tick_to_output_s();
+                    let applied = plant.remove_power(off, brake);
+                    if applied > off + 1e-12 {
+                        warnings.push(format!("category 0: drive power removal due at {off} s was applied at {applied} s, the end of the solver step the escalation was found in ({} us late)", ((applied - off) * 1e6).round()));
+                    }
+                    power_removed = Some(applied);
+                }
+            }
+            esc_level = esc;
+        };
+        for input in inputs {
+            let at = match input {
+                Input::Edge { t, .. } | Input::Tick { t, .. } => t,
+            };
+            while let Some(f) = pending.front().copied().filter(|f| f.at_s <= at) {
+                pending.pop_front();
+                inject(rig, f, &mut apply, &mut outcomes, &mut |rig, at, path, outcomes| note(rig, at, path, &mut plant, outcomes));
+            }
+            match input {
+                Input::Edge { t, um } => {
+                    rig.advance_to(t);
+                    rig.set_travel_um(um);
+                    note(rig, t, Path::Edge, &mut plant, &mut outcomes);
+                }
+                Input::Tick { t, um } => {
+                    rig.set_travel_um(um);
+                    rig.advance_to(t);
+                    note(rig, t, Path::Tick, &mut plant, &mut outcomes);
+                }
             }
         }
-        if t_next >= next_sample {
-            if stop_seen.is_none() && rig.stop_requested() {
+        while let Some(f) = pending.front().copied().filter(|f| f.at_s <= now) {
+            pending.pop_front();
+            inject(rig, f, &mut apply, &mut outcomes, &mut |rig, at, path, outcomes| note(rig, at, path, &mut plant, outcomes));
+        }
+        // The controller's samples up to now.
+        while next_sample <= now {
+            if stop_seen.is_none() && level_at(&stop_output, next_sample) {
                 stop_seen = Some(next_sample);
-                category0 = rig.category0_requested();
                 plant.command_brake(next_sample);
             }
             next_sample += scan;
         }
-        t = t_next;
+        if let Record::Stream(sink) = &mut record {
+            let signals = RowSignals { stop_output: &stop_output, stop_seen };
+            for s in rows.borrow_mut().drain(..) {
+                sink(&s, &signals);
+            }
+        }
+        t = now;
     }
-    let summary = plant.summary();
+    plant.sim.probe = None;
+    plant.sim.sink = None;
+    let mut summary = plant.summary();
+    if let Some(off) = power_removed {
+        warnings.push(format!(
+            "category 0: the firmware's escalation removed drive power at {off} s; the robot coasted and its brakes acted from {} s ({brake_source}); t_brake is the controller's controlled stop, which the power removal overrides, and t_stop is the brakes' standstill",
+            off + brake.delay
+        ));
+    }
+    summary.warnings.extend(warnings);
     let switch_time = summary.t_detect;
     let firmware_detect = rig.detected_at_s();
     let event_log = rig
@@ -371,10 +669,48 @@ fn run_loop<S: flinch_firmware::Sensor>(
         stop_seen,
         observed_dead_time: summary.t_brake.zip(switch_time).map(|(b, s)| b - s),
         category0,
+        power_removed,
+        brakes_engaged: power_removed.map(|p| p + brake.delay),
+        brake_source,
+        edge_to_stop_latency: latency::edge_to_stop_s(),
+        tick_to_output_latency: latency::tick_to_output_s(),
+        filter: describe_filter(opts.filter),
+        reset_policy: describe_reset(opts.reset),
         event_log,
         faults: outcomes,
         stop_output,
     };
-    let history = std::mem::take(&mut plant.sim.history);
+    let history = if matches!(record, Record::History) { std::mem::take(&mut plant.sim.history) } else { Vec::new() };
     Ok((HilReport { summary, firmware }, history))
+}
+
+/// The stop output's level at `t` (the last change at or before it).
+fn level_at(output: &[(f64, bool)], t: f64) -> bool {
+    output.iter().take_while(|&&(at, _)| at <= t).last().is_some_and(|&(_, l)| l)
+}
+
+type Note<'n, S> = dyn FnMut(&mut SimRig<S>, f64, Path, &mut Vec<FaultOutcome>) + 'n;
+
+fn inject<S: flinch_firmware::Sensor>(rig: &mut SimRig<S>, f: Injection, apply: &mut impl FnMut(&mut SimRig<S>, FaultKind), outcomes: &mut Vec<FaultOutcome>, note: &mut Note<'_, S>) {
+    rig.advance_to(f.at_s);
+    let before = rig.stop_requested();
+    let name = FAULTS.iter().find(|(_, k, _)| *k == f.kind).map_or("?", |(n, _, _)| *n);
+    outcomes.push(FaultOutcome { fault: name.into(), at_s: f.at_s, stopped_s: None, ended_in_go: false, reason: String::new() });
+    apply(rig, f.kind);
+    // A level change on a switch input reaches the edge interrupt at once.
+    let path = if rig.stop_requested() != before { Path::Edge } else { Path::Tick };
+    note(rig, f.at_s, path, outcomes);
+}
+
+/// The brakes of a category-0 stop, and where their figures come from: the robot's own
+/// category-0 stopping table at the scene's speed when it has one, else `[controller]`.
+fn cat0_brake(scene: &Scene, ctl: &Controller) -> (PowerOffBrake, String) {
+    if let Some(table) = scene.motion.stopping.filter(|t| t.category == 0) {
+        if let Some(e) = table.equivalent(scene.motion.speed) {
+            return (PowerOffBrake { delay: e.dead_time, decel: e.decel }, format!("motion.stopping (category 0) at {} m/s: delay {} s, {} m/s^2", scene.motion.speed, e.dead_time, e.decel));
+        }
+    }
+    let b = ctl.brake();
+    let default = b.delay == crate::plant::brake::DEFAULT_DELAY_S && b.decel == crate::plant::brake::DEFAULT_DECEL_MPS2;
+    (b, format!("[controller] brake_delay {} s, brake_decel {} m/s^2{}", b.delay, b.decel, if default { " (defaults, plant/brake.rs)" } else { "" }))
 }

@@ -109,12 +109,9 @@ struct HilArgs {
     /// Phase of the controller's first sample, as a fraction of the scan cycle in [0, 1).
     #[arg(long, value_name = "FRACTION")]
     phase: Option<f64>,
-    /// The firmware's tick period, s.
+    /// The firmware's tick period, s (whole microseconds).
     #[arg(long, value_name = "S")]
     tick: Option<f64>,
-    /// Lockstep interval between plant and firmware, s.
-    #[arg(long, value_name = "S", default_value_t = hil::DEFAULT_STEP)]
-    step: f64,
     /// Faults to inject, NAME@SECONDS, comma-separated: stuck-rest, stuck-trip, cut-wire,
     /// stuck-rest-b, welded-output, edm-wire-cut, clock-stall, reset. Exit 1 if one ends in "go".
     #[arg(long, value_name = "NAME@S,...")]
@@ -122,6 +119,14 @@ struct HilArgs {
     /// Channels of the travel switch: 1, or 2 (antivalent pair, cross-monitored, 20 ms discrepancy).
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2))]
     channels: u8,
+    /// The firmware's glitch filter: none (the edge stops at once), consecutive:N (N tick samples
+    /// tripped), min-duration:S (tripped for S seconds).
+    #[arg(long, value_name = "FILTER", default_value = "none")]
+    filter: String,
+    /// How a trip is cleared: input (a reset press, none during the run: latched), or auto:S (back
+    /// on the front stop for S seconds).
+    #[arg(long, value_name = "POLICY", default_value = "input")]
+    reset_policy: String,
     #[command(flatten)]
     out: Output,
 }
@@ -224,49 +229,76 @@ fn run(args: &RunArgs) -> Result<bool, Failure> {
     Ok(true)
 }
 
+/// The controller: the scene's `[controller]` (validated by the loader, which names file, line and
+/// key) with the options on top (named as options).
 fn controller(args: &HilArgs, sc: &scene::Scene, file: &Path) -> Result<scene::Controller, String> {
     let base = sc.controller;
     let scan_cycle = args.scan_cycle.or(base.map(|c| c.scan_cycle)).ok_or_else(|| format!("{}: [controller] scan_cycle is missing: add a [controller] table or pass --scan-cycle", file.display()))?;
     let phase = args.phase.or(base.map(|c| c.phase)).unwrap_or(0.0);
     let firmware_tick = args.tick.or(base.map(|c| c.firmware_tick)).unwrap_or(1e-4);
-    // Name where a value came from: the option, or the scene's [controller] table.
-    let from = |given: bool, opt: &str, key: &str| if given { opt.to_string() } else { format!("{}: [controller] {key}", file.display()) };
-    if !(scan_cycle > 0.0 && scan_cycle.is_finite()) {
-        return Err(format!("{}: must be > 0 s, got {scan_cycle}", from(args.scan_cycle.is_some(), "--scan-cycle", "scan_cycle")));
+    if args.scan_cycle.is_some() && !(scan_cycle > 0.0 && scan_cycle.is_finite()) {
+        return Err(format!("--scan-cycle: must be > 0 s, got {scan_cycle}"));
     }
-    if !(0.0..1.0).contains(&phase) {
-        return Err(format!("{}: must be in [0, 1), got {phase}", from(args.phase.is_some(), "--phase", "phase")));
+    if args.phase.is_some() && !(0.0..1.0).contains(&phase) {
+        return Err(format!("--phase: must be in [0, 1), got {phase}"));
     }
-    if !(1e-6..=0.1).contains(&firmware_tick) {
-        return Err(format!("{}: must be in [1e-6, 0.1] s, got {firmware_tick}", from(args.tick.is_some(), "--tick", "firmware_tick")));
+    if args.tick.is_some() && !((1e-6..=0.1).contains(&firmware_tick) && hil::whole_us(firmware_tick)) {
+        return Err(format!("--tick: must be in [1e-6, 0.1] s in whole microseconds (the firmware's clock counts them), got {firmware_tick}"));
     }
-    if !(args.step >= 1e-7 && args.step <= firmware_tick) {
-        return Err(format!("--step: must be in [1e-7 s, the firmware tick {firmware_tick} s], got {}", args.step));
-    }
-    Ok(scene::Controller { scan_cycle, phase, firmware_tick })
+    let mut c = base.unwrap_or(scene::Controller::new(scan_cycle, phase, firmware_tick));
+    c.scan_cycle = scan_cycle;
+    c.phase = phase;
+    c.firmware_tick = firmware_tick;
+    Ok(c)
 }
 
 fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
+    use flinch_harness::sim::Sample;
     check_outputs(&args.out, None)?;
     let sc = load(&args.scene)?;
+    let at_file = |e: String| format!("{}: {e}", args.scene.display());
+    if let Some(why) = hil::refusal(&sc) {
+        return Err(Failure::bad_input(at_file(why)));
+    }
     let ctl = controller(args, &sc, &args.scene).map_err(Failure::bad_input)?;
-    let record = args.out.csv.is_some() || args.out.plot.is_some();
     let faults = hil::parse_faults(args.fault.as_deref().unwrap_or("")).map_err(Failure::bad_input)?;
     if args.channels == 1 && faults.iter().any(|f| f.kind == hil::FaultKind::StuckRestB) {
         return Err(Failure::bad_input("--fault stuck-rest-b: needs --channels 2 (this run has one channel)"));
     }
-    let opts = hil::HilOptions { faults, two_channels: args.channels == 2 };
-    let (rep, history) = hil::run_with(&sc, &ctl, args.step, record, &opts).map_err(|e| Failure::runtime(format!("{}: {e}", args.scene.display())))?;
+    let filter = hil::parse_filter(&args.filter).map_err(Failure::bad_input)?;
+    let reset = hil::parse_reset_policy(&args.reset_policy).map_err(Failure::bad_input)?;
+    let opts = hil::HilOptions { faults, two_channels: args.channels == 2, filter, reset };
+    // Outputs stream (bounded memory whatever the duration); a long run shows its progress on a
+    // terminal and stops cleanly on Ctrl-C, the CSV flagged partial.
+    let long = sc.duration_s > 5.0 || stream::expected_rows(&sc) > 1_000_000;
+    let streaming = args.out.csv.is_some() || args.out.plot.is_some() || (long && std::io::IsTerminal::is_terminal(&std::io::stderr()));
+    let (rep, plotted, rows) = if streaming {
+        let trace = Trace::new(&sc).with_hil(HilSignals::before_run(&sc, ctl.scan_cycle, ctl.phase));
+        let mut st = stream::Streamer::open(&sc, args.out.csv.as_deref(), args.out.plot.is_some(), None, trace)?;
+        let mut shown = (0usize, None::<f64>);
+        let mut sink = |s: &Sample, sig: &hil::RowSignals<'_>| {
+            if (sig.stop_output.len(), sig.stop_seen) != shown {
+                shown = (sig.stop_output.len(), sig.stop_seen);
+                if let Some(h) = st.trace_mut().and_then(|t| t.hil.as_mut()) {
+                    h.stop_output = sig.stop_output.to_vec();
+                    h.stop_seen_s = sig.stop_seen;
+                }
+            }
+            st.take(s);
+        };
+        let r = hil::run_recording(&sc, &ctl, &opts, hil::Record::Stream(&mut sink));
+        let (plotted, rows, _) = st.close()?;
+        (r.map_err(|e| Failure::runtime(at_file(e)))?.0, plotted, rows)
+    } else {
+        (hil::run_with(&sc, &ctl, false, &opts).map_err(|e| Failure::runtime(at_file(e)))?.0, Vec::new(), 0)
+    };
     let safe = rep.firmware.faults.iter().all(|f| !f.ended_in_go);
-    let trace = Trace::new(&sc).with_hil(HilSignals::new(&sc, &rep));
     if let Some(p) = &args.out.csv {
-        let mut w = output::create(p)?;
-        report::csv::write(&mut w, &history, &trace).map_err(|e| output::write_error(p, &e))?;
-        wrote(p, &format!("{} rows", history.len()));
+        wrote(p, &format!("{rows} rows"));
     }
     if let Some(p) = &args.out.plot {
-        let shown = stream::decimate(&history, sc.duration_s);
-        report::plot::draw(p, &sc, &rep.summary, &shown, &trace, &Vec::new()).map_err(Failure::runtime)?;
+        let trace = Trace::new(&sc).with_hil(HilSignals::new(&sc, &rep));
+        report::plot::draw(p, &sc, &rep.summary, &plotted, &trace, &Vec::new()).map_err(Failure::runtime)?;
         wrote(p, "plot");
     }
     let text = if args.out.json {
@@ -275,9 +307,13 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
         let f = &rep.firmware;
         let ms = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{:.3} ms", v * 1e3));
         let mut t = report::human(&rep.summary);
-        t.push_str(&format!("  firmware in the loop: scan cycle {:.3} ms, phase {:.2}, tick {:.3} ms\n", f.scan_cycle * 1e3, f.phase, f.firmware_tick * 1e3));
+        t.push_str(&format!("  firmware in the loop: scan cycle {:.3} ms, phase {:.2}, tick {:.3} ms, filter {}, reset {}\n", f.scan_cycle * 1e3, f.phase, f.firmware_tick * 1e3, f.filter, f.reset_policy));
         t.push_str(&format!("    switch {}   firmware timestamp {}   latency {}   controller saw the stop {}\n", ms(f.switch_time), ms(f.firmware_detect), ms(f.firmware_latency), ms(f.stop_seen)));
-        t.push_str(&format!("    observed dead time {}{}   event log: {} entr{}\n", ms(f.observed_dead_time), if f.category0 { "   CATEGORY 0 requested (stroke budget exceeded)" } else { "" }, f.event_log.len(), if f.event_log.len() == 1 { "y" } else { "ies" }));
+        t.push_str(&format!("    observed dead time {}   event log: {} entr{}\n", ms(f.observed_dead_time), f.event_log.len(), if f.event_log.len() == 1 { "y" } else { "ies" }));
+        t.push_str(&format!("    board latency given to the plant: edge to stop {:.2} us, tick or bookkeeping to output {:.2} us (measured QEMU worst case at 16 MHz, hal-sim/src/latency.rs)\n", f.edge_to_stop_latency * 1e6, f.tick_to_output_latency * 1e6));
+        if f.category0 {
+            t.push_str(&format!("    CATEGORY 0 requested (stroke budget exceeded): drive power removed {}, brakes acting {} ({})\n", ms(f.power_removed), ms(f.brakes_engaged), f.brake_source));
+        }
         for o in &f.faults {
             t.push_str(&format!("    fault {} at {:.3} s: stop {}; {}\n", o.fault, o.at_s, o.stopped_s.map_or("never".to_string(), |s| format!("from {s:.4} s")), o.reason));
         }

@@ -235,6 +235,9 @@ pub fn simplified(scene: &Scene) -> (Scene, Vec<String>) {
     (s, done)
 }
 
+/// See [`Simulation::probe`].
+pub type Probe = Box<dyn FnMut(&Plant, f64, f64, &dyn Fn(f64) -> State)>;
+
 /// The plant as a hybrid system, with the run's bookkeeping.
 pub struct Simulation {
     /// The plant.
@@ -283,6 +286,9 @@ pub struct Simulation {
     /// Where recorded samples go as each step makes them (a streamed CSV, a decimated plot: memory
     /// stays bounded whatever the duration); `None` keeps them in `history`.
     pub sink: Option<Box<dyn FnMut(&Sample)>>,
+    /// Called after every accepted step with the plant, the step's span [t0, t1] and its dense
+    /// output: firmware in the loop reads the switch between steps from it (`hil.rs`).
+    pub probe: Option<Probe>,
     warnings: Vec<String>,
     /// Contact and robot-force magnitude at the end of the last step (t, (N, N)).
     last_end: (f64, (f64, f64)),
@@ -417,6 +423,10 @@ impl Hybrid<N, E> for Simulation {
     }
 
     fn on_step(&mut self, t0: f64, t1: f64, y1: &State, dense: &dyn Fn(f64) -> State) {
+        if let Some(mut p) = self.probe.take() {
+            p(&self.plant, t0, t1, dense);
+            self.probe = Some(p);
+        }
         match self.record_every {
             // output_interval = 0: every step's end (adding 0 to next_record would never end).
             Some(dt) if dt <= 0.0 => {
@@ -616,6 +626,7 @@ impl Simulation {
             next_record: 0.0,
             history: Vec::new(),
             sink: None,
+            probe: None,
             warnings,
             last_end: (f64::NAN, (0.0, 0.0)),
             last_end_s_dot: 0.0,
@@ -794,6 +805,24 @@ impl Run {
     /// then, or with a stopping table the table's equivalent dead time later.
     pub fn command_brake(&mut self, t: f64) {
         self.sim.plant.motion.stop_signal_at(t.max(self.driver.t));
+    }
+
+    /// Drive power is removed at `t`: a category-0 stop, the arm's brakes stop it
+    /// (`plant/brake.rs`). Returns the instant it takes effect: `t`, or now if `t` is already past
+    /// and the arm did not move between `t` and now as a coasting arm would (then the caller says
+    /// so). A `t` in the past is exact when the arm cruised at a constant speed since and the brakes
+    /// had not engaged yet: coasting is that same motion.
+    pub fn remove_power(&mut self, t: f64, brake: plant::brake::PowerOffBrake) -> f64 {
+        let now = self.driver.t;
+        let m = &self.sim.plant.motion;
+        let at = if t >= now || (brake.delay >= now - t && m.steady_between(t, now)) { t } else { now };
+        self.sim.plant.motion.remove_power_at(at, brake);
+        at
+    }
+
+    /// The step the solver would take next, s (0 before its first estimate).
+    pub fn next_step(&self) -> f64 {
+        self.driver.next_step()
     }
 
     /// Integration cost so far.

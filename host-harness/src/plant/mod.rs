@@ -7,6 +7,7 @@
 //! accumulated while in contact. Entries an element does not use (x_r of a rigid robot, x_t of a
 //! rigid tool, x_p of an obstacle) stay constant and are ignored.
 
+pub mod brake;
 pub mod contact;
 pub mod damping_law;
 pub mod decoupler;

@@ -6,6 +6,7 @@
 //! ([`MotionLaw::stop_signal_at`]) and the law brakes with the table's equivalent dead time and
 //! deceleration at the speed commanded at that instant, so it covers the table's D(v) in T(v).
 
+use super::brake::PowerOffBrake;
 use super::stopping::StoppingTable;
 use crate::scene::Motion;
 
@@ -22,6 +23,8 @@ pub struct MotionLaw {
     stopping: Option<StoppingTable>,
     /// Set when a stop signalled from the table needed its equivalent adjusted (the reason).
     pub adjusted: Option<&'static str>,
+    /// Drive power removed (category-0 stop, `plant/brake.rs`): when, and the brakes that stop it.
+    power_off: Option<(f64, PowerOffBrake)>,
 }
 
 /// Commanded position, velocity and acceleration at one instant.
@@ -38,7 +41,7 @@ pub struct Commanded {
 impl MotionLaw {
     /// The law of a scene's `[motion]`, not yet braking.
     pub fn new(m: &Motion) -> Self {
-        Self { speed: m.speed, accel: m.accel, decel: m.decel, start_at_speed: m.start_at_speed, t_brake: None, stopping: m.stopping, adjusted: None }
+        Self { speed: m.speed, accel: m.accel, decel: m.decel, start_at_speed: m.start_at_speed, t_brake: None, stopping: m.stopping, adjusted: None, power_off: None }
     }
 
     /// The robot gets the stop signal at `t`: without a table braking starts then (`brake_at`);
@@ -85,19 +88,66 @@ impl MotionLaw {
         self.t_brake
     }
 
-    /// Instant the flange comes to rest, if braking is scheduled.
+    /// Instant the flange comes to rest, if braking is scheduled or power removed.
     pub fn t_stop(&self) -> Option<f64> {
+        let controlled = self.controlled_stop();
+        match self.power_off {
+            Some((t_off, _)) if controlled.is_some_and(|ts| ts <= t_off) => controlled,
+            Some((t_off, b)) => Some(t_off + b.stop_time(self.controlled(t_off).v)),
+            None => controlled,
+        }
+    }
+
+    fn controlled_stop(&self) -> Option<f64> {
         self.t_brake.map(|tb| tb + self.unbraked(tb).v / self.decel)
     }
 
-    /// The instants where x_c'' jumps: the solver must not step across them.
-    pub fn breakpoints(&self) -> [Option<f64>; 3] {
+    /// Drive power is removed at `t` (a category-0 stop, IEC 60204-1 9.2.2): from then on the arm
+    /// coasts and `brake` stops it (`plant/brake.rs`), whatever the controlled stop was doing. The
+    /// first call wins.
+    pub fn remove_power_at(&mut self, t: f64, brake: PowerOffBrake) {
+        if self.power_off.is_none() {
+            self.power_off = Some((t.max(0.0), brake));
+        }
+    }
+
+    /// True when the controlled law moves at a constant speed over [t0, t1] (no acceleration and no
+    /// breakpoint inside): there, an arm coasting since t0 moves exactly as commanded.
+    pub fn steady_between(&self, t0: f64, t1: f64) -> bool {
         let cruise = if self.start_at_speed { None } else { Some(self.t_cruise()) };
-        [cruise, self.t_brake, self.t_stop()]
+        let kink = [cruise, self.t_brake, self.controlled_stop()].into_iter().flatten().any(|b| b > t0 && b < t1);
+        !kink && self.controlled(t0).a == 0.0 && self.controlled(t1).a == 0.0 && self.power_off.is_none()
+    }
+
+    /// When drive power was removed, if it was.
+    pub fn power_off_at(&self) -> Option<f64> {
+        self.power_off.map(|(t, _)| t)
+    }
+
+    /// The instants where x_c'' jumps: the solver must not step across them.
+    pub fn breakpoints(&self) -> [Option<f64>; 6] {
+        let cruise = if self.start_at_speed { None } else { Some(self.t_cruise()) };
+        let (off, engaged) = match self.power_off {
+            Some((t, b)) => (Some(t), Some(t + b.delay)),
+            None => (None, None),
+        };
+        [cruise, self.t_brake, self.controlled_stop(), off, engaged, self.t_stop()]
     }
 
     /// Commanded motion at `t`.
     pub fn at(&self, t: f64) -> Commanded {
+        match self.power_off {
+            Some((t_off, b)) if t > t_off => {
+                let c0 = self.controlled(t_off);
+                let (dx, v, a) = b.after(c0.v, t - t_off);
+                Commanded { x: c0.x + dx, v, a }
+            }
+            _ => self.controlled(t),
+        }
+    }
+
+    /// The trapezoid with the controlled stop, without power removal.
+    fn controlled(&self, t: f64) -> Commanded {
         match self.t_brake {
             Some(tb) if t > tb => {
                 let c0 = self.unbraked(tb);
@@ -193,6 +243,33 @@ mod tests {
 
     fn law_motion() -> Motion {
         Motion { speed: 0.05, accel: 1.0, decel: 2.0, dead_time: 0.016, stopping: None, stopping_payload: None, gravity: 0.0, start_at_speed: false, brake_after_contact: 0 }
+    }
+
+    #[test]
+    fn power_removal_overrides_the_controlled_stop_with_the_brakes() {
+        use crate::plant::brake::PowerOffBrake;
+        let b = PowerOffBrake { delay: 0.08, decel: 5.0 };
+        // Cruising at 0.05 m/s: coast 80 ms, then 10 ms of braking at 5 m/s^2.
+        let mut m = law();
+        m.remove_power_at(0.3, b);
+        assert!((m.at(0.35).v - 0.05).abs() < 1e-15 && m.at(0.35).a == 0.0, "coasting, not the 2 m/s^2 ramp");
+        assert!((m.t_stop().unwrap() - 0.39).abs() < 1e-12);
+        let travel = m.at(10.0).x - m.at(0.3).x;
+        assert!((travel - b.stop_distance(0.05)).abs() < 1e-12);
+        // Half-way through a controlled stop (tb = 0.3, d = 2: 0.04 m/s at 0.305): the drives lose
+        // power and the arm coasts at 0.04 m/s until the brakes engage.
+        let mut m = law();
+        m.brake_at(0.3);
+        m.remove_power_at(0.305, b);
+        assert!((m.at(0.35).v - 0.04).abs() < 1e-12, "{}", m.at(0.35).v);
+        assert!((m.t_stop().unwrap() - (0.305 + 0.08 + 0.04 / 5.0)).abs() < 1e-12);
+        assert!(m.breakpoints().contains(&Some(0.385)), "the engagement is a breakpoint");
+        // After the controlled stop has ended, removing power changes nothing.
+        let mut m = law();
+        m.brake_at(0.3);
+        m.remove_power_at(0.4, b);
+        assert!((m.t_stop().unwrap() - 0.325).abs() < 1e-12);
+        assert_eq!(m.at(0.5).v, 0.0);
     }
 
     #[test]

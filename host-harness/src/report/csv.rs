@@ -45,6 +45,11 @@ impl<W: Write> HistoryWriter<W> {
         self.out.write_field(&self.cell).map_err(to_io)
     }
 
+    /// The column source (a `hil` run updates the firmware's signals as it goes).
+    pub fn trace_mut(&mut self) -> &mut Trace {
+        &mut self.trace
+    }
+
     /// One row.
     pub fn row(&mut self, s: &Sample) -> io::Result<()> {
         self.field(Some(s.t), false)?;

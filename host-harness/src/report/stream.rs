@@ -162,7 +162,11 @@ fn human_bytes(b: f64) -> String {
     }
 }
 
-struct State {
+/// A history on its way out: CSV rows written as they come, a bounded decimation for a plot, a
+/// measured file's resampling, a progress bar on a terminal after 0.8 s, and Ctrl-C ending the
+/// process (exit 130) with the rows so far flushed. `flinch run` and `flinch hil` both write
+/// through it.
+pub struct Streamer {
     csv: Option<(HistoryWriter<Box<dyn Write>>, PathBuf)>,
     plot: Option<Decimator>,
     measured: Option<Resampler>,
@@ -173,8 +177,51 @@ struct State {
     duration: f64,
 }
 
-impl State {
-    fn take(&mut self, s: &Sample) {
+impl Streamer {
+    /// Opens the outputs for a run of `scene` with columns from `trace`: says on standard error
+    /// what a large CSV will receive, creates it, and installs the Ctrl-C handler.
+    pub fn open(scene: &Scene, csv: Option<&Path>, plot: bool, measured: Option<Resampler>, trace: Trace) -> Result<Self, Failure> {
+        let rows = expected_rows(scene);
+        if let Some(path) = csv {
+            let bytes = rows as f64 * ROW_BYTES as f64;
+            if bytes > 50e6 {
+                output::note(&format!("note: {} will receive about {rows} rows ({}): one per solver.output_interval = {} s over duration = {} s", output::shown(path), human_bytes(bytes), scene.solver.output_interval, scene.duration_s));
+            }
+        }
+        catch_ctrl_c();
+        let csv = match csv {
+            Some(path) => {
+                let out = output::create(path)?;
+                Some((HistoryWriter::new(out, trace).map_err(|e| output::write_error(path, &e))?, path.to_path_buf()))
+            }
+            None => None,
+        };
+        let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
+        if let Ok(style) = ProgressStyle::with_template(&format!("{{elapsed_precise}} [{{bar:40}}] {{percent}} % of {} s simulated, eta {{eta}}", scene.duration_s)) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        Ok(Self { csv, plot: plot.then(|| Decimator::new(scene.duration_s, rows)), measured, bar, started: Instant::now(), shown: false, count: 0, duration: scene.duration_s })
+    }
+
+    /// The CSV's column source (to update the firmware's signals as a `hil` run goes on).
+    pub fn trace_mut(&mut self) -> Option<&mut Trace> {
+        self.csv.as_mut().map(|(w, _)| w.trace_mut())
+    }
+
+    /// Ends the outputs: flushes the CSV; returns the samples to plot, the rows written and the
+    /// resampling.
+    pub fn close(mut self) -> Result<(Vec<Sample>, u64, Option<Resampler>), Failure> {
+        self.bar.finish_and_clear();
+        let mut written = 0;
+        if let Some((mut w, path)) = self.csv.take() {
+            w.flush().map_err(|e| output::write_error(&path, &e))?;
+            written = w.rows;
+        }
+        Ok((self.plot.map(Decimator::finish).unwrap_or_default(), written, self.measured))
+    }
+
+    /// Takes one sample.
+    pub fn take(&mut self, s: &Sample) {
         if let Some((w, path)) = &mut self.csv {
             if let Err(e) = w.row(s) {
                 let f = output::write_error(path, &e);
@@ -203,7 +250,7 @@ impl State {
                 let mut written = String::new();
                 if let Some((w, path)) = &mut self.csv {
                     let _ = w.flush();
-                    written = format!("; {} holds the {} rows up to it", output::shown(path), w.rows);
+                    written = format!("; {} is partial: it holds the {} rows up to it", output::shown(path), w.rows);
                 }
                 output::note(&format!("interrupted at t = {:.6} s of {} s{written}", s.t, self.duration));
                 std::process::exit(i32::from(EXIT_INTERRUPTED));
@@ -225,38 +272,15 @@ pub fn run(scene: &Scene, csv: Option<&Path>, plot: bool, measured: Option<Resam
         r.finish().map_err(|e| Failure::runtime(e.to_string()))?;
         return Ok(Streamed { summary: r.summary(), plotted: Vec::new(), rows: 0, resampled: None });
     }
-    if let Some(path) = csv {
-        let bytes = rows as f64 * ROW_BYTES as f64;
-        if bytes > 50e6 {
-            output::note(&format!("note: {} will receive about {rows} rows ({}): one per solver.output_interval = {} s over duration = {} s", output::shown(path), human_bytes(bytes), scene.solver.output_interval, scene.duration_s));
-        }
-    }
-    catch_ctrl_c();
-    let csv = match csv {
-        Some(path) => {
-            let out = output::create(path)?;
-            Some((HistoryWriter::new(out, Trace::new(scene)).map_err(|e| output::write_error(path, &e))?, path.to_path_buf()))
-        }
-        None => None,
-    };
-    let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
-    if let Ok(style) = ProgressStyle::with_template(&format!("{{elapsed_precise}} [{{bar:40}}] {{percent}} % of {} s simulated, eta {{eta}}", scene.duration_s)) {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    let state = Rc::new(RefCell::new(State { csv, plot: plot.then(|| Decimator::new(scene.duration_s, rows)), measured, bar, started: Instant::now(), shown: false, count: 0, duration: scene.duration_s }));
+    let state = Rc::new(RefCell::new(Streamer::open(scene, csv, plot, measured, Trace::new(scene))?));
     let sink = Rc::clone(&state);
     r.sim.sink = Some(Box::new(move |s: &Sample| sink.borrow_mut().take(s)));
     let result = r.finish();
     r.sim.sink = None;
-    let mut st = Rc::try_unwrap(state).map_err(|_| Failure::runtime("internal: the sample sink is still held"))?.into_inner();
-    st.bar.finish_and_clear();
-    let mut written = 0;
-    if let Some((mut w, path)) = st.csv.take() {
-        w.flush().map_err(|e| output::write_error(&path, &e))?;
-        written = w.rows;
-    }
+    let st = Rc::try_unwrap(state).map_err(|_| Failure::runtime("internal: the sample sink is still held"))?.into_inner();
+    let (plotted, written, resampled) = st.close()?;
     result.map_err(|e| Failure::runtime(e.to_string()))?;
-    Ok(Streamed { summary: r.summary(), plotted: st.plot.map(Decimator::finish).unwrap_or_default(), rows: written, resampled: st.measured })
+    Ok(Streamed { summary: r.summary(), plotted, rows: written, resampled })
 }
 
 #[cfg(test)]

@@ -30,17 +30,26 @@ impl HilSignals {
     /// controller samples every scan cycle.
     pub fn new(scene: &Scene, rep: &HilReport) -> Self {
         let f = &rep.firmware;
+        let mut s = Self::before_run(scene, f.scan_cycle, f.phase);
+        s.stop_output = f.stop_output.clone();
+        s.stop_seen_s = f.stop_seen;
+        s
+    }
+
+    /// Before the run: the threshold and the controller's samples, no stop yet (a streamed CSV's
+    /// columns; the run updates the stop as it goes).
+    pub fn before_run(scene: &Scene, scan_cycle: f64, phase: f64) -> Self {
         let threshold_m = match scene.sensor {
             Some(Sensor::Travel { threshold }) => threshold,
             _ => f64::NAN,
         };
         let mut controller_samples_s = Vec::new();
-        if f.scan_cycle > 0.0 {
+        if scan_cycle > 0.0 {
             // Bounded: a plot or CSV needs no more than a few thousand ticks to be read.
-            let n = ((scene.duration_s / f.scan_cycle).ceil() as usize).min(100_000);
-            controller_samples_s.extend((0..=n).map(|k| (f.phase + k as f64) * f.scan_cycle).take_while(|&t| t <= scene.duration_s));
+            let n = ((scene.duration_s / scan_cycle).ceil() as usize).min(100_000);
+            controller_samples_s.extend((0..=n).map(|k| (phase + k as f64) * scan_cycle).take_while(|&t| t <= scene.duration_s));
         }
-        Self { threshold_m, stop_output: f.stop_output.clone(), stop_seen_s: f.stop_seen, controller_samples_s }
+        Self { threshold_m, stop_output: Vec::new(), stop_seen_s: None, controller_samples_s }
     }
 }
 

@@ -18,8 +18,15 @@ pub const PHASE: Key = Key::number("phase", "of a scan cycle", Incl(0.0), Excl(1
 /// Firmware tick.
 pub const FIRMWARE_TICK: Key = Key::number("firmware_tick", "s", Incl(1e-6), Incl(0.01), "the firmware ticks at 1 us to 10 ms", "the firmware's tick period");
 
+/// Brake engagement delay of a category-0 stop.
+pub const BRAKE_DELAY: Key = Key::number("brake_delay", "s", Incl(0.0), Incl(1.0), "holding brakes engage in tens of ms (Pilz PRBT 6: 80 ms); a stop category 0 robot stops well within 1 s (ISO 13855 stopping performance)", "category-0 stop (the firmware's escalation output removes drive power): from power removal to the brakes acting; the arm coasts meanwhile (plant/brake.rs)")
+    .optional("0.08 s, the Pilz PRBT 6 brake engagement time (plant/brake.rs)");
+/// Braking deceleration of a category-0 stop.
+pub const BRAKE_DECEL: Key = Key::number("brake_decel", "m/s^2", Excl(0.0), Incl(500.0), "up to about 50 g, the bound of motion.decel", "category-0 stop: the arm's deceleration once its brakes act (plant/brake.rs); a motion.stopping table with category = 0 is used instead when given")
+    .optional("5 m/s^2, from the UR5/CB3 category-0 stop of its slowest joint (plant/brake.rs)");
+
 /// The keys of `[controller]`.
-pub const KEYS: &[Key] = &[SCAN_CYCLE, PHASE, FIRMWARE_TICK];
+pub const KEYS: &[Key] = &[SCAN_CYCLE, PHASE, FIRMWARE_TICK, BRAKE_DELAY, BRAKE_DECEL];
 
 /// Reads `[controller]`.
 pub(super) fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
@@ -27,9 +34,17 @@ pub(super) fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
     let scan_cycle = cx.number(t, &SCAN_CYCLE);
     let phase = cx.number(t, &PHASE);
     let firmware_tick = cx.number(t, &FIRMWARE_TICK);
+    if let Some(x) = firmware_tick.filter(|&x| !crate::hil::whole_us(x)) {
+        cx.bad(t, FIRMWARE_TICK.name, format!("a whole number of microseconds (the firmware's clock counts them), got {x}"));
+        return None;
+    }
+    let brake_delay = cx.maybe_number(t, &BRAKE_DELAY);
+    let brake_decel = cx.maybe_number(t, &BRAKE_DECEL);
     Some(Controller {
         scan_cycle: scan_cycle?,
         phase: phase?,
         firmware_tick: firmware_tick?,
+        brake_delay: brake_delay?.unwrap_or(crate::plant::brake::DEFAULT_DELAY_S),
+        brake_decel: brake_decel?.unwrap_or(crate::plant::brake::DEFAULT_DECEL_MPS2),
     })
 }

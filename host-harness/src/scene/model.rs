@@ -358,4 +358,20 @@ pub struct Controller {
     pub phase: f64,
     /// Firmware tick period, s, > 0.
     pub firmware_tick: f64,
+    /// Category-0 stop: brake engagement delay, s (`plant/brake.rs`; default 0.08).
+    pub brake_delay: f64,
+    /// Category-0 stop: braking deceleration, m/s^2 (default 5).
+    pub brake_decel: f64,
+}
+
+impl Controller {
+    /// A controller with the category-0 brake's defaults (`plant/brake.rs`).
+    pub const fn new(scan_cycle: f64, phase: f64, firmware_tick: f64) -> Self {
+        Self { scan_cycle, phase, firmware_tick, brake_delay: crate::plant::brake::DEFAULT_DELAY_S, brake_decel: crate::plant::brake::DEFAULT_DECEL_MPS2 }
+    }
+
+    /// The brakes of a category-0 stop.
+    pub fn brake(&self) -> crate::plant::brake::PowerOffBrake {
+        crate::plant::brake::PowerOffBrake { delay: self.brake_delay, decel: self.brake_decel }
+    }
 }

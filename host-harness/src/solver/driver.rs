@@ -144,6 +144,13 @@ impl<const N: usize, const E: usize> Driver<N, E> {
         self.g = sys.events(self.t, &self.y);
     }
 
+    /// The step the adaptive controller proposes next, s (0 before the first estimate). A caller
+    /// that advances to `t + next_step()` takes the step the driver would have taken anyway, and can
+    /// look at the state after each one (firmware in the loop, `hil.rs`).
+    pub fn next_step(&self) -> f64 {
+        self.h
+    }
+
     /// Integrates up to `t_end` (inclusive).
     pub fn advance_to<S: Hybrid<N, E>, M: Stepper<N>>(&mut self, sys: &mut S, stepper: &mut M, t_end: f64) -> Result<(), SolveError> {
         const SAFE: f64 = 0.9;

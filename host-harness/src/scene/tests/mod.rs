@@ -136,11 +136,7 @@ fn bases_load() {
     assert_eq!(s.solver.method, Method::Rk4);
     assert_eq!(
         s.controller,
-        Some(Controller {
-            scan_cycle: 0.016,
-            phase: 0.5,
-            firmware_tick: 1e-4
-        })
+        Some(Controller::new(0.016, 0.5, 1e-4))
     );
     let h = parse(HYD, "hyd.toml").unwrap();
     let Decoupler::Hydraulic(d) = h.decoupler else {

@@ -1,0 +1,169 @@
+//! `flinch hil` as a user meets it: a long run streams its CSV in bounded memory and stops cleanly
+//! on Ctrl-C with the file flagged partial; `[controller]` values are refused with file, line and
+//! key; a module hil cannot run is refused (exit 2) for its real reason.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn flinch() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_flinch"));
+    c.current_dir(repo());
+    c
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("flinch-hil-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn text(o: &[u8]) -> String {
+    String::from_utf8_lossy(o).into_owned()
+}
+
+/// Tables 5-7 with `extra` appended and `duration` replaced, written to `dir`.
+fn scene(dir: &Path, duration: f64, extra: &str) -> PathBuf {
+    let t = std::fs::read_to_string(repo().join("scenes/tables5-7_bistable.toml")).unwrap();
+    let t = t.replace("duration = 0.6 ", &format!("duration = {duration} "));
+    let p = dir.join("s.toml");
+    std::fs::write(&p, format!("{t}\n{extra}")).unwrap();
+    p
+}
+
+fn peak_rss_kb(mut cmd: Command) -> (u64, Output) {
+    let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let pid = child.id();
+    let mut peak = 0;
+    let start = Instant::now();
+    let mut err = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        err.read_to_end(&mut s).unwrap();
+        s
+    });
+    loop {
+        if let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
+            if let Some(kb) = s.lines().find_map(|l| l.strip_prefix("VmHWM:")).and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok()) {
+                peak = peak.max(kb);
+            }
+        }
+        if let Some(status) = child.try_wait().unwrap() {
+            return (peak, Output { status, stdout: Vec::new(), stderr: reader.join().unwrap() });
+        }
+        assert!(start.elapsed() < Duration::from_secs(300), "too slow");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn a_long_hil_run_streams_its_csv_and_decimates_its_plot_in_bounded_memory() {
+    let d = tmp("long");
+    // 20 s at 10 us: two million rows; the old hil kept every sample (and the whole history)
+    // until the end.
+    let sc = scene(&d, 20.0, "[solver]\noutput_interval = 1e-5\n");
+    let mut c = flinch();
+    c.args(["hil"]).arg(&sc).args(["--scan-cycle", "0.016", "--csv"]).arg(d.join("h.csv")).args(["--plot"]).arg(d.join("h.png"));
+    let (kb, o) = peak_rss_kb(c);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(err.contains("will receive about 2000001 rows"), "says up front what it will write: {err}");
+    let f = std::io::BufReader::new(std::fs::File::open(d.join("h.csv")).unwrap());
+    let mut n = 0;
+    let mut last = String::new();
+    let mut header = String::new();
+    for l in std::io::BufRead::lines(f) {
+        let l = l.unwrap();
+        if n == 0 {
+            header = l.clone();
+        }
+        n += 1;
+        last = l;
+    }
+    assert_eq!(n, 2_000_002, "header and every row");
+    assert!(header.ends_with("switch_tripped,stop_requested,stop_seen_by_controller"), "{header}");
+    assert!(last.ends_with(",1,1"), "the stop, latched, seen by the controller at the end: {last}");
+    assert!(kb < 80_000, "peak resident set {kb} kB");
+    assert!(std::fs::metadata(d.join("h.png")).unwrap().len() > 20_000);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn ctrl_c_stops_a_long_hil_run_with_complete_rows_and_says_the_file_is_partial() {
+    let d = tmp("sigint");
+    let sc = scene(&d, 60.0, "[solver]\noutput_interval = 1e-5\n");
+    let csv = d.join("h.csv");
+    let mut child = flinch().args(["hil"]).arg(&sc).args(["--scan-cycle", "0.016", "--csv"]).arg(&csv).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let start = Instant::now();
+    while std::fs::metadata(&csv).map_or(0, |m| m.len()) < 200_000 && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let mut err = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted at t =") && err.contains("is partial"), "{err}");
+    let body = std::fs::read_to_string(&csv).unwrap();
+    assert!(body.ends_with('\n'), "the last row is complete");
+    let cols = body.lines().next().unwrap().split(',').count();
+    assert!(body.lines().all(|l| l.split(',').count() == cols));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn controller_values_are_refused_with_file_line_and_key() {
+    let d = tmp("ctl");
+    // Not a whole number of microseconds: the firmware's clock cannot tick at it.
+    let sc = scene(&d, 0.6, "[controller]\nscan_cycle = 0.016\nphase = 0.0\nfirmware_tick = 1.5e-6\n");
+    let o = flinch().args(["hil"]).arg(&sc).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    let e = text(&o.stderr);
+    let line = std::fs::read_to_string(&sc).unwrap().lines().position(|l| l.starts_with("firmware_tick")).unwrap() + 1;
+    assert!(e.contains(&format!("s.toml:{line}: controller.firmware_tick: a whole number of microseconds")), "{e}");
+    assert!(!e.contains("--step") && !e.contains("--tick"), "a scene value is not an option: {e}");
+    // A 2 us tick is fine (it used to be refused as a --step error: the old lockstep's default
+    // 10 us step was longer than the tick).
+    let sc = scene(&d, 0.6, "[controller]\nscan_cycle = 0.016\nphase = 0.0\nfirmware_tick = 2e-6\n");
+    let o = flinch().args(["hil"]).arg(&sc).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // Out of range in the scene: the loader's own message.
+    let sc = scene(&d, 0.6, "[controller]\nscan_cycle = 0.016\nphase = 0.0\nfirmware_tick = 1e-4\nbrake_decel = 0\n");
+    let o = flinch().args(["hil"]).arg(&sc).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("controller.brake_decel: allowed range"), "{}", text(&o.stderr));
+    // An option is named as an option.
+    let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--tick", "1.5e-6"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("--tick: must be in [1e-6, 0.1] s in whole microseconds"), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_module_hil_cannot_run_and_bad_flags_are_exit_2_with_the_reason() {
+    let d = tmp("refuse");
+    let t = std::fs::read_to_string(repo().join("scenes/table2_linear.toml")).unwrap();
+    let t = t.replace("kind = \"force\"", "kind = \"travel\"").replace("threshold = 1.0 ", "threshold = 0.005 ");
+    let p = d.join("lin.toml");
+    std::fs::write(&p, t).unwrap();
+    let o = flinch().args(["hil"]).arg(&p).args(["--scan-cycle", "0.016"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("decoupler.kind: flinch hil cannot run a \"linear\" spring-damper: it has no end-stops"), "{}", text(&o.stderr));
+    for (flag, value, says) in [("--filter", "median", "consecutive:N"), ("--reset-policy", "button", "auto:SECONDS"), ("--filter", "consecutive:0", "1 to 255")] {
+        let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", flag, value]).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}");
+        assert!(text(&o.stderr).contains(says), "{flag} {value}: {}", text(&o.stderr));
+    }
+    let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--filter", "consecutive:2", "--reset-policy", "auto:0.05", "--json"]).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["firmware"]["filter"], "consecutive:2");
+    assert_eq!(v["firmware"]["reset_policy"], "auto:0.05");
+    assert_eq!(v["firmware"]["edge_to_stop_latency_s"], 7.25e-6);
+    let _ = std::fs::remove_dir_all(&d);
+}
