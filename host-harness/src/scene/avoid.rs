@@ -387,6 +387,9 @@ fn scene(cx: &mut Ctx, avoid: &Tab) {
             approx(frames), num(pixels), approx(frames * pixels), num(MAX_FRAME_PIXELS), num(frame)
         ));
     }
+    if let (Some(fit_t), Some(sf), Some(ef)) = (&fit_t, get(FIT_KEYS, &fit, "sigma_factor"), get(FIT_KEYS, &fit, "eval_sigma_factor")) {
+        sigma_within_window(cx, fit_t, sf, ef);
+    }
     let r = |n| get(ROBOT_KEYS, &robot, n);
     let (Some(step), Some(threshold)) = (r("calibration_step_m"), r("calibration_threshold_m")) else { return };
     let dilate = r("calibration_dilate_m").unwrap_or(0.0);
@@ -428,6 +431,24 @@ fn scene(cx: &mut Ctx, avoid: &Tab) {
         cx.bad(&robot_t, DILATE.name, format!(
             "growing {} masks of {} px by {} px ({} m) is up to {} pixel writes; allowed at most {} ({why}; the shipped scene: 2.9e9), got calibration_dilate_m = {}",
             num(positions), num(pixels), num(rad), num(dilate), approx(positions * pixels * disc), num(MAX_DILATION_WORK), num(dilate)
+        ));
+    }
+}
+
+/// Largest evaluation sigma the MCU accepts, in units of the spacing: the firmware visits the centres
+/// within 4 sigma' (`TRUNC_SIGMAS`) and holds at most `MAX_WINDOW` = 10 per axis, so
+/// `2 * 4 * sigma' / s + 2 <= 10` (`Grid::set_geometry`), i.e. sigma' <= s.
+pub const MAX_EVAL_SIGMA_OVER_SPACING: f64 = (flinch_firmware::avoidance::MAX_WINDOW as f64 - 2.0) / (2.0 * flinch_firmware::avoidance::TRUNC_SIGMAS);
+
+/// sigma' = `sigma_factor * eval_sigma_factor * spacing / 2` (eq 70, Fig. 90) must fit the firmware's
+/// window, or the MCU refuses every frame (`bad_header`) and the robot never moves: refused here,
+/// on `fit.eval_sigma_factor`.
+fn sigma_within_window(cx: &mut Ctx, fit: &Tab, sigma_factor: f64, eval_factor: f64) {
+    let ratio = sigma_factor * eval_factor / 2.0;
+    if ratio > MAX_EVAL_SIGMA_OVER_SPACING {
+        cx.bad(fit, "eval_sigma_factor", format!(
+            "sigma' = sigma_factor x eval_sigma_factor x spacing / 2 = {} x spacing; the firmware evaluates centres within 4 sigma' and holds at most {} per axis, so sigma' must be at most {} x spacing (sigma_factor x eval_sigma_factor <= {}): the MCU would refuse every frame; got eval_sigma_factor = {} with sigma_factor = {}",
+            approx(ratio), flinch_firmware::avoidance::MAX_WINDOW, num(MAX_EVAL_SIGMA_OVER_SPACING), num(2.0 * MAX_EVAL_SIGMA_OVER_SPACING), num(eval_factor), num(sigma_factor)
         ));
     }
 }
@@ -494,6 +515,34 @@ mod tests {
         // Without a file name, `line N:` as `avoid::scene::Avoid::parse` reports.
         let e = check(&SHIPPED.replacen("dt_s = 0.01", "dt_s = 1e9", 1), "").unwrap_err();
         assert!(e.starts_with("line 14: avoid.dt_s: allowed range [1e-4, 0.1] s"), "{e}");
+    }
+
+    /// sigma' > spacing used to pass the loader and then be refused by the MCU on every frame (the
+    /// robot never moved, silently). Refused here with the file, line and key; at the bound the
+    /// firmware's receiver accepts the frame, just past it it refuses it: the two limits agree.
+    #[test]
+    fn sigma_wider_than_the_spacing_is_refused_where_the_mcu_would_refuse_it() {
+        let e = refused("eval_sigma_factor = 1.5 ", "eval_sigma_factor = 2.5 ");
+        assert!(e.starts_with("s.toml:37: avoid.fit.eval_sigma_factor: sigma' = sigma_factor x eval_sigma_factor x spacing / 2 = 1.25 x spacing"), "{e}");
+        assert!(e.contains("at most 1 x spacing") && e.contains("got eval_sigma_factor = 2.5 with sigma_factor = 1"), "{e}");
+        let e = refused("sigma_factor = 1.0 ", "sigma_factor = 1.5 ");
+        assert!(e.contains("avoid.fit.eval_sigma_factor: sigma' = sigma_factor x eval_sigma_factor x spacing / 2 = 1.125 x spacing"), "{e}");
+        // At the bound (the shipped demo's 1.0 x 2.0) the loader passes it.
+        check(&SHIPPED.replacen("eval_sigma_factor = 1.5 ", "eval_sigma_factor = 2.0 ", 1), "s.toml").unwrap();
+        // The firmware, through the wire's Q16.16 geometry, for every grid the loader allows.
+        use flinch_firmware::avoidance::{self as fw, num::I16F16};
+        for n in 1..=30usize {
+            let spacing = 1.05 / n as f64;
+            for (ratio, accepted) in [(MAX_EVAL_SIGMA_OVER_SPACING, true), (MAX_EVAL_SIGMA_OVER_SPACING * 1.01, false)] {
+                let q = |v: f64| (v * 65536.0).round() as i32;
+                let h = fw::FrameHeader { nx: n as u8, ny: n as u8, seq: 1, age_ms: 0, x0_q16: q(spacing / 2.0), y0_q16: q(spacing / 2.0), spacing_q16: q(spacing), sigma_q16: q(ratio * spacing) };
+                let mut out = vec![0u8; fw::frame::MAX_FRAME];
+                let len = fw::encode_frame(&h, &vec![0; n * n], &mut out).unwrap();
+                let mut rx = Box::new(fw::Receiver::<I16F16>::new(100, 10));
+                rx.feed(&out[..len], 0);
+                assert_eq!(rx.stats.good == 1, accepted, "grid {n}, sigma'/s = {ratio}: {:?}", rx.stats);
+            }
+        }
     }
 
     #[test]
