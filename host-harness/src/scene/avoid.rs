@@ -30,7 +30,7 @@ const fn part(name: &'static str, doc: &'static str) -> Key {
 }
 
 /// Keys holding `[x, y]` (two numbers, each in the key's range), not one number.
-pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m"];
+pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m", "position_m"];
 
 const START: Key = point("start_m", "[x, y] start of the tool");
 const GOAL: Key = point("goal_m", "[x, y] goal of the tool");
@@ -137,6 +137,22 @@ const CAMERA: Key = Key::of("camera", Ty::Table("the synthetic depth camera"), "
 const FIT: Key = Key::of("fit", Ty::Table("the RBF fit"), "[avoid.fit]");
 const ROBOT: Key = Key::of("robot", Ty::Table("the robot as the camera sees it"), "[avoid.robot]");
 const OPERATOR: Key = Key::of("operator", Ty::Table("the operator and its motion"), "[avoid.operator]");
+const DEPTH_CAMERA: Key = Key::of("depth_camera", Ty::Table("the pinhole camera of recorded depth frames (flinch avoid --depth)"), "[avoid.depth_camera]").optional("no recorded input (--depth is refused)");
+
+/// `[avoid.depth_camera]`: the pinhole camera that took the recorded frames of `flinch avoid --depth`
+/// (avoid/camera.rs), reprojected onto the `[avoid.camera]` raster of the work plane.
+pub const DEPTH_CAMERA_KEYS: &[Key] = &[
+    Key::number("fx_px", "px", Incl(10.0), Incl(20000.0), "focal lengths of depth cameras in pixels: about 200-1500 (RealSense D435 at 640 x 480: 380-620; Kinect v1: 525)", "focal length along the image columns"),
+    Key::number("fy_px", "px", Incl(10.0), Incl(20000.0), "as fx_px", "focal length along the image rows"),
+    Key::number("cx_px", "px", Incl(-10000.0), Incl(10000.0), "the principal point, near the image centre (TUM fr1: 318.6, 255.3); pixel centres at whole numbers", "principal point, column"),
+    Key::number("cy_px", "px", Incl(-10000.0), Incl(10000.0), "as cx_px", "principal point, row"),
+    Key::number("depth_scale_m", "m", Incl(1e-5), Incl(0.01), "metres per count of the 16-bit image: RealSense z16 0.001, TUM RGB-D 0.0002 (5000 per m), Azure Kinect 0.001", "metres per depth count (0 = null)"),
+    point("position_m", "[x, y] of the camera's optical centre over the work plane"),
+    Key::number("height_m", "m", Incl(0.3), Incl(5.0), "the working range of depth cameras, 0.3-5 m above the plane", "optical centre above the work plane"),
+    Key::number("roll_deg", "deg", Incl(-60.0), Incl(60.0), "a camera looking down on the plane: at most 60 degrees from the vertical", "rotation about the plane's x axis, applied to the straight-down camera").default(0.0),
+    Key::number("pitch_deg", "deg", Incl(-60.0), Incl(60.0), "as roll_deg", "rotation about the plane's y axis, after roll").default(0.0),
+    Key::number("yaw_deg", "deg", Incl(-180.0), Incl(180.0), "any heading", "rotation about the vertical, after pitch").default(0.0),
+];
 
 /// `[avoid]`'s numbers.
 pub const KEYS: &[Key] = &[
@@ -340,6 +356,9 @@ fn scene(cx: &mut Ctx, avoid: &Tab) {
     let fit = fit_t.as_ref().map(|t| read(cx, t, FIT_KEYS));
     let robot_t = cx.maybe_table(avoid, &ROBOT).flatten();
     let robot = robot_t.as_ref().map(|t| read(cx, t, ROBOT_KEYS));
+    if let Some(Some(t)) = cx.maybe_table(avoid, &DEPTH_CAMERA) {
+        read(cx, &t, DEPTH_CAMERA_KEYS);
+    }
     let op_t = cx.maybe_table(avoid, &OPERATOR).flatten();
     let op = op_t.as_ref().map(|t| read(cx, t, OPERATOR_KEYS));
     if let Some(t) = &op_t {
