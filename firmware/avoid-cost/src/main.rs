@@ -25,6 +25,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use flinch_firmware::avoidance::{
+    frame, FrameHeader, Receiver,
     num::{I16F16, I20F12, I8F24},
     sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, SafeController, SafeState, Sensed,
     SsmParams, Watchdog,
@@ -33,7 +34,7 @@ use flinch_firmware::avoidance::{
 const SYST_CVR: u32 = 0xE000_E018;
 
 #[inline(always)]
-fn now() -> u32 {
+fn now_ticks() -> u32 {
     // SAFETY: SysTick's current-value register is always readable; reading has no side effect.
     unsafe { read_volatile(SYST_CVR as *const u32) }
 }
@@ -95,14 +96,14 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
             tool_y_m: y,
             age_s: R::from_f64(0.1),
         };
-        let t0 = now();
+        let t0 = now_ticks();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
         let factor = wd.factor::<R>(black_box(Some(40)));
         let c = ctl.command(x, y, gx, gy, &f, factor);
         // On top of the hill the field's command is zero: a 0.3 m/s kick keeps a command for the
         // monitor to scale at every position (its costliest branch).
         let out = safe.limit(c.vx.add(black_box(kick)), c.vy, x, y, black_box(Some(&sensed)));
-        let t1 = now();
+        let t1 = now_ticks();
         black_box(out);
         if let Some(n) = states.get_mut(match out.state {
             SafeState::Run => 0,
@@ -130,6 +131,54 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
     );
 }
 
+/// Frame handling: one 30 Hz stream of `n x n` frames fed to the receiver `bytes_per_step` at a
+/// time, one call a 10 ms control step (what arrives on the line in one step at 30 frames a second),
+/// three frames; the largest cost of one step's call, and the mean per frame byte. Then the same
+/// frame handed over whole in one call (the worst single call if a whole frame is waiting).
+fn measure_rx<R: Real>(name: &str, n: usize, overhead: u32) {
+    let mut rx = Receiver::<R>::new(100, 50);
+    let mut out = [0u8; frame::MAX_FRAME];
+    let len = frame::frame_len(n, n).unwrap_or(0);
+    // 30 frames a second, 10 ms steps: a frame's bytes spread over 3.3 steps.
+    let per_step = (len * 10).div_ceil(33);
+    let mut w = [0i32; flinch_firmware::avoidance::MAX_CENTRES];
+    for (k, v) in w.iter_mut().enumerate() {
+        *v = ((k as i32).wrapping_mul(2_654_435) % 40_000).wrapping_sub(20_000);
+    }
+    let (mut max, mut total, mut now) = (0u32, 0u32, 0u32);
+    for seq in 1..=3u32 {
+        let h = FrameHeader { nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+        let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return };
+        for chunk in out.get(..l).unwrap_or(&[]).chunks(per_step.max(1)) {
+            let t0 = now_ticks();
+            rx.feed(black_box(chunk), now);
+            let t1 = now_ticks();
+            let ins = counts(t0, t1).saturating_sub(overhead) * 40 / 64;
+            max = max.max(ins);
+            total = total.saturating_add(ins);
+            now = now.wrapping_add(10);
+        }
+    }
+    let h = FrameHeader { nx: n as u8, ny: n as u8, seq: 4, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+    let l = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out).unwrap_or(0);
+    let t0 = now_ticks();
+    rx.feed(black_box(out.get(..l).unwrap_or(&[])), now);
+    let t1 = now_ticks();
+    let whole = counts(t0, t1).saturating_sub(overhead) * 40 / 64;
+    hprintln!(
+        "avoid_rx grid={}x{} variant={} frame_bytes={} bytes_per_step={} max={} per_byte={} whole_frame={} (instructions) good={}",
+        n,
+        n,
+        name,
+        len,
+        per_step,
+        max,
+        total / (3 * len as u32).max(1),
+        whole,
+        rx.stats.good
+    );
+}
+
 /// Exit QEMU through semihosting (and spin if not under a debugger).
 fn exit(code: debug::ExitStatus) -> ! {
     debug::exit(code);
@@ -152,8 +201,8 @@ fn main() -> ! {
     // The cost of the measurement itself: two back-to-back SysTick reads.
     let mut overhead = u32::MAX;
     for _ in 0..8 {
-        let t0 = now();
-        let t1 = now();
+        let t0 = now_ticks();
+        let t1 = now_ticks();
         overhead = overhead.min(counts(t0, t1));
     }
     hprintln!("avoid_cost: empty measurement {} counts subtracted; SysTick 25 MHz, -icount shift=6", overhead);
@@ -165,6 +214,10 @@ fn main() -> ! {
         measure::<f32, _>("f32-lut", n, &GaussLut::<f32>::new(), overhead);
         measure::<f32, _>("f32-micromath", n, &GaussMicromath, overhead);
         measure::<f32, _>("f32-libm", n, &GaussLibm, overhead);
+    }
+    for n in [5usize, 15, 30] {
+        measure_rx::<I16F16>("I16F16", n, overhead);
+        measure_rx::<f32>("f32", n, overhead);
     }
     exit(debug::EXIT_SUCCESS)
 }
