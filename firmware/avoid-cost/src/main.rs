@@ -147,7 +147,7 @@ fn measure_rx<R: Real>(name: &str, n: usize, overhead: u32) {
     }
     let (mut max, mut total, mut now) = (0u32, 0u32, 0u32);
     for seq in 1..=3u32 {
-        let h = FrameHeader { nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
         let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return };
         for chunk in out.get(..l).unwrap_or(&[]).chunks(per_step.max(1)) {
             let t0 = now_ticks();
@@ -159,7 +159,7 @@ fn measure_rx<R: Real>(name: &str, n: usize, overhead: u32) {
             now = now.wrapping_add(10);
         }
     }
-    let h = FrameHeader { nx: n as u8, ny: n as u8, seq: 4, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+    let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq: 4, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
     let l = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out).unwrap_or(0);
     let t0 = now_ticks();
     rx.feed(black_box(out.get(..l).unwrap_or(&[])), now);
