@@ -44,10 +44,11 @@ fn counts(t0: u32, t1: u32) -> u32 {
     t0.wrapping_sub(t1) & 0x00FF_FFFF
 }
 
-/// A hill of weights (0.2 m peak) around the middle of an `n x n` grid over 1.05 m.
-fn grid<R: Real>(g: &mut Grid<R>, n: usize) {
+/// A hill of weights (0.2 m peak) around the middle of an `n x n` grid over 1.05 m, evaluated at
+/// sigma' = `sigma_over_s` x spacing.
+fn grid<R: Real>(g: &mut Grid<R>, n: usize, sigma_over_s: f64) {
     let s = 1.05 / n as f64;
-    let _ = g.set_geometry(n, n, R::from_f64(s / 2.0), R::from_f64(s / 2.0), R::from_f64(s), R::from_f64(0.75 * s));
+    let _ = g.set_geometry(n, n, R::from_f64(s / 2.0), R::from_f64(s / 2.0), R::from_f64(s), R::from_f64(sigma_over_s * s));
     let c = n as f64 / 2.0;
     for j in 0..n {
         for i in 0..n {
@@ -61,9 +62,9 @@ fn grid<R: Real>(g: &mut Grid<R>, n: usize) {
 }
 
 
-fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32) {
+fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss: &G, overhead: u32) -> u32 {
     let mut g = Grid::<R>::empty();
-    grid(&mut g, n);
+    grid(&mut g, n, sigma_over_s);
     let mut ctl = Controller::new(Gains {
         repulsion: Repulsion::Vortex { sign: 0 },
         k_att: R::from_f64(0.25),
@@ -118,9 +119,10 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
         sum += ins;
     }
     hprintln!(
-        "avoid_cost grid={}x{} variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} check={}",
+        "avoid_cost grid={}x{} sigma'={}s variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} check={}",
         n,
         n,
+        sigma_over_s,
         name,
         max,
         sum / 16,
@@ -129,18 +131,19 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
         states[2],
         check.to_f64()
     );
+    max
 }
 
 /// Frame handling: one 30 Hz stream of `n x n` frames fed to the receiver `bytes_per_step` at a
 /// time, one call a 10 ms control step (what arrives on the line in one step at 30 frames a second),
 /// three frames; the largest cost of one step's call, and the mean per frame byte. Then the same
 /// frame handed over whole in one call (the worst single call if a whole frame is waiting).
-fn measure_rx<R: Real>(name: &str, n: usize, overhead: u32) {
+fn measure_rx<R: Real>(name: &str, n: usize, rate_hz: usize, overhead: u32) -> u32 {
     let mut rx = Receiver::<R>::new(100, 50);
     let mut out = [0u8; frame::MAX_FRAME];
     let len = frame::frame_len(n, n).unwrap_or(0);
-    // 30 frames a second, 10 ms steps: a frame's bytes spread over 3.3 steps.
-    let per_step = (len * 10).div_ceil(33);
+    // `rate_hz` frames a second, 10 ms steps: what the line brings in one step.
+    let per_step = (len * rate_hz).div_ceil(100);
     let mut w = [0i32; flinch_firmware::avoidance::MAX_CENTRES];
     for (k, v) in w.iter_mut().enumerate() {
         *v = ((k as i32).wrapping_mul(2_654_435) % 40_000).wrapping_sub(20_000);
@@ -148,7 +151,7 @@ fn measure_rx<R: Real>(name: &str, n: usize, overhead: u32) {
     let (mut max, mut total, mut now) = (0u32, 0u32, 0u32);
     for seq in 1..=3u32 {
         let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
-        let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return };
+        let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return u32::MAX };
         for chunk in out.get(..l).unwrap_or(&[]).chunks(per_step.max(1)) {
             let t0 = now_ticks();
             rx.feed(black_box(chunk), now);
@@ -166,9 +169,10 @@ fn measure_rx<R: Real>(name: &str, n: usize, overhead: u32) {
     let t1 = now_ticks();
     let whole = counts(t0, t1).saturating_sub(overhead) * 40 / 64;
     hprintln!(
-        "avoid_rx grid={}x{} variant={} frame_bytes={} bytes_per_step={} max={} per_byte={} whole_frame={} (instructions) good={}",
+        "avoid_rx grid={}x{} rate_hz={} variant={} frame_bytes={} bytes_per_step={} max={} per_byte={} whole_frame={} (instructions) good={}",
         n,
         n,
+        rate_hz,
         name,
         len,
         per_step,
@@ -177,6 +181,11 @@ fn measure_rx<R: Real>(name: &str, n: usize, overhead: u32) {
         whole,
         rx.stats.good
     );
+    if rx.stats.good == 4 {
+        max
+    } else {
+        u32::MAX
+    }
 }
 
 /// Exit QEMU through semihosting (and spin if not under a debugger).
@@ -208,16 +217,28 @@ fn main() -> ! {
     hprintln!("avoid_cost: empty measurement {} counts subtracted; SysTick 25 MHz, -icount shift=6", overhead);
 
     for n in [15usize, 30] {
-        measure::<I16F16, _>("I16F16-lut", n, &GaussLut::<I16F16>::new(), overhead);
-        measure::<I20F12, _>("I20F12-lut", n, &GaussLut::<I20F12>::new(), overhead);
-        measure::<I8F24, _>("I8F24-lut", n, &GaussLut::<I8F24>::new(), overhead);
-        measure::<f32, _>("f32-lut", n, &GaussLut::<f32>::new(), overhead);
-        measure::<f32, _>("f32-micromath", n, &GaussMicromath, overhead);
-        measure::<f32, _>("f32-libm", n, &GaussLibm, overhead);
+        measure::<I16F16, _>("I16F16-lut", n, 0.75, &GaussLut::<I16F16>::new(), overhead);
+        measure::<I20F12, _>("I20F12-lut", n, 0.75, &GaussLut::<I20F12>::new(), overhead);
+        measure::<I8F24, _>("I8F24-lut", n, 0.75, &GaussLut::<I8F24>::new(), overhead);
+        measure::<f32, _>("f32-lut", n, 0.75, &GaussLut::<f32>::new(), overhead);
+        measure::<f32, _>("f32-micromath", n, 0.75, &GaussMicromath, overhead);
+        measure::<f32, _>("f32-libm", n, 0.75, &GaussLibm, overhead);
     }
-    for n in [5usize, 15, 30] {
-        measure_rx::<I16F16>("I16F16", n, overhead);
-        measure_rx::<f32>("f32", n, overhead);
+    // The step plus its share of frame handling, per 10 ms step. The grids and rates: the shipped
+    // demo (5 x 5, sigma' = 2 sigma = the spacing, the widest window the firmware takes: 9 x 9
+    // centres; 30 frames a second), the thesis's 15 x 15 (sigma' = 1.5 sigma) at 30 and 10 frames a
+    // second, and 30 x 30 at 30.
+    for (n, sig, rate) in [(5usize, 1.0, 30usize), (15, 0.75, 30), (15, 0.75, 10), (30, 0.75, 30)] {
+        let steps = [
+            ("I16F16-lut", measure::<I16F16, _>("I16F16-lut", n, sig, &GaussLut::<I16F16>::new(), overhead), measure_rx::<I16F16>("I16F16", n, rate, overhead)),
+            ("f32-lut", measure::<f32, _>("f32-lut", n, sig, &GaussLut::<f32>::new(), overhead), measure_rx::<f32>("f32", n, rate, overhead)),
+        ];
+        for (name, step, rx) in steps {
+            hprintln!(
+                "avoid_budget grid={}x{} sigma'={}s rate_hz={} variant={} step_max={} rx_max={} total={} (instructions per 10 ms step; limit 5000)",
+                n, n, sig, rate, name, step, rx, step.saturating_add(rx)
+            );
+        }
     }
     exit(debug::EXIT_SUCCESS)
 }
