@@ -43,6 +43,9 @@ use super::path::{FrameSource, Setup, NOTHING_SENSED_M};
 use super::rbf::{filter_weights, Field};
 use super::scene::Avoid;
 
+/// Most pixels of one recorded frame: 4096 x 4096 (depth cameras give up to 1280 x 1024).
+pub const MAX_FRAME_PIXELS: usize = 4096 * 4096;
+
 /// The recorded frames and robot poses.
 #[derive(Clone, Debug)]
 pub struct Recording {
@@ -305,8 +308,13 @@ impl FrameSource for RecordedSource {
         self.next = k;
         let (tc, path) = self.rec.frames[k - 1].clone();
         let img = DepthImage::load(&path)?;
-        if img.width < 2 || img.height < 2 {
-            return Err(format!("{}: {} x {} px is not a depth frame", path.display(), img.width, img.height));
+        if img.width < 2 || img.height < 2 || img.width * img.height > MAX_FRAME_PIXELS {
+            return Err(format!(
+                "{}: {} x {} px; a depth frame must be at least 2 x 2 and at most {MAX_FRAME_PIXELS} pixels (depth cameras give up to 1280 x 1024; the work per frame is bounded by it)",
+                path.display(),
+                img.width,
+                img.height
+            ));
         }
         let pose = self.rec.pose_at(tc, &path)?;
         let (field, sep, info) = process_frame(scene, setup, &self.cam, &img, pose, tool);
