@@ -320,6 +320,8 @@ fn cli_verdict_and_csv() {
         csv,
         thesis,
         save_depth: None,
+        depth: None,
+        robot_poses: None,
     };
     assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(false));
     let text = std::fs::read_to_string(&csv).unwrap();

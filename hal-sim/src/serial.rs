@@ -156,6 +156,7 @@ mod tests {
 
     fn frame(seq: u32, w0: i32) -> Vec<u8> {
         let h = fw::FrameHeader {
+            session: 0,
             nx: 15,
             ny: 15,
             seq,

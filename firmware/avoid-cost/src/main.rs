@@ -25,6 +25,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use flinch_firmware::avoidance::{
+    frame, FrameHeader, Receiver,
     num::{I16F16, I20F12, I8F24},
     sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, SafeController, SafeState, Sensed,
     SsmParams, Watchdog,
@@ -33,7 +34,7 @@ use flinch_firmware::avoidance::{
 const SYST_CVR: u32 = 0xE000_E018;
 
 #[inline(always)]
-fn now() -> u32 {
+fn now_ticks() -> u32 {
     // SAFETY: SysTick's current-value register is always readable; reading has no side effect.
     unsafe { read_volatile(SYST_CVR as *const u32) }
 }
@@ -43,10 +44,11 @@ fn counts(t0: u32, t1: u32) -> u32 {
     t0.wrapping_sub(t1) & 0x00FF_FFFF
 }
 
-/// A hill of weights (0.2 m peak) around the middle of an `n x n` grid over 1.05 m.
-fn grid<R: Real>(g: &mut Grid<R>, n: usize) {
+/// A hill of weights (0.2 m peak) around the middle of an `n x n` grid over 1.05 m, evaluated at
+/// sigma' = `sigma_over_s` x spacing.
+fn grid<R: Real>(g: &mut Grid<R>, n: usize, sigma_over_s: f64) {
     let s = 1.05 / n as f64;
-    let _ = g.set_geometry(n, n, R::from_f64(s / 2.0), R::from_f64(s / 2.0), R::from_f64(s), R::from_f64(0.75 * s));
+    let _ = g.set_geometry(n, n, R::from_f64(s / 2.0), R::from_f64(s / 2.0), R::from_f64(s), R::from_f64(sigma_over_s * s));
     let c = n as f64 / 2.0;
     for j in 0..n {
         for i in 0..n {
@@ -60,9 +62,9 @@ fn grid<R: Real>(g: &mut Grid<R>, n: usize) {
 }
 
 
-fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32) {
+fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss: &G, overhead: u32) -> u32 {
     let mut g = Grid::<R>::empty();
-    grid(&mut g, n);
+    grid(&mut g, n, sigma_over_s);
     let mut ctl = Controller::new(Gains {
         repulsion: Repulsion::Vortex { sign: 0 },
         k_att: R::from_f64(0.25),
@@ -95,14 +97,14 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
             tool_y_m: y,
             age_s: R::from_f64(0.1),
         };
-        let t0 = now();
+        let t0 = now_ticks();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
         let factor = wd.factor::<R>(black_box(Some(40)));
         let c = ctl.command(x, y, gx, gy, &f, factor);
         // On top of the hill the field's command is zero: a 0.3 m/s kick keeps a command for the
         // monitor to scale at every position (its costliest branch).
         let out = safe.limit(c.vx.add(black_box(kick)), c.vy, x, y, black_box(Some(&sensed)));
-        let t1 = now();
+        let t1 = now_ticks();
         black_box(out);
         if let Some(n) = states.get_mut(match out.state {
             SafeState::Run => 0,
@@ -117,9 +119,10 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
         sum += ins;
     }
     hprintln!(
-        "avoid_cost grid={}x{} variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} check={}",
+        "avoid_cost grid={}x{} sigma'={}s variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} check={}",
         n,
         n,
+        sigma_over_s,
         name,
         max,
         sum / 16,
@@ -128,6 +131,61 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
         states[2],
         check.to_f64()
     );
+    max
+}
+
+/// Frame handling: one 30 Hz stream of `n x n` frames fed to the receiver `bytes_per_step` at a
+/// time, one call a 10 ms control step (what arrives on the line in one step at 30 frames a second),
+/// three frames; the largest cost of one step's call, and the mean per frame byte. Then the same
+/// frame handed over whole in one call (the worst single call if a whole frame is waiting).
+fn measure_rx<R: Real>(name: &str, n: usize, rate_hz: usize, overhead: u32) -> u32 {
+    let mut rx = Receiver::<R>::new(100, 50);
+    let mut out = [0u8; frame::MAX_FRAME];
+    let len = frame::frame_len(n, n).unwrap_or(0);
+    // `rate_hz` frames a second, 10 ms steps: what the line brings in one step.
+    let per_step = (len * rate_hz).div_ceil(100);
+    let mut w = [0i32; flinch_firmware::avoidance::MAX_CENTRES];
+    for (k, v) in w.iter_mut().enumerate() {
+        *v = ((k as i32).wrapping_mul(2_654_435) % 40_000).wrapping_sub(20_000);
+    }
+    let (mut max, mut total, mut now) = (0u32, 0u32, 0u32);
+    for seq in 1..=3u32 {
+        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+        let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return u32::MAX };
+        for chunk in out.get(..l).unwrap_or(&[]).chunks(per_step.max(1)) {
+            let t0 = now_ticks();
+            rx.feed(black_box(chunk), now);
+            let t1 = now_ticks();
+            let ins = counts(t0, t1).saturating_sub(overhead) * 40 / 64;
+            max = max.max(ins);
+            total = total.saturating_add(ins);
+            now = now.wrapping_add(10);
+        }
+    }
+    let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq: 4, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+    let l = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out).unwrap_or(0);
+    let t0 = now_ticks();
+    rx.feed(black_box(out.get(..l).unwrap_or(&[])), now);
+    let t1 = now_ticks();
+    let whole = counts(t0, t1).saturating_sub(overhead) * 40 / 64;
+    hprintln!(
+        "avoid_rx grid={}x{} rate_hz={} variant={} frame_bytes={} bytes_per_step={} max={} per_byte={} whole_frame={} (instructions) good={}",
+        n,
+        n,
+        rate_hz,
+        name,
+        len,
+        per_step,
+        max,
+        total / (3 * len as u32).max(1),
+        whole,
+        rx.stats.good
+    );
+    if rx.stats.good == 4 {
+        max
+    } else {
+        u32::MAX
+    }
 }
 
 /// Exit QEMU through semihosting (and spin if not under a debugger).
@@ -152,19 +210,35 @@ fn main() -> ! {
     // The cost of the measurement itself: two back-to-back SysTick reads.
     let mut overhead = u32::MAX;
     for _ in 0..8 {
-        let t0 = now();
-        let t1 = now();
+        let t0 = now_ticks();
+        let t1 = now_ticks();
         overhead = overhead.min(counts(t0, t1));
     }
     hprintln!("avoid_cost: empty measurement {} counts subtracted; SysTick 25 MHz, -icount shift=6", overhead);
 
     for n in [15usize, 30] {
-        measure::<I16F16, _>("I16F16-lut", n, &GaussLut::<I16F16>::new(), overhead);
-        measure::<I20F12, _>("I20F12-lut", n, &GaussLut::<I20F12>::new(), overhead);
-        measure::<I8F24, _>("I8F24-lut", n, &GaussLut::<I8F24>::new(), overhead);
-        measure::<f32, _>("f32-lut", n, &GaussLut::<f32>::new(), overhead);
-        measure::<f32, _>("f32-micromath", n, &GaussMicromath, overhead);
-        measure::<f32, _>("f32-libm", n, &GaussLibm, overhead);
+        measure::<I16F16, _>("I16F16-lut", n, 0.75, &GaussLut::<I16F16>::new(), overhead);
+        measure::<I20F12, _>("I20F12-lut", n, 0.75, &GaussLut::<I20F12>::new(), overhead);
+        measure::<I8F24, _>("I8F24-lut", n, 0.75, &GaussLut::<I8F24>::new(), overhead);
+        measure::<f32, _>("f32-lut", n, 0.75, &GaussLut::<f32>::new(), overhead);
+        measure::<f32, _>("f32-micromath", n, 0.75, &GaussMicromath, overhead);
+        measure::<f32, _>("f32-libm", n, 0.75, &GaussLibm, overhead);
+    }
+    // The step plus its share of frame handling, per 10 ms step. The grids and rates: the shipped
+    // demo (5 x 5, sigma' = 2 sigma = the spacing, the widest window the firmware takes: 9 x 9
+    // centres; 30 frames a second), the thesis's 15 x 15 (sigma' = 1.5 sigma) at 30 and 10 frames a
+    // second, and 30 x 30 at 30.
+    for (n, sig, rate) in [(5usize, 1.0, 30usize), (15, 0.75, 30), (15, 0.75, 10), (30, 0.75, 30)] {
+        let steps = [
+            ("I16F16-lut", measure::<I16F16, _>("I16F16-lut", n, sig, &GaussLut::<I16F16>::new(), overhead), measure_rx::<I16F16>("I16F16", n, rate, overhead)),
+            ("f32-lut", measure::<f32, _>("f32-lut", n, sig, &GaussLut::<f32>::new(), overhead), measure_rx::<f32>("f32", n, rate, overhead)),
+        ];
+        for (name, step, rx) in steps {
+            hprintln!(
+                "avoid_budget grid={}x{} sigma'={}s rate_hz={} variant={} step_max={} rx_max={} total={} (instructions per 10 ms step; limit 5000)",
+                n, n, sig, rate, name, step, rx, step.saturating_add(rx)
+            );
+        }
     }
     exit(debug::EXIT_SUCCESS)
 }

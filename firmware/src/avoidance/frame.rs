@@ -6,10 +6,10 @@
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 2 | sync `0xA5 0x5A` |
-//! | 2 | 1 | version ([`VERSION`]) |
+//! | 2 | 1 | version ([`VERSION`], 2) |
 //! | 3 | 1 | `nx`, centres along x, 1..=30 |
 //! | 4 | 1 | `ny`, centres along y, 1..=30 |
-//! | 5 | 1 | reserved, 0 |
+//! | 5 | 1 | `session`: the host picks a new one each time it starts (a boot counter or a random byte); a new session is accepted with any `seq` |
 //! | 6 | 4 | `seq`, u32, increases by at least one per frame (wrapping) |
 //! | 10 | 2 | `age_ms`, u16: age of the depth image when the frame was sent |
 //! | 12 | 4 | `x0`, Q16.16 m: position of centre (0, 0) |
@@ -27,8 +27,8 @@ use super::field::MAX_AXIS;
 pub const SYNC0: u8 = 0xA5;
 /// Second sync byte.
 pub const SYNC1: u8 = 0x5A;
-/// Protocol version carried in byte 2.
-pub const VERSION: u8 = 1;
+/// Protocol version carried in byte 2 (2: byte 5 is the session; version 1 had it reserved, 0).
+pub const VERSION: u8 = 2;
 /// Bytes before the weights.
 pub const HEADER_LEN: usize = 28;
 /// Bytes of the trailing CRC.
@@ -42,6 +42,8 @@ pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 /// Header fields of a frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FrameHeader {
+    /// Session of the sending host (byte 5): a restarted host sends a new one.
+    pub session: u8,
     /// Centres along x.
     pub nx: u8,
     /// Centres along y.
@@ -83,7 +85,7 @@ pub fn encode_frame(h: &FrameHeader, weights_q16: &[i32], out: &mut [u8]) -> Opt
     if weights_q16.len() != nx.saturating_mul(ny) || out.len() < len {
         return None;
     }
-    put(out, 0, &[SYNC0, SYNC1, VERSION, h.nx, h.ny, 0])?;
+    put(out, 0, &[SYNC0, SYNC1, VERSION, h.nx, h.ny, h.session])?;
     put(out, 6, &h.seq.to_le_bytes())?;
     put(out, 10, &h.age_ms.to_le_bytes())?;
     put(out, 12, &h.x0_q16.to_le_bytes())?;
@@ -111,7 +113,7 @@ pub fn decode_header(b: &[u8]) -> Option<FrameHeader> {
     if b.len() < HEADER_LEN || b.first() != Some(&SYNC0) || b.get(1) != Some(&SYNC1) {
         return None;
     }
-    if b.get(2) != Some(&VERSION) || b.get(5) != Some(&0) {
+    if b.get(2) != Some(&VERSION) {
         return None;
     }
     let nx = *b.get(3)?;
@@ -119,6 +121,7 @@ pub fn decode_header(b: &[u8]) -> Option<FrameHeader> {
     frame_len(nx as usize, ny as usize)?;
     let age = b.get(10..12)?;
     Some(FrameHeader {
+        session: *b.get(5)?,
         nx,
         ny,
         seq: le_u32(b, 6)?,

@@ -7,11 +7,13 @@
 //! `flinch avoid SCENE.toml` is [`run`].
 
 pub mod calib;
+pub mod camera;
 pub mod compare;
 pub mod depth;
 pub mod path;
 pub mod plot;
 pub mod rbf;
+pub mod recorded;
 pub mod scene;
 
 use std::path::PathBuf;
@@ -53,6 +55,15 @@ pub struct AvoidArgs {
     /// Write the first synthetic depth frame (16-bit, `.png` or `.pgm`) to this file.
     #[arg(long, value_name = "FILE")]
     pub save_depth: Option<PathBuf>,
+    /// Run on recorded depth frames instead of the synthetic camera: one 16-bit PNG/PGM, or a
+    /// directory of them (times from `index.csv` or the file names); the scene's
+    /// `[avoid.depth_camera]` gives the pinhole camera and `depth_scale_m` (docs/avoidance.md).
+    #[arg(long, value_name = "FILE|DIR")]
+    pub depth: Option<PathBuf>,
+    /// With `--depth`: the robot's tool point over time (`t_s,x_m,y_m`, the frames' clock), to
+    /// remove the robot from each frame; without it the robot is an obstacle.
+    #[arg(long, value_name = "CSV", requires = "depth")]
+    pub robot_poses: Option<PathBuf>,
 }
 
 /// The receiver's frame counters (MCU engine), counts.
@@ -222,7 +233,13 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
         return run_compare(&scene, &setup, &args.scene).map(|_| true);
     }
     let engine = if args.mcu { Engine::Mcu } else { Engine::Reference };
-    let res = path::simulate(&scene, &setup, engine).map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    let (res, recorded) = match &args.depth {
+        None => (path::simulate(&scene, &setup, engine).map_err(|e| format!("{}: {e}", args.scene.display()))?, None),
+        Some(d) => {
+            let (r, stats) = recorded::simulate(&scene, &setup, engine, d, args.robot_poses.as_deref())?;
+            (r, Some(stats))
+        }
+    };
     if let Some(p) = &args.plot {
         plot::plot(&scene, &res, p)?;
     }
@@ -297,6 +314,16 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
         });
         println!("  stalls            {}", res.stalls);
+        if let (Some(st), Some(d)) = (&recorded, &args.depth) {
+            println!(
+                "  recorded frames   {} used from {}; robot {}; unknown (obstacle) at most {:.1} % of the plane in a frame, at most {} cells filled",
+                st.frames_used,
+                d.display(),
+                if args.robot_poses.is_some() { "removed at its recorded poses" } else { "not removed (no --robot-poses): an obstacle" },
+                st.max_unknown_fraction * 100.0,
+                st.max_filled_cells
+            );
+        }
         if let Some(s) = res.rx {
             println!(
                 "  frames received   {} good, {} bad CRC, {} bad header, {} short, {} stale",

@@ -526,13 +526,36 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResu
     }
 }
 
-/// Simulate the scene with any command source.
+/// Where the loop's camera frames come from: the synthetic scene ([`Synthetic`]) or a recording
+/// (`avoid::recorded`).
+pub trait FrameSource {
+    /// The newest frame captured by loop time `t_s` with the tool at `tool`: its field, the
+    /// separation sensed from the tool's surface (m) and its capture time (s, at most `t_s`); `None`
+    /// when there is no new frame since the last call.
+    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<(Field, f64, f64)>, String>;
+}
+
+/// The synthetic camera: the scene rendered at every frame, captured when asked.
+pub struct Synthetic(pub Rng);
+
+impl FrameSource for Synthetic {
+    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<(Field, f64, f64)>, String> {
+        let (f, sep) = fit_and_sense(scene, setup, tool, scene.hand_at(t_s), &mut self.0);
+        Ok(Some((f, sep, t_s)))
+    }
+}
+
+/// Simulate the scene with any command source, on the synthetic camera.
+pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) -> Result<PathResult, String> {
+    simulate_from(scene, setup, engine, &mut Synthetic(Rng::new(scene.camera.seed)))
+}
+
+/// Simulate the scene with any command source and any frame source.
 ///
 /// Every step the tool's signed distance to the operator is measured on the true geometry. The run
 /// ends at the goal, when the tool leaves the camera's view, when the progress monitor trips
 /// (`progress_window_s`, `progress_m`) or at `max_time_s`; in each case the tool is stopped there.
-pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) -> Result<PathResult, String> {
-    let mut rng = Rng::new(scene.camera.seed);
+pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, source: &mut dyn FrameSource) -> Result<PathResult, String> {
     let dt = scene.dt_s;
     let steps = (scene.max_time_s / dt).ceil() as usize;
     let goal = scene.goal_m;
@@ -546,7 +569,7 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
     // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
     // capture). Each reaches the controller `latency_s` after capture.
     let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2])> = std::collections::VecDeque::new();
-    let (f0, sep0) = fit_and_sense(scene, setup, p, scene.hand_at(0.0), &mut rng);
+    let Some((f0, sep0, _)) = source.frame(scene, setup, 0.0, p)? else { return Err("no camera frame at t = 0".into()) };
     let mut field = f0.clone();
     // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
     let delay = scene.latency_s + match scene.baud {
@@ -577,9 +600,12 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         let t_prev = t - dt;
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
-            let (f, sep) = fit_and_sense(scene, setup, p, scene.hand_at(t_prev), &mut rng);
-            in_flight.push_back((t_prev + delay, t_prev, f, sep, p));
-            frames += 1;
+            if let Some((f, sep, tc)) = source.frame(scene, setup, t_prev, p)? {
+                // The tool where it was at capture (a recorded frame may be older than this step).
+                let at = points[((tc / dt).round().max(0.0) as usize).min(points.len() - 1)];
+                in_flight.push_back((tc + delay, tc, f, sep, at));
+                frames += 1;
+            }
             next_frame += scene.frame_period_s;
         }
         while in_flight.front().is_some_and(|f| f.0 <= t_prev + 1e-12) {

@@ -233,6 +233,7 @@ impl Field {
     /// The frame that carries this field to the MCU (`flinch_firmware::avoidance::frame`).
     pub fn to_frame(&self, seq: u32, age_ms: u16) -> Result<Vec<u8>, String> {
         let h = fw::FrameHeader {
+            session: 0,
             nx: self.nx as u8,
             ny: self.ny as u8,
             seq,

@@ -77,6 +77,9 @@ pub struct Avoid {
     pub robot: RobotCfg,
     /// The operator and its motion.
     pub operator: OperatorCfg,
+    /// The pinhole camera of recorded frames (`flinch avoid --depth`), if any.
+    #[serde(default)]
+    pub depth_camera: Option<super::camera::DepthCameraCfg>,
 }
 
 fn default_repulsion() -> String {

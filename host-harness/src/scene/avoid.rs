@@ -30,7 +30,7 @@ const fn part(name: &'static str, doc: &'static str) -> Key {
 }
 
 /// Keys holding `[x, y]` (two numbers, each in the key's range), not one number.
-pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m"];
+pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m", "position_m"];
 
 const START: Key = point("start_m", "[x, y] start of the tool");
 const GOAL: Key = point("goal_m", "[x, y] goal of the tool");
@@ -137,6 +137,22 @@ const CAMERA: Key = Key::of("camera", Ty::Table("the synthetic depth camera"), "
 const FIT: Key = Key::of("fit", Ty::Table("the RBF fit"), "[avoid.fit]");
 const ROBOT: Key = Key::of("robot", Ty::Table("the robot as the camera sees it"), "[avoid.robot]");
 const OPERATOR: Key = Key::of("operator", Ty::Table("the operator and its motion"), "[avoid.operator]");
+const DEPTH_CAMERA: Key = Key::of("depth_camera", Ty::Table("the pinhole camera of recorded depth frames (flinch avoid --depth)"), "[avoid.depth_camera]").optional("no recorded input (--depth is refused)");
+
+/// `[avoid.depth_camera]`: the pinhole camera that took the recorded frames of `flinch avoid --depth`
+/// (avoid/camera.rs), reprojected onto the `[avoid.camera]` raster of the work plane.
+pub const DEPTH_CAMERA_KEYS: &[Key] = &[
+    Key::number("fx_px", "px", Incl(10.0), Incl(20000.0), "focal lengths of depth cameras in pixels: about 200-1500 (RealSense D435 at 640 x 480: 380-620; Kinect v1: 525)", "focal length along the image columns"),
+    Key::number("fy_px", "px", Incl(10.0), Incl(20000.0), "as fx_px", "focal length along the image rows"),
+    Key::number("cx_px", "px", Incl(-10000.0), Incl(10000.0), "the principal point, near the image centre (TUM fr1: 318.6, 255.3); pixel centres at whole numbers", "principal point, column"),
+    Key::number("cy_px", "px", Incl(-10000.0), Incl(10000.0), "as cx_px", "principal point, row"),
+    Key::number("depth_scale_m", "m", Incl(1e-5), Incl(0.01), "metres per count of the 16-bit image: RealSense z16 0.001, TUM RGB-D 0.0002 (5000 per m), Azure Kinect 0.001", "metres per depth count (0 = null)"),
+    point("position_m", "[x, y] of the camera's optical centre over the work plane"),
+    Key::number("height_m", "m", Incl(0.3), Incl(5.0), "the working range of depth cameras, 0.3-5 m above the plane", "optical centre above the work plane"),
+    Key::number("roll_deg", "deg", Incl(-60.0), Incl(60.0), "a camera looking down on the plane: at most 60 degrees from the vertical", "rotation about the plane's x axis, applied to the straight-down camera").default(0.0),
+    Key::number("pitch_deg", "deg", Incl(-60.0), Incl(60.0), "as roll_deg", "rotation about the plane's y axis, after roll").default(0.0),
+    Key::number("yaw_deg", "deg", Incl(-180.0), Incl(180.0), "any heading", "rotation about the vertical, after pitch").default(0.0),
+];
 
 /// `[avoid]`'s numbers.
 pub const KEYS: &[Key] = &[
@@ -340,6 +356,9 @@ fn scene(cx: &mut Ctx, avoid: &Tab) {
     let fit = fit_t.as_ref().map(|t| read(cx, t, FIT_KEYS));
     let robot_t = cx.maybe_table(avoid, &ROBOT).flatten();
     let robot = robot_t.as_ref().map(|t| read(cx, t, ROBOT_KEYS));
+    if let Some(Some(t)) = cx.maybe_table(avoid, &DEPTH_CAMERA) {
+        read(cx, &t, DEPTH_CAMERA_KEYS);
+    }
     let op_t = cx.maybe_table(avoid, &OPERATOR).flatten();
     let op = op_t.as_ref().map(|t| read(cx, t, OPERATOR_KEYS));
     if let Some(t) = &op_t {
@@ -387,6 +406,9 @@ fn scene(cx: &mut Ctx, avoid: &Tab) {
             approx(frames), num(pixels), approx(frames * pixels), num(MAX_FRAME_PIXELS), num(frame)
         ));
     }
+    if let (Some(fit_t), Some(sf), Some(ef)) = (&fit_t, get(FIT_KEYS, &fit, "sigma_factor"), get(FIT_KEYS, &fit, "eval_sigma_factor")) {
+        sigma_within_window(cx, fit_t, sf, ef);
+    }
     let r = |n| get(ROBOT_KEYS, &robot, n);
     let (Some(step), Some(threshold)) = (r("calibration_step_m"), r("calibration_threshold_m")) else { return };
     let dilate = r("calibration_dilate_m").unwrap_or(0.0);
@@ -428,6 +450,24 @@ fn scene(cx: &mut Ctx, avoid: &Tab) {
         cx.bad(&robot_t, DILATE.name, format!(
             "growing {} masks of {} px by {} px ({} m) is up to {} pixel writes; allowed at most {} ({why}; the shipped scene: 2.9e9), got calibration_dilate_m = {}",
             num(positions), num(pixels), num(rad), num(dilate), approx(positions * pixels * disc), num(MAX_DILATION_WORK), num(dilate)
+        ));
+    }
+}
+
+/// Largest evaluation sigma the MCU accepts, in units of the spacing: the firmware visits the centres
+/// within 4 sigma' (`TRUNC_SIGMAS`) and holds at most `MAX_WINDOW` = 10 per axis, so
+/// `2 * 4 * sigma' / s + 2 <= 10` (`Grid::set_geometry`), i.e. sigma' <= s.
+pub const MAX_EVAL_SIGMA_OVER_SPACING: f64 = (flinch_firmware::avoidance::MAX_WINDOW as f64 - 2.0) / (2.0 * flinch_firmware::avoidance::TRUNC_SIGMAS);
+
+/// sigma' = `sigma_factor * eval_sigma_factor * spacing / 2` (eq 70, Fig. 90) must fit the firmware's
+/// window, or the MCU refuses every frame (`bad_header`) and the robot never moves: refused here,
+/// on `fit.eval_sigma_factor`.
+fn sigma_within_window(cx: &mut Ctx, fit: &Tab, sigma_factor: f64, eval_factor: f64) {
+    let ratio = sigma_factor * eval_factor / 2.0;
+    if ratio > MAX_EVAL_SIGMA_OVER_SPACING {
+        cx.bad(fit, "eval_sigma_factor", format!(
+            "sigma' = sigma_factor x eval_sigma_factor x spacing / 2 = {} x spacing; the firmware evaluates centres within 4 sigma' and holds at most {} per axis, so sigma' must be at most {} x spacing (sigma_factor x eval_sigma_factor <= {}): the MCU would refuse every frame; got eval_sigma_factor = {} with sigma_factor = {}",
+            approx(ratio), flinch_firmware::avoidance::MAX_WINDOW, num(MAX_EVAL_SIGMA_OVER_SPACING), num(2.0 * MAX_EVAL_SIGMA_OVER_SPACING), num(eval_factor), num(sigma_factor)
         ));
     }
 }
@@ -494,6 +534,34 @@ mod tests {
         // Without a file name, `line N:` as `avoid::scene::Avoid::parse` reports.
         let e = check(&SHIPPED.replacen("dt_s = 0.01", "dt_s = 1e9", 1), "").unwrap_err();
         assert!(e.starts_with("line 14: avoid.dt_s: allowed range [1e-4, 0.1] s"), "{e}");
+    }
+
+    /// sigma' > spacing used to pass the loader and then be refused by the MCU on every frame (the
+    /// robot never moved, silently). Refused here with the file, line and key; at the bound the
+    /// firmware's receiver accepts the frame, just past it it refuses it: the two limits agree.
+    #[test]
+    fn sigma_wider_than_the_spacing_is_refused_where_the_mcu_would_refuse_it() {
+        let e = refused("eval_sigma_factor = 1.5 ", "eval_sigma_factor = 2.5 ");
+        assert!(e.starts_with("s.toml:37: avoid.fit.eval_sigma_factor: sigma' = sigma_factor x eval_sigma_factor x spacing / 2 = 1.25 x spacing"), "{e}");
+        assert!(e.contains("at most 1 x spacing") && e.contains("got eval_sigma_factor = 2.5 with sigma_factor = 1"), "{e}");
+        let e = refused("sigma_factor = 1.0 ", "sigma_factor = 1.5 ");
+        assert!(e.contains("avoid.fit.eval_sigma_factor: sigma' = sigma_factor x eval_sigma_factor x spacing / 2 = 1.125 x spacing"), "{e}");
+        // At the bound (the shipped demo's 1.0 x 2.0) the loader passes it.
+        check(&SHIPPED.replacen("eval_sigma_factor = 1.5 ", "eval_sigma_factor = 2.0 ", 1), "s.toml").unwrap();
+        // The firmware, through the wire's Q16.16 geometry, for every grid the loader allows.
+        use flinch_firmware::avoidance::{self as fw, num::I16F16};
+        for n in 1..=30usize {
+            let spacing = 1.05 / n as f64;
+            for (ratio, accepted) in [(MAX_EVAL_SIGMA_OVER_SPACING, true), (MAX_EVAL_SIGMA_OVER_SPACING * 1.01, false)] {
+                let q = |v: f64| (v * 65536.0).round() as i32;
+                let h = fw::FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq: 1, age_ms: 0, x0_q16: q(spacing / 2.0), y0_q16: q(spacing / 2.0), spacing_q16: q(spacing), sigma_q16: q(ratio * spacing) };
+                let mut out = vec![0u8; fw::frame::MAX_FRAME];
+                let len = fw::encode_frame(&h, &vec![0; n * n], &mut out).unwrap();
+                let mut rx = Box::new(fw::Receiver::<I16F16>::new(100, 10));
+                rx.feed(&out[..len], 0);
+                assert_eq!(rx.stats.good == 1, accepted, "grid {n}, sigma'/s = {ratio}: {:?}", rx.stats);
+            }
+        }
     }
 
     #[test]

@@ -168,6 +168,7 @@ pub fn key_tables() -> &'static [KeyTable] {
         KeyTable { path: "avoid.robot", when: AVOID_SCENE, keys: avoid::ROBOT_KEYS },
         KeyTable { path: "avoid.operator", when: AVOID_SCENE, keys: avoid::OPERATOR_KEYS },
         KeyTable { path: "avoid.operator.keyframes[]", when: AVOID_SCENE, keys: avoid::KEYFRAME_KEYS },
+        KeyTable { path: "avoid.depth_camera", when: AVOID_SCENE, keys: avoid::DEPTH_CAMERA_KEYS },
     ];
     TABLES
 }
