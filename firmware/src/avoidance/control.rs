@@ -46,6 +46,12 @@ pub struct Gains<R> {
     pub slow_height_m: R,
     /// Field height at which the command is zero, m (set above any reachable height to disable).
     pub stop_height_m: R,
+    /// Ours (`false`: eq 74-78 as the thesis wrote them): the vortex's magnitude bounded by `k_att`,
+    /// and instead of scaling the whole command by the height, a radial barrier: the command's
+    /// uphill rate `v . grad f*` is at most `k_att (stop - f*) / (stop - slow)` above `slow_height_m`
+    /// and zero at `stop_height_m` (the excess removed along the gradient), so the tool never climbs
+    /// a hill but may still move along it or down.
+    pub bounded: bool,
 }
 
 /// Fail-safe on the age of the last good weights.
@@ -95,12 +101,17 @@ pub struct Controller<R> {
     /// Gains and thresholds.
     pub gains: Gains<R>,
     latched: i8,
+    /// `k_att / (stop_height - slow_height)`, 1/s (the barrier's uphill rate per metre below stop).
+    barrier_rate: R,
+    half: R,
 }
 
 impl<R: Real> Controller<R> {
     /// A controller with nothing latched.
     pub fn new(gains: Gains<R>) -> Self {
-        Controller { gains, latched: 0 }
+        let span = gains.stop_height_m.sub(gains.slow_height_m);
+        let barrier_rate = if span > R::ZERO { gains.k_att.div(span) } else { R::ZERO };
+        Controller { gains, latched: 0, barrier_rate, half: R::ONE.div(R::from_int(2)) }
     }
 
     /// Speed factor from the field height at the tool.
@@ -157,17 +168,35 @@ impl<R: Real> Controller<R> {
             self.latched = 0;
             fresh
         };
-        let kr = if sign < 0 { g.k_rep.neg() } else { g.k_rep };
-        let frx = kr.mul(vx);
-        let fry = kr.mul(vy);
-
-        let scale = self.height_scale(f.height).mul(watchdog);
-        Command {
-            vx: fax.add(frx).mul(scale),
-            vy: fay.add(fry).mul(scale),
-            scale,
-            vortex_sign: sign,
+        let mut k = g.k_rep;
+        if g.bounded {
+            // |F_r| <= k_att: |grad| bounded from above by max + min / 2.
+            let (ax, ay) = (vx.abs(), vy.abs());
+            let gb = if ax > ay { ax.add(ay.mul(self.half)) } else { ay.add(ax.mul(self.half)) };
+            if k.mul(gb) > g.k_att && gb > R::ZERO {
+                k = g.k_att.div(gb);
+            }
         }
+        let kr = if sign < 0 { k.neg() } else { k };
+        let mut cx = fax.add(kr.mul(vx));
+        let mut cy = fay.add(kr.mul(vy));
+
+        if !g.bounded {
+            let scale = self.height_scale(f.height).mul(watchdog);
+            return Command { vx: cx.mul(scale), vy: cy.mul(scale), scale, vortex_sign: sign };
+        }
+        // The radial barrier: never uphill at `stop_height_m`, less and less so above `slow`.
+        if f.height > g.slow_height_m {
+            let allow = if f.height < g.stop_height_m { g.stop_height_m.sub(f.height).mul(self.barrier_rate) } else { R::ZERO };
+            let up = cx.mul(f.grad_x).add(cy.mul(f.grad_y));
+            let g2 = f.grad_x.mul(f.grad_x).add(f.grad_y.mul(f.grad_y));
+            if up > allow && g2 > R::ZERO {
+                let e = up.sub(allow).div(g2);
+                cx = cx.sub(e.mul(f.grad_x));
+                cy = cy.sub(e.mul(f.grad_y));
+            }
+        }
+        Command { vx: cx.mul(watchdog), vy: cy.mul(watchdog), scale: watchdog, vortex_sign: sign }
     }
 }
 
@@ -184,6 +213,7 @@ mod tests {
             latch_height_m: 0.01,
             slow_height_m: 0.2,
             stop_height_m: 0.4,
+            bounded: false,
         }
     }
 

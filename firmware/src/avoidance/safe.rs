@@ -62,6 +62,38 @@ pub struct Sensed<R> {
     pub tool_y_m: R,
     /// Time since the image was taken, s.
     pub age_s: R,
+    /// The nearest sensed obstacle point when the image was taken, m (for [`Steer`]: far away when
+    /// nothing was sensed).
+    pub nearest_x_m: R,
+    /// See `nearest_x_m`.
+    pub nearest_y_m: R,
+}
+
+/// The barrier that steers the command round what the sensor sees, before the monitor limits it
+/// (ours; off as the thesis wrote it). It keeps the tool where the monitor lets it run at full
+/// speed, so that it goes round an obstacle instead of being stopped by it.
+///
+/// * Obstacle barrier: with `g` the separation at capture less the tool's motion since (the age
+///   term left out: it is the monitor's), the tool's approach speed towards the nearest sensed point
+///   is limited to `rate (g - barrier_m)`, `rate = cap / band_m` (negative below the barrier: it
+///   backs off). The excess is removed along the direction to that point (the radial part: it never
+///   climbs towards an obstacle) and turned, with the same magnitude, along the boundary (a vortex
+///   bounded by the approach it replaces), its side latched while inside the band so that it does not
+///   dither; chosen towards the view's centre when the command is head-on.
+/// * Workspace edge: the sensed view is a barrier of the same kind on each axis, the tool's centre
+///   kept `edge_margin_m` inside it: it never leaves the region where obstacles are seen.
+#[derive(Clone, Copy, Debug)]
+pub struct Steer<R> {
+    /// Separation (from the tool's surface) the barrier holds, m: the host sets it so that the
+    /// monitor still allows the cap there with the oldest frame.
+    pub barrier_m: R,
+    /// Band above the barrier (and inside the view's edges) over which the allowed approach speed
+    /// rises from 0 to the cap, m (> 0).
+    pub band_m: R,
+    /// The sensed view `[x0, y0, x1, y1]`, m.
+    pub view_m: [R; 4],
+    /// How far inside the view the tool's centre stays, m.
+    pub edge_margin_m: R,
 }
 
 /// What the monitor did this step.
@@ -97,6 +129,13 @@ pub struct SafeCommand<R> {
 #[derive(Clone, Copy, Debug)]
 pub struct SafeController<R> {
     params: SsmParams<R>,
+    steer: Option<Steer<R>>,
+    /// `cap / band_m`, 1/s.
+    rate: R,
+    /// Side of the boundary-following turn, latched inside the band (0: none).
+    side: i8,
+    /// `cap / 64`: a command leaning less than this to one side (per unit `|n|^2`) is head-on.
+    lean_tol: R,
     /// `v_h (T_r + T_s) + C + Z_d + Z_r`: the separation at which the limit reaches zero, m.
     stop_separation_m: R,
     /// `T_r + T_s / 2`, s.
@@ -114,7 +153,91 @@ impl<R: Real> SafeController<R> {
             per_speed_s: params.reaction_time_s.add(params.stopping_time_s.mul(half)),
             params,
             half,
+            steer: None,
+            rate: R::ZERO,
+            side: 0,
+            lean_tol: params.speed_cap_mps.div(R::from_int(64)),
         }
+    }
+
+    /// The same monitor with the [`Steer`] barrier before it.
+    pub fn with_steer(mut self, steer: Steer<R>) -> Self {
+        self.rate = if steer.band_m > R::ZERO { self.params.speed_cap_mps.div(steer.band_m) } else { R::ZERO };
+        self.steer = Some(steer);
+        self
+    }
+
+    /// The [`Steer`] barrier on a requested command (unchanged without one): approach towards the
+    /// nearest sensed point and towards the view's edges limited, the blocked approach turned along
+    /// the boundary. The result still goes through [`Self::limit`].
+    pub fn steer(&mut self, vx: R, vy: R, x: R, y: R, sensed: Option<&Sensed<R>>) -> (R, R) {
+        let Some(st) = self.steer else { return (vx, vy) };
+        let (mut vx, mut vy) = (vx, vy);
+        let [x0, y0, x1, y1] = st.view_m;
+        let mut inside_band = false;
+        if let Some(f) = sensed {
+            let g = f.separation_m.sub(self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m)));
+            let free = g.sub(st.barrier_m);
+            if free < st.band_m {
+                inside_band = true;
+                // Towards the nearest point (not normalised): v.n <= a |n| with a the allowed
+                // approach speed; |n| bounded from above (max + min / 2), which allows up to 11.8 %
+                // more approach in the band and backs off up to 11.8 % faster below it.
+                let (nx, ny) = (f.nearest_x_m.sub(x), f.nearest_y_m.sub(y));
+                let n2 = nx.mul(nx).add(ny.mul(ny));
+                let a = free.mul(self.rate);
+                let vn = vx.mul(nx).add(vy.mul(ny));
+                let over = vn.sub(a.mul(self.norm_bound(nx, ny)));
+                if over > R::ZERO && n2 > R::ZERO {
+                    let e = over.div(n2);
+                    vx = vx.sub(e.mul(nx));
+                    vy = vy.sub(e.mul(ny));
+                    // Left tangent (-ny, nx); the side: latched, else the side the command leans
+                    // to, else towards the view's centre.
+                    if self.side == 0 {
+                        let lean = vy.mul(nx).sub(vx.mul(ny));
+                        let tol = self.lean_tol.mul(n2);
+                        self.side = if lean > tol {
+                            1
+                        } else if lean < tol.neg() {
+                            -1
+                        } else {
+                            let (cx, cy) = (x0.add(x1).mul(self.half).sub(x), y0.add(y1).mul(self.half).sub(y));
+                            if cy.mul(nx).sub(cx.mul(ny)) < R::ZERO {
+                                -1
+                            } else {
+                                1
+                            }
+                        };
+                    }
+                    // The turn replaces the blocked forward approach (`vn`, at most), not a backing
+                    // off: `e` when the barrier allows some approach, `vn / n2` below it.
+                    let t = if vn > R::ZERO {
+                        if a >= R::ZERO {
+                            e
+                        } else {
+                            vn.div(n2)
+                        }
+                    } else {
+                        R::ZERO
+                    };
+                    let t = if self.side < 0 { t.neg() } else { t };
+                    vx = vx.sub(t.mul(ny));
+                    vy = vy.add(t.mul(nx));
+                }
+            }
+        }
+        if !inside_band {
+            self.side = 0;
+        }
+        // The view's edges: per axis, the speed towards an edge at most `rate` times the room left.
+        let m = st.edge_margin_m;
+        let clamp = |v: R, lo: R, hi: R| if v < lo { lo } else if v > hi { hi } else { v };
+        let (lox, hix) = (x0.add(m).sub(x).mul(self.rate), x1.sub(m).sub(x).mul(self.rate));
+        let (loy, hiy) = (y0.add(m).sub(y).mul(self.rate), y1.sub(m).sub(y).mul(self.rate));
+        vx = if lox > hix { R::ZERO } else { clamp(vx, lox, hix) };
+        vy = if loy > hiy { R::ZERO } else { clamp(vy, loy, hiy) };
+        (vx, vy)
     }
 
     /// The parameters.
@@ -210,7 +333,7 @@ mod tests {
     }
 
     fn sensed<R: Real>(sep: f64, age: f64) -> Sensed<R> {
-        Sensed { separation_m: R::from_f64(sep), tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age) }
+        Sensed { separation_m: R::from_f64(sep), tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age), nearest_x_m: R::from_f64(sep + 0.05), nearest_y_m: R::ZERO }
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! fit is encoded into a serial frame, fed to a [`Receiver`] in `I16F16`, and the step uses the
 //! lookup-table Gaussian over the truncated window plus the weights-age watchdog.
 
-use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Watchdog};
+use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Steer, Watchdog};
 use flinch_firmware::avoidance::num::I16F16;
 use flinch_hal_sim::serial::SimSerial;
 
@@ -70,13 +70,65 @@ pub fn ssm<R: Real>(scene: &Avoid) -> Option<SsmParams<R>> {
     })
 }
 
-fn monitored<R: Real>(safe: &Option<SafeController<R>>, v: [R; 2], p: [f64; 2], sensed: Option<&Sensed<f64>>, cap: f64) -> Cmd {
+/// Capture to command for a scene: the latency plus, when the baud rate is modelled, one frame's
+/// time on the line, s.
+pub fn frame_delay_s(scene: &Avoid) -> Result<f64, String> {
+    Ok(scene.latency_s
+        + match scene.baud {
+            Some(b) => {
+                let cam = scene.camera();
+                let grid = RbfGrid::new(cam.width_px, cam.height_px, scene.fit.grid, cam.m_per_px, scene.fit.sigma_factor)?;
+                link_time(grid.nx, grid.ny, b)?.1
+            }
+            None => 0.0,
+        })
+}
+
+/// Width of the steering barrier's band, m: over it the allowed approach speed rises from 0 to
+/// the cap.
+pub const STEER_BAND_M: f64 = 0.05;
+
+/// The separation (from the tool's surface, at capture, less the motion since) that the steering
+/// barrier holds, m: the monitor's zero-speed separation (with the clearance asked), plus what a
+/// person covers at `v_h` while the oldest frame is in use (capture to command, one camera period,
+/// one control step), plus the robot's own term at the cap, plus 10 mm. There the monitor still
+/// allows the cap, so the tool goes round at its cruise speed instead of being stopped.
+pub fn steer_barrier_m(scene: &Avoid) -> Result<f64, String> {
+    let s = &scene.safety;
+    let stop = s.human_speed_mps * (s.reaction_time_s + s.stopping_time_s) + s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m;
+    let oldest = frame_delay_s(scene)? + scene.frame_period_s + scene.dt_s;
+    Ok(stop + s.human_speed_mps * oldest + scene.speed_mps * (s.reaction_time_s + s.stopping_time_s / 2.0) + 0.01)
+}
+
+/// The monitor with its steering barrier for a scene (`None`: monitor off, as the thesis wrote it).
+pub fn safe_controller<R: Real>(scene: &Avoid) -> Result<Option<SafeController<R>>, String> {
+    let Some(p) = ssm::<R>(scene) else { return Ok(None) };
+    let (w, h) = scene.extent_m();
+    let q = R::from_f64;
+    Ok(Some(SafeController::new(p).with_steer(Steer {
+        barrier_m: q(steer_barrier_m(scene)?),
+        band_m: q(STEER_BAND_M),
+        view_m: [R::ZERO, R::ZERO, q(w), q(h)],
+        edge_margin_m: q(scene.robot.wrist_radius_m),
+    })))
+}
+
+fn monitored<R: Real>(safe: &mut Option<SafeController<R>>, v: [R; 2], p: [f64; 2], sensed: Option<&Sensed<f64>>, cap: f64) -> Cmd {
     match safe {
         None => Cmd { v: [v[0].to_f64(), v[1].to_f64()], limit_mps: cap, state: "field" },
         Some(c) => {
             let q = R::from_f64;
-            let sn = sensed.map(|s| Sensed { separation_m: q(s.separation_m), tool_x_m: q(s.tool_x_m), tool_y_m: q(s.tool_y_m), age_s: q(s.age_s) });
-            let out = c.limit(v[0], v[1], q(p[0]), q(p[1]), sn.as_ref());
+            let sn = sensed.map(|s| Sensed {
+                separation_m: q(s.separation_m),
+                tool_x_m: q(s.tool_x_m),
+                tool_y_m: q(s.tool_y_m),
+                age_s: q(s.age_s),
+                nearest_x_m: q(s.nearest_x_m),
+                nearest_y_m: q(s.nearest_y_m),
+            });
+            let (x, y) = (q(p[0]), q(p[1]));
+            let (vx, vy) = c.steer(v[0], v[1], x, y, sn.as_ref());
+            let out = c.limit(vx, vy, x, y, sn.as_ref());
             Cmd { v: [out.vx.to_f64(), out.vy.to_f64()], limit_mps: out.limit_mps.to_f64(), state: state_name(out.state) }
         }
     }
@@ -93,7 +145,7 @@ pub struct RefEngine {
 impl RefEngine {
     /// For a scene.
     pub fn new(scene: &Avoid) -> Result<Self, String> {
-        Ok(RefEngine { ctl: Controller::new(gains(scene)?), safe: ssm(scene).map(SafeController::new), cap: scene.speed_mps, field: None })
+        Ok(RefEngine { ctl: Controller::new(gains(scene)?), safe: safe_controller(scene)?, cap: scene.speed_mps, field: None })
     }
 }
 
@@ -106,7 +158,7 @@ impl StepEngine for RefEngine {
         let (h, fx, fy) = self.field.as_ref().map_or((0.0, 0.0, 0.0), |f| f.sample(p[0], p[1]));
         let s = fw::FieldSample { height: h, grad_x: fx, grad_y: fy };
         let c = self.ctl.command(p[0], p[1], goal[0], goal[1], &s, 1.0);
-        monitored(&self.safe, [c.vx, c.vy], p, sensed, self.cap)
+        monitored(&mut self.safe, [c.vx, c.vy], p, sensed, self.cap)
     }
 }
 
@@ -129,7 +181,7 @@ impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
     pub fn new(scene: &Avoid, gauss: G) -> Result<Self, String> {
         Ok(FwEngine {
             ctl: Controller::new(gains(scene)?),
-            safe: ssm(scene).map(SafeController::new),
+            safe: safe_controller(scene)?,
             cap: scene.speed_mps,
             rx: Box::new(Receiver::new(200, 20)),
             line: SimSerial::pair(),
@@ -156,7 +208,7 @@ impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
         let s = fw::sample(self.rx.grid(), &self.gauss, q(p[0]), q(p[1]));
         let wd = self.watchdog.factor::<R>(self.rx.weights_age_ms(now_ms));
         let c = self.ctl.command(q(p[0]), q(p[1]), q(goal[0]), q(goal[1]), &s, wd);
-        monitored(&self.safe, [c.vx, c.vy], p, sensed, self.cap)
+        monitored(&mut self.safe, [c.vx, c.vy], p, sensed, self.cap)
     }
     fn rx_stats(&self) -> Option<RxStats> {
         Some(self.rx.stats)
@@ -397,6 +449,13 @@ pub const NOTHING_SENSED_M: f64 = 10.0;
 /// raise) higher than `safety.sense_height_m`, less half a pixel; about [`NOTHING_SENSED_M`] when
 /// there is none.
 pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> (Field, f64) {
+    let (f, sep, _) = fit_and_sense_at(scene, setup, tool, hand, rng);
+    (f, sep)
+}
+
+/// [`fit_and_sense`], and the nearest sensed obstacle point (m; [`NOTHING_SENSED_M`] along x from
+/// the tool when there is none).
+pub fn fit_and_sense_at(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2]) {
     let cam = scene.camera();
     let robot = scene.robot_shape();
     let op = scene.operator_shape();
@@ -408,10 +467,10 @@ pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2
     } else {
         preprocess(&img, &cam, 0.0, Some((&setup.calibration, tool)))
     };
-    let from_centre = if scene.robot.removal == "model" {
-        sensed_separation(&img, &cam, &robot, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
+    let (from_centre, nearest) = if scene.robot.removal == "model" {
+        sensed_nearest(&img, &cam, &robot, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
     } else {
-        nearest_obstacle(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
+        nearest_obstacle_at(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
     };
     // From the tool's surface, as the signed distance is measured.
     let sep = (from_centre - robot.wrist_radius_m).max(0.0);
@@ -423,7 +482,7 @@ pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2
         }
     }
     filter_weights(&mut w);
-    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep)
+    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep, nearest)
 }
 
 /// Robot removal by the robot-only height model: a pixel is cleared only when the robot, at the
@@ -451,7 +510,13 @@ pub fn remove_robot_by_model(map: &mut super::depth::HeightMap, m_per_px: f64, r
 /// [`remove_robot_by_model`]), less half a pixel, m. Null pixels are not filled here: a filled pixel
 /// beside the robot would borrow the robot's height and read as an obstacle.
 pub fn sensed_separation(img: &super::depth::DepthImage, cam: &super::depth::Camera, robot: &super::depth::RobotShape, tool: [f64; 2], margin_m: f64, sense_m: f64) -> f64 {
+    sensed_nearest(img, cam, robot, tool, margin_m, sense_m).0
+}
+
+/// [`sensed_separation`] and the nearest pixel's centre, m.
+pub fn sensed_nearest(img: &super::depth::DepthImage, cam: &super::depth::Camera, robot: &super::depth::RobotShape, tool: [f64; 2], margin_m: f64, sense_m: f64) -> (f64, [f64; 2]) {
     let mut best = f64::INFINITY;
+    let mut at = [tool[0] + NOTHING_SENSED_M, tool[1]];
     let w = img.width;
     for (k, &d) in img.mm.iter().enumerate() {
         if d == 0 {
@@ -463,29 +528,40 @@ pub fn sensed_separation(img: &super::depth::DepthImage, cam: &super::depth::Cam
         if h <= sense_m || (hr > 0.0 && h <= hr + margin_m) {
             continue;
         }
-        best = best.min((p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2));
+        let d2 = (p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2);
+        if d2 < best {
+            (best, at) = (d2, p);
+        }
     }
     if best.is_finite() {
-        (best.sqrt() - 0.5 * cam.m_per_px).max(0.0)
+        ((best.sqrt() - 0.5 * cam.m_per_px).max(0.0), at)
     } else {
-        NOTHING_SENSED_M
+        (NOTHING_SENSED_M, at)
     }
 }
 
 /// Distance from `p` to the nearest pixel above `height_m`, less half a pixel, m.
 pub fn nearest_obstacle(map: &super::depth::HeightMap, m_per_px: f64, p: [f64; 2], height_m: f64) -> f64 {
+    nearest_obstacle_at(map, m_per_px, p, height_m).0
+}
+
+/// [`nearest_obstacle`] and the nearest pixel's centre, m.
+pub fn nearest_obstacle_at(map: &super::depth::HeightMap, m_per_px: f64, p: [f64; 2], height_m: f64) -> (f64, [f64; 2]) {
     let mut best = f64::INFINITY;
+    let mut at = [p[0] + NOTHING_SENSED_M, p[1]];
     for (k, v) in map.m.iter().enumerate() {
         if *v > height_m {
-            let (c, r) = ((k % map.width) as f64, (k / map.width) as f64);
-            let d2 = ((c + 0.5) * m_per_px - p[0]).powi(2) + ((r + 0.5) * m_per_px - p[1]).powi(2);
-            best = best.min(d2);
+            let q = [((k % map.width) as f64 + 0.5) * m_per_px, ((k / map.width) as f64 + 0.5) * m_per_px];
+            let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+            if d2 < best {
+                (best, at) = (d2, q);
+            }
         }
     }
     if best.is_finite() {
-        (best.sqrt() - 0.5 * m_per_px).max(0.0)
+        ((best.sqrt() - 0.5 * m_per_px).max(0.0), at)
     } else {
-        NOTHING_SENSED_M
+        (NOTHING_SENSED_M, at)
     }
 }
 
@@ -499,6 +575,7 @@ pub fn gains<R: Real>(scene: &Avoid) -> Result<Gains<R>, String> {
         latch_height_m: R::from_f64(scene.latch_height_m),
         slow_height_m: R::from_f64(scene.slow_height_m),
         stop_height_m: R::from_f64(scene.stop_height_m),
+        bounded: scene.safety.on(),
     })
 }
 
@@ -545,15 +622,12 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
     let mut rows = Vec::with_capacity(steps.min(1 << 20));
     // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
     // capture). Each reaches the controller `latency_s` after capture.
-    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2])> = std::collections::VecDeque::new();
-    let (f0, sep0) = fit_and_sense(scene, setup, p, scene.hand_at(0.0), &mut rng);
+    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2], [f64; 2])> = std::collections::VecDeque::new();
+    let (f0, sep0, near0) = fit_and_sense_at(scene, setup, p, scene.hand_at(0.0), &mut rng);
     let mut field = f0.clone();
     // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
-    let delay = scene.latency_s + match scene.baud {
-        Some(b) => link_time(setup.fitter.grid.nx, setup.fitter.grid.ny, b)?.1,
-        None => 0.0,
-    };
-    in_flight.push_back((delay, 0.0, f0, sep0, p));
+    let delay = frame_delay_s(scene)?;
+    in_flight.push_back((delay, 0.0, f0, sep0, p, near0));
     let mut frames = 1;
     let mut seq: u32 = 0;
     let mut sensed: Option<Sensed<f64>> = None;
@@ -577,18 +651,18 @@ pub fn simulate_with(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine) 
         let t_prev = t - dt;
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
-            let (f, sep) = fit_and_sense(scene, setup, p, scene.hand_at(t_prev), &mut rng);
-            in_flight.push_back((t_prev + delay, t_prev, f, sep, p));
+            let (f, sep, near) = fit_and_sense_at(scene, setup, p, scene.hand_at(t_prev), &mut rng);
+            in_flight.push_back((t_prev + delay, t_prev, f, sep, p, near));
             frames += 1;
             next_frame += scene.frame_period_s;
         }
         while in_flight.front().is_some_and(|f| f.0 <= t_prev + 1e-12) {
-            let Some((_, tc, f, sep, at)) = in_flight.pop_front() else { break };
+            let Some((_, tc, f, sep, at, near)) = in_flight.pop_front() else { break };
             engine.new_field(&f, seq, now)?;
             seq = seq.wrapping_add(1);
             field = f;
             capture_t = tc;
-            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0 });
+            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1] });
         }
         if let Some(sn) = sensed.as_mut() {
             // Counted from capture: latency plus the time since it arrived.
