@@ -8,6 +8,7 @@
 //!
 //! One step = `avoidance::sample` (field height and gradient over the truncated window) plus
 //! `Controller::command` (attraction, vortex, speed scaling, watchdog factor) plus
+//! `SafeController::steer` (the barrier on the sensed separation and the view's edges) and
 //! `SafeController::limit` (speed and separation monitoring: separation less the tool's motion since
 //! capture and the frame's age, speed limit, clamp) at one tool position. The separations are chosen
 //! so that every branch is taken: run, slow (a scaled command) and protective stop (counted in the
@@ -27,7 +28,7 @@ use cortex_m_semihosting::{debug, hprintln};
 use flinch_firmware::avoidance::{
     num::{I16F16, I20F12, I8F24},
     sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, SafeController, SafeState, Sensed,
-    SsmParams, Watchdog,
+    SsmParams, Steer, Watchdog,
 };
 
 const SYST_CVR: u32 = 0xE000_E018;
@@ -66,24 +67,35 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
     let mut ctl = Controller::new(Gains {
         repulsion: Repulsion::Vortex { sign: 0 },
         k_att: R::from_f64(0.25),
-        k_rep: R::from_f64(0.6),
+        k_rep: R::from_f64(5.0),
         capture_radius_m: R::from_f64(0.03),
         latch_height_m: R::from_f64(0.02),
         slow_height_m: R::from_f64(0.05),
         stop_height_m: R::from_f64(0.3),
+        // Ours: the vortex bounded (k_rep high enough that the bound applies) and the radial
+        // barrier on f* (the hill is above slow_height_m at these positions).
+        bounded: true,
     });
     let wd = Watchdog { slow_after_ms: 100, stop_after_ms: 330 };
-    let safe = SafeController::new(SsmParams {
+    let mut safe = SafeController::new(SsmParams {
         human_speed_mps: R::from_f64(1.6),
         reaction_time_s: R::from_f64(0.02),
         stopping_time_s: R::from_f64(0.1),
         margin_m: R::from_f64(0.035),
         speed_cap_mps: R::from_f64(0.25),
+    })
+    .with_steer(Steer {
+        // The barrier at 0.45 m with a 0.05 m band: every separation below 0.5 m is steered.
+        barrier_m: R::from_f64(0.45),
+        band_m: R::from_f64(0.05),
+        view_m: [R::ZERO, R::ZERO, R::from_f64(1.05), R::from_f64(1.05)],
+        edge_margin_m: R::from_f64(0.045),
     });
     let kick = R::from_f64(0.3);
     let (mut max, mut sum) = (0u32, 0u32);
     let mut states = [0u32; 3];
     let mut check = R::ZERO;
+    let mut parts = [0u32; 4];
     for k in 0..16 {
         let x = R::from_f64(0.30 + 0.028 * k as f64);
         let y = R::from_f64(0.40 + 0.011 * k as f64);
@@ -94,14 +106,21 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
             tool_x_m: x.sub(R::from_f64(0.01)),
             tool_y_m: y,
             age_s: R::from_f64(0.1),
+            // Nearest point straight ahead of the command (head-on: the costliest turn).
+            nearest_x_m: x.add(R::from_f64(0.345 + 0.02 * k as f64)),
+            nearest_y_m: y,
         };
         let t0 = now();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
+        let ta = now();
         let factor = wd.factor::<R>(black_box(Some(40)));
         let c = ctl.command(x, y, gx, gy, &f, factor);
+        let tb = now();
         // On top of the hill the field's command is zero: a 0.3 m/s kick keeps a command for the
         // monitor to scale at every position (its costliest branch).
-        let out = safe.limit(c.vx.add(black_box(kick)), c.vy, x, y, black_box(Some(&sensed)));
+        let (vx, vy) = safe.steer(c.vx.add(black_box(kick)), c.vy, x, y, black_box(Some(&sensed)));
+        let tc = now();
+        let out = safe.limit(vx, vy, x, y, black_box(Some(&sensed)));
         let t1 = now();
         black_box(out);
         if let Some(n) = states.get_mut(match out.state {
@@ -112,12 +131,16 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
             *n += 1;
         }
         check = check.add(out.vx.abs()).add(out.vy.abs());
-        let ins = (counts(t0, t1).saturating_sub(overhead)) * 40 / 64;
+        // Three more SysTick reads inside the step: their cost is subtracted too.
+        let ins = (counts(t0, t1).saturating_sub(4 * overhead)) * 40 / 64;
+        for (slot, (a, b)) in parts.iter_mut().zip([(t0, ta), (ta, tb), (tb, tc), (tc, t1)]) {
+            *slot = (*slot).max(counts(a, b).saturating_sub(overhead) * 40 / 64);
+        }
         max = max.max(ins);
         sum += ins;
     }
     hprintln!(
-        "avoid_cost grid={}x{} variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} check={}",
+        "avoid_cost grid={}x{} variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} parts field/command/steer/limit max={}/{}/{}/{} check={}",
         n,
         n,
         name,
@@ -126,6 +149,10 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, gauss: &G, overhead: u32)
         states[0],
         states[1],
         states[2],
+        parts[0],
+        parts[1],
+        parts[2],
+        parts[3],
         check.to_f64()
     );
 }

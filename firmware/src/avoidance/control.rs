@@ -132,7 +132,19 @@ impl<R: Real> Controller<R> {
         let g = self.gains;
         let ex = gx.sub(x);
         let ey = gy.sub(y);
-        let dist = ex.mul(ex).add(ey.mul(ey)).sqrt();
+        let dist = if g.bounded {
+            // Ours: `|e|` bounded from above by max + min / 2 (no square root): the attraction's
+            // speed is 89.4-100 % of k_a by heading, which is what the monitor's own length bound
+            // lets through at the cap anyway.
+            let (ax, ay) = (ex.abs(), ey.abs());
+            if ax > ay {
+                ax.add(ay.halve())
+            } else {
+                ay.add(ax.halve())
+            }
+        } else {
+            ex.mul(ex).add(ey.mul(ey)).sqrt()
+        };
         let denom = if dist > g.capture_radius_m { dist } else { g.capture_radius_m };
         let (fax, fay) = if denom > R::ZERO {
             // One division: k_a / max(|e|, r_capture), then two products.
@@ -170,11 +182,21 @@ impl<R: Real> Controller<R> {
         };
         let mut k = g.k_rep;
         if g.bounded {
-            // |F_r| <= k_att: |grad| bounded from above by max + min / 2.
+            // |F_r| <= k_att: |grad| bounded from above by max + min / 2, and `k` halved until the
+            // bound holds (no division; at most 32 halvings, after which `k` is 0 in every type
+            // used here): the vortex ends between k_att / 2 and k_att when it had to be bounded.
             let (ax, ay) = (vx.abs(), vy.abs());
-            let gb = if ax > ay { ax.add(ay.mul(self.half)) } else { ay.add(ax.mul(self.half)) };
-            if k.mul(gb) > g.k_att && gb > R::ZERO {
-                k = g.k_att.div(gb);
+            let gb = if ax > ay { ax.add(ay.halve()) } else { ay.add(ax.halve()) };
+            let mut p = k.mul(gb);
+            for _ in 0..32 {
+                if p <= g.k_att {
+                    break;
+                }
+                k = k.halve();
+                p = p.halve();
+            }
+            if p > g.k_att {
+                k = R::ZERO;
             }
         }
         let kr = if sign < 0 { k.neg() } else { k };
@@ -191,7 +213,25 @@ impl<R: Real> Controller<R> {
             let up = cx.mul(f.grad_x).add(cy.mul(f.grad_y));
             let g2 = f.grad_x.mul(f.grad_x).add(f.grad_y.mul(f.grad_y));
             if up > allow && g2 > R::ZERO {
-                let e = up.sub(allow).div(g2);
+                // Remove `e' (grad f*)` with `e' = (up - allow) P`, `P` the power of two in
+                // `[1 / g2, 2 / g2)` (no division; at most 32 steps): between the exact projection
+                // and twice it, so the uphill rate ends at or below `allow`, never above.
+                let (mut q, mut p) = (g2, R::ONE);
+                for _ in 0..32 {
+                    if q >= R::ONE {
+                        break;
+                    }
+                    q = q.add(q);
+                    p = p.add(p);
+                }
+                for _ in 0..32 {
+                    if q < R::ONE.add(R::ONE) {
+                        break;
+                    }
+                    q = q.halve();
+                    p = p.halve();
+                }
+                let e = up.sub(allow).mul(p);
                 cx = cx.sub(e.mul(f.grad_x));
                 cy = cy.sub(e.mul(f.grad_y));
             }

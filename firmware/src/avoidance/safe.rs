@@ -140,6 +140,8 @@ pub struct SafeController<R> {
     stop_separation_m: R,
     /// `T_r + T_s / 2`, s.
     per_speed_s: R,
+    /// `1 / (T_r + T_s / 2)`, 1/s, saturating in fixed point (a smaller factor: a lower limit).
+    inv_per_speed: R,
     /// One half.
     half: R,
 }
@@ -151,6 +153,7 @@ impl<R: Real> SafeController<R> {
         SafeController {
             stop_separation_m: params.human_speed_mps.mul(params.reaction_time_s.add(params.stopping_time_s)).add(params.margin_m),
             per_speed_s: params.reaction_time_s.add(params.stopping_time_s.mul(half)),
+            inv_per_speed: R::ONE.div(params.reaction_time_s.add(params.stopping_time_s.mul(half))),
             params,
             half,
             steer: None,
@@ -210,17 +213,10 @@ impl<R: Real> SafeController<R> {
                             }
                         };
                     }
-                    // The turn replaces the blocked forward approach (`vn`, at most), not a backing
-                    // off: `e` when the barrier allows some approach, `vn / n2` below it.
-                    let t = if vn > R::ZERO {
-                        if a >= R::ZERO {
-                            e
-                        } else {
-                            vn.div(n2)
-                        }
-                    } else {
-                        R::ZERO
-                    };
+                    // The turn replaces the blocked forward approach, not a backing off: `e` while
+                    // the barrier allows some approach, none below it (there the tool backs off
+                    // first; one division a step).
+                    let t = if vn > R::ZERO && a >= R::ZERO { e } else { R::ZERO };
                     let t = if self.side < 0 { t.neg() } else { t };
                     vx = vx.sub(t.mul(ny));
                     vy = vy.add(t.mul(nx));
@@ -255,7 +251,9 @@ impl<R: Real> SafeController<R> {
             if free >= cap.mul(self.per_speed_s) {
                 cap
             } else {
-                let v = free.div(self.per_speed_s);
+                // `free / per_speed` as a product (no division a step); where `1 / per_speed`
+                // saturates the product is smaller: a lower limit.
+                let v = free.mul(self.inv_per_speed);
                 if v < cap {
                     v
                 } else {
@@ -294,7 +292,16 @@ impl<R: Real> SafeController<R> {
         if speed > R::ZERO && m > R::ZERO {
             // Unit components `v / m` in [-1, 1] (no overflow), the bound over `m` in [1, 1.5]:
             // the result's bound is the limit (to rounding).
-            let (ux, uy) = (vx.div(m), vy.div(m));
+            // Up to 1 m/s a component (every command of a cruise speed), one division: `1 / m`
+            // has at least as many significant bits as the number type's fraction (it saturates in
+            // I8F24 below 1/128 m/s: both components then get the same smaller factor, the
+            // direction is kept and the result stays under the limit). Above it, two divisions.
+            let (ux, uy) = if m <= R::ONE {
+                let inv = R::ONE.div(m);
+                (vx.mul(inv), vy.mul(inv))
+            } else {
+                (vx.div(m), vy.div(m))
+            };
             let (bx, by) = (ux.abs(), uy.abs());
             let r = R::ONE.add(if bx < by { bx } else { by }.mul(self.half));
             let k = limit.div(r);
@@ -313,7 +320,7 @@ impl<R: Real> SafeController<R> {
             return a.add(b);
         }
         let (m, n) = if aa > bb { (aa, bb) } else { (bb, aa) };
-        m.add(n.mul(self.half))
+        m.add(n.halve())
     }
 }
 
