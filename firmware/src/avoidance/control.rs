@@ -103,7 +103,6 @@ pub struct Controller<R> {
     latched: i8,
     /// `k_att / (stop_height - slow_height)`, 1/s (the barrier's uphill rate per metre below stop).
     barrier_rate: R,
-    half: R,
 }
 
 impl<R: Real> Controller<R> {
@@ -111,7 +110,7 @@ impl<R: Real> Controller<R> {
     pub fn new(gains: Gains<R>) -> Self {
         let span = gains.stop_height_m.sub(gains.slow_height_m);
         let barrier_rate = if span > R::ZERO { gains.k_att.div(span) } else { R::ZERO };
-        Controller { gains, latched: 0, barrier_rate, half: R::ONE.div(R::from_int(2)) }
+        Controller { gains, latched: 0, barrier_rate }
     }
 
     /// Speed factor from the field height at the tool.
@@ -303,5 +302,31 @@ mod tests {
         assert!((w.factor::<f64>(Some(200)) - 0.5).abs() < 1e-12);
         assert_eq!(w.factor::<f64>(Some(300)), 0.0);
         assert_eq!(w.factor::<f64>(Some(u32::MAX)), 0.0);
+    }
+
+    /// Ours: the vortex is bounded by k_att whatever k_rep (between k_att / 2 and k_att when the
+    /// bound applies), and the radial barrier never lets the command climb f* faster than allowed:
+    /// not at all at `stop_height_m`. The thesis's law (bounded = false) is unchanged.
+    #[test]
+    fn bounded_vortex_and_radial_barrier() {
+        let g = Gains { bounded: true, k_rep: 1e4, ..gains() };
+        let mut c = Controller::new(g);
+        let off_hill = FieldSample { height: 0.0, grad_x: 3.0, grad_y: -1.0 };
+        let cmd = c.command(0.0, 0.0, 1.0, 0.0, &off_hill, 1.0);
+        let (rx, ry) = (cmd.vx - 0.2, cmd.vy);
+        assert!(rx.hypot(ry) <= 0.2 + 1e-12 && rx.hypot(ry) >= 0.2 / 2.0 / 1.1181, "{rx} {ry}");
+        for h in [0.25, 0.3, 0.39, 0.4, 0.5] {
+            for (gx, gy) in [(1.0, 0.0), (0.3, 0.4), (-2.0, 0.5), (0.01, 0.0)] {
+                let f = FieldSample { height: h, grad_x: gx, grad_y: gy };
+                let mut c = Controller::new(Gains { bounded: true, ..gains() });
+                let cmd = c.command(0.0, 0.0, 1.0, 0.0, &f, 1.0);
+                let up = cmd.vx * gx + cmd.vy * gy;
+                let allow = if h < 0.4 { 0.2 * (0.4 - h) / 0.2 } else { 0.0 };
+                assert!(up <= allow + 1e-9, "h {h} grad ({gx}, {gy}): uphill {up} > {allow}");
+            }
+        }
+        let mut thesis = Controller::new(Gains { k_rep: 1e4, ..gains() });
+        let t = thesis.command(0.0, 0.0, 1.0, 0.0, &off_hill, 1.0);
+        assert!(t.vx.hypot(t.vy) > 1000.0, "eq 76 as written is unbounded");
     }
 }

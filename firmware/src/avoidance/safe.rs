@@ -213,10 +213,11 @@ impl<R: Real> SafeController<R> {
                             }
                         };
                     }
-                    // The turn replaces the blocked forward approach, not a backing off: `e` while
-                    // the barrier allows some approach, none below it (there the tool backs off
-                    // first; one division a step).
-                    let t = if vn > R::ZERO && a >= R::ZERO { e } else { R::ZERO };
+                    // The turn, only when the command wanted to approach: as large as the cut
+                    // (the blocked approach, plus the backing off below the barrier: at most
+                    // `vn + 1.118 rate (barrier - g)`), so the tool keeps going round a person who
+                    // comes closer; the monitor's limit bounds the sum.
+                    let t = if vn > R::ZERO { e } else { R::ZERO };
                     let t = if self.side < 0 { t.neg() } else { t };
                     vx = vx.sub(t.mul(ny));
                     vy = vy.add(t.mul(nx));
@@ -427,5 +428,71 @@ mod tests {
         assert!(sp <= 0.2501, "{sp}");
         // Scaled to the bound max + min / 2 = 1.5 m for a diagonal of true length sqrt 2 m.
         assert!(sp > 0.25 * 2f64.sqrt() / 1.5 - 1e-3, "{sp}");
+    }
+
+    fn steered(barrier: f64) -> SafeController<f64> {
+        SafeController::new(params::<f64>()).with_steer(Steer { barrier_m: barrier, band_m: 0.05, view_m: [0.0, 0.0, 2.0, 2.0], edge_margin_m: 0.045 })
+    }
+
+    fn at(sep: f64, nearest: [f64; 2]) -> Sensed<f64> {
+        Sensed { separation_m: sep, tool_x_m: 1.0, tool_y_m: 1.0, age_s: 0.0, nearest_x_m: nearest[0], nearest_y_m: nearest[1] }
+    }
+
+    /// Head-on in the band: the approach is cut to the barrier's rate (its length bound allows at
+    /// most 11.8 % more), the cut turned along the boundary (never a faster command), its side
+    /// latched; below the barrier it backs off and turns; far away nothing changes.
+    #[test]
+    fn the_barrier_cuts_the_approach_and_turns_it() {
+        let mut c = steered(0.4);
+        let rate = 0.25 / 0.05;
+        let near = at(0.42, [1.5, 1.0]);
+        let (vx, vy) = c.steer(0.25, 0.0, 1.0, 1.0, Some(&near));
+        assert!(vx <= rate * 0.02 * 1.1181 + 1e-12 && vx >= 0.0, "{vx}");
+        assert!(vy.abs() > 0.1, "turned along the boundary: {vy}");
+        assert!(vx.hypot(vy) <= 0.25 + 1e-12);
+        let side = vy.signum();
+        // The command now leans the other way: the side stays while in the band.
+        let (_, vy2) = c.steer(0.25, -0.05 * side, 1.0, 1.0, Some(&near));
+        assert_eq!(vy2.signum(), side);
+        // Below the barrier: backs off, and still turns; out of the band the latch is released.
+        let (bx, by) = c.steer(0.25, 0.0, 1.0, 1.0, Some(&at(0.35, [1.5, 1.0])));
+        assert!(bx < 0.0 && by.signum() == side, "{bx} {by}");
+        assert_eq!(c.steer(0.25, 0.1, 1.0, 1.0, Some(&at(1.0, [2.5, 1.0]))), (0.25, 0.1));
+        assert_eq!(c.side, 0);
+        // Moving away from the obstacle is never cut.
+        assert_eq!(c.steer(-0.25, 0.0, 1.0, 1.0, Some(&near)), (-0.25, 0.0));
+    }
+
+    /// The view's edges: the speed towards an edge is at most `rate` times the room left inside
+    /// `edge_margin_m`, and outside it the command points back in.
+    #[test]
+    fn the_view_edges_are_a_barrier() {
+        let mut c = steered(0.4);
+        let far = at(5.0, [9.0, 9.0]);
+        let (vx, vy) = c.steer(0.25, 0.25, 2.0 - 0.045 - 0.01, 1.0, Some(&far));
+        assert!((vx - 0.25 / 0.05 * 0.01).abs() < 1e-12 && vy == 0.25, "{vx} {vy}");
+        let (ox, _) = c.steer(0.25, 0.0, 2.01, 1.0, Some(&far));
+        assert!(ox < 0.0);
+        let (lx, ly) = c.steer(-0.3, -0.3, 0.02, 0.02, None);
+        assert!(lx > 0.0 && ly > 0.0, "{lx} {ly}");
+    }
+
+    /// Whatever comes in (extreme, non-finite), steering then the limit ends at or below the cap
+    /// and never moves towards an obstacle faster than the barrier allows, in I16F16 too.
+    #[test]
+    fn steered_commands_stay_bounded() {
+        let q = |v: f64| I16F16::from_f64(v);
+        let mut c = SafeController::new(params::<I16F16>()).with_steer(Steer { barrier_m: q(0.4), band_m: q(0.05), view_m: [q(0.0), q(0.0), q(2.0), q(2.0)], edge_margin_m: q(0.045) });
+        let s = Sensed { separation_m: q(0.43), tool_x_m: q(1.0), tool_y_m: q(1.0), age_s: q(0.0), nearest_x_m: q(1.4), nearest_y_m: q(1.3) };
+        for (vx, vy) in [(30000.0, 30000.0), (-30000.0, 5.0), (0.3, 0.2), (0.0, 0.0)] {
+            let (sx, sy) = c.steer(q(vx), q(vy), q(1.0), q(1.0), Some(&s));
+            let out = c.limit(sx, sy, q(1.0), q(1.0), Some(&s));
+            let (ox, oy) = (out.vx.to_f64(), out.vy.to_f64());
+            assert!(ox.hypot(oy) <= 0.2502, "{vx} {vy}: {ox} {oy}");
+        }
+        let mut f = steered(0.4);
+        let (nx, ny) = f.steer(f64::NAN, 0.0, 1.0, 1.0, Some(&at(0.42, [1.5, 1.0])));
+        let out = f.limit(nx, ny, 1.0, 1.0, Some(&at(0.42, [1.5, 1.0])));
+        assert_eq!((out.vx, out.vy), (0.0, 0.0));
     }
 }
