@@ -901,3 +901,99 @@ mod blind_zone {
         assert!(worst <= scene.camera.m_per_px, "{worst}");
     }
 }
+
+#[cfg(test)]
+mod removal_mismatch {
+    use super::*;
+    use crate::avoid::depth::render;
+
+    /// The robot is not where, or not quite what, its model says (the model's pose 10 mm off in x or
+    /// y, or a wrist 5 mm larger than modelled): the part of the robot the model does not explain
+    /// stays in the image, and the hand beside the tool (20 to 60 mm from the wrist's true edge,
+    /// 8 directions) must still be seen, never farther than its true visible distance plus a
+    /// pixel. The price is availability, not safety: the unexplained rim reads as an obstacle at
+    /// the tool (separation about 0: a protective stop until the model is right).
+    #[test]
+    fn a_mismatched_robot_model_still_sees_the_hand() {
+        let mut scene = tests::small_scene("vortex", [0.5, 0.5]);
+        scene.robot.removal = "model".into();
+        scene.camera.noise_mm = 0.0;
+        scene.camera.null_fraction = 0.0;
+        let cam = scene.camera();
+        let px = scene.camera.m_per_px;
+        let model = scene.robot_shape();
+        let tool = [0.45, 0.45];
+        let mut rng = Rng::new(3);
+        let mut rim_min: f64 = f64::INFINITY;
+        for (off, grow) in [([0.01, 0.0], 0.0), ([0.0, -0.01], 0.0), ([0.0, 0.0], 0.005)] {
+            let mut real = model.clone();
+            real.wrist_radius_m += grow;
+            let at = [tool[0] + off[0], tool[1] + off[1]];
+            // The robot alone: its unexplained rim is seen (separation near 0), not hidden.
+            let img = render(&cam, Some((&real, at)), None, &mut rng);
+            let (alone, _) = sensed_nearest(&img, &cam, &model, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m);
+            rim_min = rim_min.min(alone);
+            for k in 0..8 {
+                let a = k as f64 * std::f64::consts::PI / 4.0;
+                for gap in [0.02, 0.04, 0.06] {
+                    let r = real.wrist_radius_m + scene.operator.hand_radius_m + gap;
+                    let hand = [at[0] + r * a.cos(), at[1] + r * a.sin()];
+                    let mut s = scene.clone();
+                    s.operator.entry_m = hand;
+                    let op = s.operator_shape();
+                    let img = render(&cam, Some((&real, at)), Some((&op, hand)), &mut rng);
+                    // The hand's true visible distance from the reported tool point (where the
+                    // monitor measures from), less half a pixel.
+                    let mut truth = f64::INFINITY;
+                    for q in 0..cam.width_px * cam.height_px {
+                        let p = [((q % cam.width_px) as f64 + 0.5) * px, ((q / cam.width_px) as f64 + 0.5) * px];
+                        let ho = op.height_at(hand, p);
+                        if ho > s.safety.sense_height_m && ho > real.height_at(at, p) {
+                            truth = truth.min(((p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2)).sqrt() - 0.5 * px);
+                        }
+                    }
+                    let (sep, _) = sensed_nearest(&img, &cam, &model, tool, s.robot.removal_margin_m, s.safety.sense_height_m);
+                    assert!(sep <= truth + px, "model off by {off:?}, wrist +{grow} m, hand at {a:.2} rad {gap} m: sensed {sep} m, true {truth} m");
+                }
+            }
+        }
+        assert!(rim_min < model.wrist_radius_m + 2.0 * px, "the unexplained rim is seen at the tool: {rim_min} m");
+    }
+
+    /// The hidden area (ours: what the robot occludes; the thesis: its grown masks), measured on the
+    /// thesis's set-up (`avoid_thesis_reach.toml`, 210 x 210 px at 5 mm) at 5 tool positions. Ours
+    /// clears the robot's footprint and nothing else (within the pixels its edge cuts); the thesis's
+    /// masks clear several times more. Printed for docs/avoidance.md:
+    /// `cargo test -p flinch-harness --lib avoid::path::removal_mismatch -- --nocapture`.
+    #[test]
+    fn the_hidden_area_is_the_robot_footprint() {
+        let scene = Avoid::parse(include_str!("../../../scenes/avoid_thesis_reach.toml")).unwrap();
+        let mut thesis = scene.clone();
+        thesis.thesis_mode();
+        let setup = Setup::new(&thesis, None).unwrap();
+        let cam = scene.camera();
+        let robot = scene.robot_shape();
+        let n = (cam.width_px * cam.height_px) as f64;
+        let mut rng = Rng::new(5);
+        for tool in [[0.12, 0.5], [0.3, 0.5], [0.52, 0.52], [0.7, 0.3], [0.93, 0.5]] {
+            let img = render(&cam, Some((&robot, tool)), None, &mut rng);
+            let mut ours = preprocess(&img, &cam, 0.0, None);
+            let cleared = remove_robot_by_model(&mut ours, cam.m_per_px, &robot, tool, scene.robot.removal_margin_m) as f64;
+            let footprint = (0..cam.width_px * cam.height_px)
+                .filter(|&k| robot.height_at(tool, [((k % cam.width_px) as f64 + 0.5) * cam.m_per_px, ((k / cam.width_px) as f64 + 0.5) * cam.m_per_px]) > 0.0)
+                .count() as f64;
+            // The thesis clears the nearest stored mask (count its pixels on a map of ones).
+            let mut ones = crate::avoid::depth::HeightMap { width: cam.width_px, height: cam.height_px, m: vec![1.0; cam.width_px * cam.height_px] };
+            let masked = setup.calibration.clear(tool, &mut ones) as f64;
+            println!(
+                "hidden at tool {tool:?}: ours {:.2} % of the image (robot footprint {:.2} %), thesis masks {:.2} %",
+                100.0 * cleared / n,
+                100.0 * footprint / n,
+                100.0 * masked / n
+            );
+            assert!(cleared <= footprint, "ours clears only the robot: {cleared} of {footprint} px");
+            assert!(cleared >= 0.95 * footprint, "and all of it (noise-free pixels): {cleared} of {footprint}");
+            assert!(masked > 1.5 * footprint, "the thesis's masks hide more: {masked} px against {footprint}");
+        }
+    }
+}
