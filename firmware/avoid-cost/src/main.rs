@@ -165,6 +165,69 @@ fn exit(code: debug::ExitStatus) -> ! {
     }
 }
 
+/// The steering barrier's obstacle part (the same arithmetic as `SafeController::steer`, side
+/// fixed) written with nalgebra's `Vector2<f32>`, and again with plain `f32`s, to compare the cost.
+#[inline(never)]
+fn steer_nalgebra(v: nalgebra::Vector2<f32>, p: nalgebra::Vector2<f32>, at: nalgebra::Vector2<f32>, near: nalgebra::Vector2<f32>, sep: f32) -> nalgebra::Vector2<f32> {
+    let moved = (p - at).norm();
+    let free = sep - moved - 0.45;
+    if free >= 0.05 {
+        return v;
+    }
+    let n = near - p;
+    let n2 = n.norm_squared();
+    let a = free * 5.0;
+    let vn = v.dot(&n);
+    let over = vn - a * n.norm();
+    if over > 0.0 && n2 > 0.0 {
+        let e = over / n2;
+        let t = if vn > 0.0 { e } else { 0.0 };
+        v - n * e + nalgebra::Vector2::new(-n.y, n.x) * t
+    } else {
+        v
+    }
+}
+
+#[inline(never)]
+fn steer_plain(v: [f32; 2], p: [f32; 2], at: [f32; 2], near: [f32; 2], sep: f32) -> [f32; 2] {
+    let (dx, dy) = (p[0] - at[0], p[1] - at[1]);
+    let moved = libm::sqrtf(dx * dx + dy * dy);
+    let free = sep - moved - 0.45;
+    if free >= 0.05 {
+        return v;
+    }
+    let (nx, ny) = (near[0] - p[0], near[1] - p[1]);
+    let n2 = nx * nx + ny * ny;
+    let a = free * 5.0;
+    let vn = v[0] * nx + v[1] * ny;
+    let over = vn - a * libm::sqrtf(n2);
+    if over > 0.0 && n2 > 0.0 {
+        let e = over / n2;
+        let t = if vn > 0.0 { e } else { 0.0 };
+        [v[0] - e * nx - t * ny, v[1] - e * ny + t * nx]
+    } else {
+        v
+    }
+}
+
+fn measure_vec(overhead: u32) {
+    let (mut na_max, mut pl_max, mut diff) = (0u32, 0u32, 0.0f32);
+    for k in 0..16 {
+        let x = 0.30 + 0.028 * k as f32;
+        let sep = 0.30 + 0.02 * k as f32;
+        let t0 = now();
+        let a = steer_nalgebra(black_box(nalgebra::Vector2::new(0.3, 0.05)), black_box(nalgebra::Vector2::new(x, 0.5)), nalgebra::Vector2::new(x - 0.01, 0.5), nalgebra::Vector2::new(x + sep + 0.045, 0.52), black_box(sep));
+        let t1 = now();
+        let b = steer_plain(black_box([0.3, 0.05]), black_box([x, 0.5]), [x - 0.01, 0.5], [x + sep + 0.045, 0.52], black_box(sep));
+        let t2 = now();
+        black_box((a, b));
+        diff = diff.max((a.x - b[0]).abs()).max((a.y - b[1]).abs());
+        na_max = na_max.max(counts(t0, t1).saturating_sub(overhead) * 40 / 64);
+        pl_max = pl_max.max(counts(t1, t2).saturating_sub(overhead) * 40 / 64);
+    }
+    hprintln!("avoid_vec steer f32: nalgebra Vector2 max={} plain f32 max={} (instructions) largest difference {}", na_max, pl_max, diff);
+}
+
 #[entry]
 fn main() -> ! {
     let mut cp = match cortex_m::Peripherals::take() {
@@ -193,6 +256,7 @@ fn main() -> ! {
         measure::<f32, _>("f32-micromath", n, &GaussMicromath, overhead);
         measure::<f32, _>("f32-libm", n, &GaussLibm, overhead);
     }
+    measure_vec(overhead);
     exit(debug::EXIT_SUCCESS)
 }
 
