@@ -77,8 +77,11 @@ fn crossings_are_reported_as_collisions() {
     }
 }
 
-const ADVERSARIAL: [&str; 15] = [
+const ADVERSARIAL: [&str; 18] = [
     "avoid_operator_hand.toml",
+    "avoid_head_on_wide.toml",
+    "avoid_hand_side_wide.toml",
+    "avoid_moving_hand_wide.toml",
     "avoid_thesis_reach.toml",
     "avoid_hand_at_tool.toml",
     "avoid_head_on.toml",
@@ -243,10 +246,10 @@ fn clearance_is_from_the_surface_and_enforced() {
     }
 }
 
-/// The shipped demo needs avoidance and uses it: the hand rests on the straight line. With the field
-/// off (k_rep = 0) the thesis's law runs into it and the monitor alone stops short; with both, the
-/// field takes the tool round beyond the protective separation and it reaches the goal keeping its
-/// clearance (and well beyond: the monitor would not let it pass closer than about 0.36 m).
+/// The shipped demo needs avoidance and uses it: the hand rests on the straight line. As the thesis
+/// wrote it with the field off (k_rep = 0) the tool runs into it; ours goes round beyond the
+/// protective separation and reaches the goal keeping its clearance (and well beyond: the steering
+/// barrier holds the tool where the monitor allows the cruise speed, about 0.45 m from the surface).
 #[test]
 fn the_demo_needs_avoidance_and_goes_round() {
     let (scene, r) = run("avoid_operator_hand.toml");
@@ -257,11 +260,47 @@ fn the_demo_needs_avoidance_and_goes_round() {
     assert!(r.min_signed_distance_m > 0.3, "{}", r.min_signed_distance_m);
     let mut off = scene.clone();
     off.k_rep = 0.0;
-    let (_, stopped) = run_scene(off.clone());
-    assert!(matches!(stopped.status, Status::Stopped(_)), "{:?}", stopped.status);
     off.thesis_mode();
     let (_, t) = run_scene(off);
     assert!(matches!(t.status, Status::Collision(_)) && t.min_signed_distance_m < -0.05, "{:?} {}", t.status, t.min_signed_distance_m);
+}
+
+/// Where there is room (a 2.1 m workspace): a hand head-on (a symmetric hill: Fig. 87's trap), a
+/// hand beside the path and a hand that moves onto the path. Ours reaches the goal every time,
+/// keeping the clearance asked (and the barrier's ~0.45 m), at the cruise speed (the barrier holds
+/// the tool where the monitor allows it), never within 0.1 m of the operator; the SSM bound from the
+/// true separation holds at every step (`safe`). Without the steering barrier (the monitor alone,
+/// field as the thesis wrote it) the same scenes stop, or go through with the thesis's law alone.
+#[test]
+fn scenes_with_room_are_passed_at_speed() {
+    for name in ["avoid_head_on_wide.toml", "avoid_hand_side_wide.toml", "avoid_moving_hand_wide.toml", "avoid_operator_hand.toml"] {
+        let (scene, r) = run(name);
+        safe(name, &scene, &r);
+        assert_eq!(r.status, Status::Reached, "{name}: {:?}", r.status);
+        assert!(r.min_signed_distance_m >= scene.clearance_m.max(0.4), "{name}: {} m", r.min_signed_distance_m);
+        assert!(r.max_speed_mps >= 0.9 * scene.speed_mps, "{name}: {} m/s", r.max_speed_mps);
+        assert_eq!(r.max_speed_near_operator_mps, 0.0, "{name}");
+        // Cruise speed most of the way: at most twice the straight line's time.
+        let straight = ((scene.goal_m[0] - scene.start_m[0]).powi(2) + (scene.goal_m[1] - scene.start_m[1]).powi(2)).sqrt();
+        assert!(r.time_to_goal_s.unwrap() < 2.0 * straight / scene.speed_mps, "{name}: {:?} s", r.time_to_goal_s);
+    }
+    // The head-on hand without the barrier (the thesis's field and law): it does not keep the
+    // clearance.
+    let (scene, t) = thesis("avoid_head_on_wide.toml");
+    honest("avoid_head_on_wide.toml", &scene, &t);
+    assert_ne!(t.status, Status::Reached, "{:?} {}", t.status, t.min_signed_distance_m);
+}
+
+/// In the thesis's 1.05 m workspace the protective separation leaves no way round: every scene
+/// with the operator near the path stops (the status says why) and none is reported reached.
+#[test]
+fn no_room_in_the_thesis_workspace_is_an_honest_stop() {
+    for name in ["avoid_head_on.toml", "avoid_thesis_reach.toml", "avoid_forearm_across.toml", "avoid_goal_covered.toml", "avoid_u_trap.toml", "avoid_box_wall.toml", "avoid_wall.toml"] {
+        let (scene, r) = run(name);
+        safe(name, &scene, &r);
+        assert!(matches!(r.status, Status::Stopped(_)), "{name}: {:?}", r.status);
+        assert_eq!(r.max_speed_near_operator_mps, 0.0, "{name}");
+    }
 }
 
 /// The thesis's law on every scene: whatever it does, the report is honest.

@@ -43,4 +43,4 @@ pub use frame::{encode_frame, frame_len, FrameHeader};
 pub use gauss::{Gauss, GaussLibm, GaussLut, GaussMicromath};
 pub use num::Real;
 pub use receiver::{Receiver, RxStats};
-pub use safe::{SafeCommand, SafeController, SafeState, Sensed, SsmParams};
+pub use safe::{SafeCommand, SafeController, SafeState, Sensed, SsmParams, Steer};

@@ -8,6 +8,7 @@
 //!
 //! One step = `avoidance::sample` (field height and gradient over the truncated window) plus
 //! `Controller::command` (attraction, vortex, speed scaling, watchdog factor) plus
+//! `SafeController::steer` (the barrier on the sensed separation and the view's edges) and
 //! `SafeController::limit` (speed and separation monitoring: separation less the tool's motion since
 //! capture and the frame's age, speed limit, clamp) at one tool position. The separations are chosen
 //! so that every branch is taken: run, slow (a scaled command) and protective stop (counted in the
@@ -28,7 +29,7 @@ use flinch_firmware::avoidance::{
     frame, FrameHeader, Receiver,
     num::{I16F16, I20F12, I8F24},
     sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, SafeController, SafeState, Sensed,
-    SsmParams, Watchdog,
+    SsmParams, Steer, Watchdog,
 };
 
 const SYST_CVR: u32 = 0xE000_E018;
@@ -68,24 +69,35 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
     let mut ctl = Controller::new(Gains {
         repulsion: Repulsion::Vortex { sign: 0 },
         k_att: R::from_f64(0.25),
-        k_rep: R::from_f64(0.6),
+        k_rep: R::from_f64(5.0),
         capture_radius_m: R::from_f64(0.03),
         latch_height_m: R::from_f64(0.02),
         slow_height_m: R::from_f64(0.05),
         stop_height_m: R::from_f64(0.3),
+        // Ours: the vortex bounded (k_rep high enough that the bound applies) and the radial
+        // barrier on f* (the hill is above slow_height_m at these positions).
+        bounded: true,
     });
     let wd = Watchdog { slow_after_ms: 100, stop_after_ms: 330 };
-    let safe = SafeController::new(SsmParams {
+    let mut safe = SafeController::new(SsmParams {
         human_speed_mps: R::from_f64(1.6),
         reaction_time_s: R::from_f64(0.02),
         stopping_time_s: R::from_f64(0.1),
         margin_m: R::from_f64(0.035),
         speed_cap_mps: R::from_f64(0.25),
+    })
+    .with_steer(Steer {
+        // The barrier at 0.45 m with a 0.05 m band: every separation below 0.5 m is steered.
+        barrier_m: R::from_f64(0.45),
+        band_m: R::from_f64(0.05),
+        view_m: [R::ZERO, R::ZERO, R::from_f64(1.05), R::from_f64(1.05)],
+        edge_margin_m: R::from_f64(0.045),
     });
     let kick = R::from_f64(0.3);
     let (mut max, mut sum) = (0u32, 0u32);
     let mut states = [0u32; 3];
     let mut check = R::ZERO;
+    let mut parts = [0u32; 4];
     for k in 0..16 {
         let x = R::from_f64(0.30 + 0.028 * k as f64);
         let y = R::from_f64(0.40 + 0.011 * k as f64);
@@ -96,14 +108,21 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
             tool_x_m: x.sub(R::from_f64(0.01)),
             tool_y_m: y,
             age_s: R::from_f64(0.1),
+            // Nearest point straight ahead of the command (head-on: the costliest turn).
+            nearest_x_m: x.add(R::from_f64(0.345 + 0.02 * k as f64)),
+            nearest_y_m: y,
         };
         let t0 = now_ticks();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
+        let ta = now_ticks();
         let factor = wd.factor::<R>(black_box(Some(40)));
         let c = ctl.command(x, y, gx, gy, &f, factor);
+        let tb = now_ticks();
         // On top of the hill the field's command is zero: a 0.3 m/s kick keeps a command for the
         // monitor to scale at every position (its costliest branch).
-        let out = safe.limit(c.vx.add(black_box(kick)), c.vy, x, y, black_box(Some(&sensed)));
+        let (vx, vy) = safe.steer(c.vx.add(black_box(kick)), c.vy, x, y, black_box(Some(&sensed)));
+        let tc = now_ticks();
+        let out = safe.limit(vx, vy, x, y, black_box(Some(&sensed)));
         let t1 = now_ticks();
         black_box(out);
         if let Some(n) = states.get_mut(match out.state {
@@ -114,12 +133,16 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
             *n += 1;
         }
         check = check.add(out.vx.abs()).add(out.vy.abs());
-        let ins = (counts(t0, t1).saturating_sub(overhead)) * 40 / 64;
+        // Three more SysTick reads inside the step: their cost is subtracted too.
+        let ins = (counts(t0, t1).saturating_sub(4 * overhead)) * 40 / 64;
+        for (slot, (a, b)) in parts.iter_mut().zip([(t0, ta), (ta, tb), (tb, tc), (tc, t1)]) {
+            *slot = (*slot).max(counts(a, b).saturating_sub(overhead) * 40 / 64);
+        }
         max = max.max(ins);
         sum += ins;
     }
     hprintln!(
-        "avoid_cost grid={}x{} sigma'={}s variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} check={}",
+        "avoid_cost grid={}x{} sigma'={}s variant={} max={} mean={} (instructions) monitor run/slow/stop={}/{}/{} parts field/command/steer/limit max={}/{}/{}/{} check={}",
         n,
         n,
         sigma_over_s,
@@ -129,6 +152,10 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
         states[0],
         states[1],
         states[2],
+        parts[0],
+        parts[1],
+        parts[2],
+        parts[3],
         check.to_f64()
     );
     max
@@ -196,6 +223,69 @@ fn exit(code: debug::ExitStatus) -> ! {
     }
 }
 
+/// The steering barrier's obstacle part (the same arithmetic as `SafeController::steer`, side
+/// fixed) written with nalgebra's `Vector2<f32>`, and again with plain `f32`s, to compare the cost.
+#[inline(never)]
+fn steer_nalgebra(v: nalgebra::Vector2<f32>, p: nalgebra::Vector2<f32>, at: nalgebra::Vector2<f32>, near: nalgebra::Vector2<f32>, sep: f32) -> nalgebra::Vector2<f32> {
+    let moved = (p - at).norm();
+    let free = sep - moved - 0.45;
+    if free >= 0.05 {
+        return v;
+    }
+    let n = near - p;
+    let n2 = n.norm_squared();
+    let a = free * 5.0;
+    let vn = v.dot(&n);
+    let over = vn - a * n.norm();
+    if over > 0.0 && n2 > 0.0 {
+        let e = over / n2;
+        let t = if vn > 0.0 { e } else { 0.0 };
+        v - n * e + nalgebra::Vector2::new(-n.y, n.x) * t
+    } else {
+        v
+    }
+}
+
+#[inline(never)]
+fn steer_plain(v: [f32; 2], p: [f32; 2], at: [f32; 2], near: [f32; 2], sep: f32) -> [f32; 2] {
+    let (dx, dy) = (p[0] - at[0], p[1] - at[1]);
+    let moved = libm::sqrtf(dx * dx + dy * dy);
+    let free = sep - moved - 0.45;
+    if free >= 0.05 {
+        return v;
+    }
+    let (nx, ny) = (near[0] - p[0], near[1] - p[1]);
+    let n2 = nx * nx + ny * ny;
+    let a = free * 5.0;
+    let vn = v[0] * nx + v[1] * ny;
+    let over = vn - a * libm::sqrtf(n2);
+    if over > 0.0 && n2 > 0.0 {
+        let e = over / n2;
+        let t = if vn > 0.0 { e } else { 0.0 };
+        [v[0] - e * nx - t * ny, v[1] - e * ny + t * nx]
+    } else {
+        v
+    }
+}
+
+fn measure_vec(overhead: u32) {
+    let (mut na_max, mut pl_max, mut diff) = (0u32, 0u32, 0.0f32);
+    for k in 0..16 {
+        let x = 0.30 + 0.028 * k as f32;
+        let sep = 0.30 + 0.02 * k as f32;
+        let t0 = now_ticks();
+        let a = steer_nalgebra(black_box(nalgebra::Vector2::new(0.3, 0.05)), black_box(nalgebra::Vector2::new(x, 0.5)), nalgebra::Vector2::new(x - 0.01, 0.5), nalgebra::Vector2::new(x + sep + 0.045, 0.52), black_box(sep));
+        let t1 = now_ticks();
+        let b = steer_plain(black_box([0.3, 0.05]), black_box([x, 0.5]), [x - 0.01, 0.5], [x + sep + 0.045, 0.52], black_box(sep));
+        let t2 = now_ticks();
+        black_box((a, b));
+        diff = diff.max((a.x - b[0]).abs()).max((a.y - b[1]).abs());
+        na_max = na_max.max(counts(t0, t1).saturating_sub(overhead) * 40 / 64);
+        pl_max = pl_max.max(counts(t1, t2).saturating_sub(overhead) * 40 / 64);
+    }
+    hprintln!("avoid_vec steer f32: nalgebra Vector2 max={} plain f32 max={} (instructions) largest difference {}", na_max, pl_max, diff);
+}
+
 #[entry]
 fn main() -> ! {
     let mut cp = match cortex_m::Peripherals::take() {
@@ -240,6 +330,7 @@ fn main() -> ! {
             );
         }
     }
+    measure_vec(overhead);
     exit(debug::EXIT_SUCCESS)
 }
 

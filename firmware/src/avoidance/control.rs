@@ -46,6 +46,12 @@ pub struct Gains<R> {
     pub slow_height_m: R,
     /// Field height at which the command is zero, m (set above any reachable height to disable).
     pub stop_height_m: R,
+    /// Ours (`false`: eq 74-78 as the thesis wrote them): the vortex's magnitude bounded by `k_att`,
+    /// and instead of scaling the whole command by the height, a radial barrier: the command's
+    /// uphill rate `v . grad f*` is at most `k_att (stop - f*) / (stop - slow)` above `slow_height_m`
+    /// and zero at `stop_height_m` (the excess removed along the gradient), so the tool never climbs
+    /// a hill but may still move along it or down.
+    pub bounded: bool,
 }
 
 /// Fail-safe on the age of the last good weights.
@@ -95,12 +101,16 @@ pub struct Controller<R> {
     /// Gains and thresholds.
     pub gains: Gains<R>,
     latched: i8,
+    /// `k_att / (stop_height - slow_height)`, 1/s (the barrier's uphill rate per metre below stop).
+    barrier_rate: R,
 }
 
 impl<R: Real> Controller<R> {
     /// A controller with nothing latched.
     pub fn new(gains: Gains<R>) -> Self {
-        Controller { gains, latched: 0 }
+        let span = gains.stop_height_m.sub(gains.slow_height_m);
+        let barrier_rate = if span > R::ZERO { gains.k_att.div(span) } else { R::ZERO };
+        Controller { gains, latched: 0, barrier_rate }
     }
 
     /// Speed factor from the field height at the tool.
@@ -121,7 +131,19 @@ impl<R: Real> Controller<R> {
         let g = self.gains;
         let ex = gx.sub(x);
         let ey = gy.sub(y);
-        let dist = ex.mul(ex).add(ey.mul(ey)).sqrt();
+        let dist = if g.bounded {
+            // Ours: `|e|` bounded from above by max + min / 2 (no square root): the attraction's
+            // speed is 89.4-100 % of k_a by heading, which is what the monitor's own length bound
+            // lets through at the cap anyway.
+            let (ax, ay) = (ex.abs(), ey.abs());
+            if ax > ay {
+                ax.add(ay.halve())
+            } else {
+                ay.add(ax.halve())
+            }
+        } else {
+            ex.mul(ex).add(ey.mul(ey)).sqrt()
+        };
         let denom = if dist > g.capture_radius_m { dist } else { g.capture_radius_m };
         let (fax, fay) = if denom > R::ZERO {
             // One division: k_a / max(|e|, r_capture), then two products.
@@ -157,17 +179,63 @@ impl<R: Real> Controller<R> {
             self.latched = 0;
             fresh
         };
-        let kr = if sign < 0 { g.k_rep.neg() } else { g.k_rep };
-        let frx = kr.mul(vx);
-        let fry = kr.mul(vy);
-
-        let scale = self.height_scale(f.height).mul(watchdog);
-        Command {
-            vx: fax.add(frx).mul(scale),
-            vy: fay.add(fry).mul(scale),
-            scale,
-            vortex_sign: sign,
+        let mut k = g.k_rep;
+        if g.bounded {
+            // |F_r| <= k_att: |grad| bounded from above by max + min / 2, and `k` halved until the
+            // bound holds (no division; at most 32 halvings, after which `k` is 0 in every type
+            // used here): the vortex ends between k_att / 2 and k_att when it had to be bounded.
+            let (ax, ay) = (vx.abs(), vy.abs());
+            let gb = if ax > ay { ax.add(ay.halve()) } else { ay.add(ax.halve()) };
+            let mut p = k.mul(gb);
+            for _ in 0..32 {
+                if p <= g.k_att {
+                    break;
+                }
+                k = k.halve();
+                p = p.halve();
+            }
+            if p > g.k_att {
+                k = R::ZERO;
+            }
         }
+        let kr = if sign < 0 { k.neg() } else { k };
+        let mut cx = fax.add(kr.mul(vx));
+        let mut cy = fay.add(kr.mul(vy));
+
+        if !g.bounded {
+            let scale = self.height_scale(f.height).mul(watchdog);
+            return Command { vx: cx.mul(scale), vy: cy.mul(scale), scale, vortex_sign: sign };
+        }
+        // The radial barrier: never uphill at `stop_height_m`, less and less so above `slow`.
+        if f.height > g.slow_height_m {
+            let allow = if f.height < g.stop_height_m { g.stop_height_m.sub(f.height).mul(self.barrier_rate) } else { R::ZERO };
+            let up = cx.mul(f.grad_x).add(cy.mul(f.grad_y));
+            let g2 = f.grad_x.mul(f.grad_x).add(f.grad_y.mul(f.grad_y));
+            if up > allow && g2 > R::ZERO {
+                // Remove `e' (grad f*)` with `e' = (up - allow) P`, `P` the power of two in
+                // `[1 / g2, 2 / g2)` (no division; at most 32 steps): between the exact projection
+                // and twice it, so the uphill rate ends at or below `allow`, never above.
+                let (mut q, mut p) = (g2, R::ONE);
+                for _ in 0..32 {
+                    if q >= R::ONE {
+                        break;
+                    }
+                    q = q.add(q);
+                    p = p.add(p);
+                }
+                for _ in 0..32 {
+                    if q < R::ONE.add(R::ONE) {
+                        break;
+                    }
+                    q = q.halve();
+                    p = p.halve();
+                }
+                let e = up.sub(allow).mul(p);
+                cx = cx.sub(e.mul(f.grad_x));
+                cy = cy.sub(e.mul(f.grad_y));
+            }
+        }
+        Command { vx: cx.mul(watchdog), vy: cy.mul(watchdog), scale: watchdog, vortex_sign: sign }
     }
 }
 
@@ -184,6 +252,7 @@ mod tests {
             latch_height_m: 0.01,
             slow_height_m: 0.2,
             stop_height_m: 0.4,
+            bounded: false,
         }
     }
 
@@ -233,5 +302,31 @@ mod tests {
         assert!((w.factor::<f64>(Some(200)) - 0.5).abs() < 1e-12);
         assert_eq!(w.factor::<f64>(Some(300)), 0.0);
         assert_eq!(w.factor::<f64>(Some(u32::MAX)), 0.0);
+    }
+
+    /// Ours: the vortex is bounded by k_att whatever k_rep (between k_att / 2 and k_att when the
+    /// bound applies), and the radial barrier never lets the command climb f* faster than allowed:
+    /// not at all at `stop_height_m`. The thesis's law (bounded = false) is unchanged.
+    #[test]
+    fn bounded_vortex_and_radial_barrier() {
+        let g = Gains { bounded: true, k_rep: 1e4, ..gains() };
+        let mut c = Controller::new(g);
+        let off_hill = FieldSample { height: 0.0, grad_x: 3.0, grad_y: -1.0 };
+        let cmd = c.command(0.0, 0.0, 1.0, 0.0, &off_hill, 1.0);
+        let (rx, ry) = (cmd.vx - 0.2, cmd.vy);
+        assert!(rx.hypot(ry) <= 0.2 + 1e-12 && rx.hypot(ry) >= 0.2 / 2.0 / 1.1181, "{rx} {ry}");
+        for h in [0.25, 0.3, 0.39, 0.4, 0.5] {
+            for (gx, gy) in [(1.0, 0.0), (0.3, 0.4), (-2.0, 0.5), (0.01, 0.0)] {
+                let f = FieldSample { height: h, grad_x: gx, grad_y: gy };
+                let mut c = Controller::new(Gains { bounded: true, ..gains() });
+                let cmd = c.command(0.0, 0.0, 1.0, 0.0, &f, 1.0);
+                let up = cmd.vx * gx + cmd.vy * gy;
+                let allow = if h < 0.4 { 0.2 * (0.4 - h) / 0.2 } else { 0.0 };
+                assert!(up <= allow + 1e-9, "h {h} grad ({gx}, {gy}): uphill {up} > {allow}");
+            }
+        }
+        let mut thesis = Controller::new(Gains { k_rep: 1e4, ..gains() });
+        let t = thesis.command(0.0, 0.0, 1.0, 0.0, &off_hill, 1.0);
+        assert!(t.vx.hypot(t.vy) > 1000.0, "eq 76 as written is unbounded");
     }
 }

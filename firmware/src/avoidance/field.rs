@@ -153,18 +153,23 @@ pub fn sample<R: Real, G: Gauss<R>>(grid: &Grid<R>, gauss: &G, x: R, y: R) -> Fi
     // Per column: g(tx_i) and g(tx_i) * tx_i.
     let mut gx = [zero; MAX_WINDOW];
     let mut hx = [zero; MAX_WINDOW];
-    for (k, (gk, hk)) in gx.iter_mut().zip(hx.iter_mut()).enumerate().take(ihi.saturating_sub(ilo).saturating_add(1)) {
-        let t = tx0.sub(grid.step_t.mul(R::from_int(ilo.saturating_add(k) as i32)));
+    // `t_i = tx0 - i step_t`, one product for the first and a subtraction per column after it
+    // (exact in fixed point, where `i step_t` is exact too).
+    let mut t = tx0.sub(grid.step_t.mul(R::from_int(ilo as i32)));
+    for (gk, hk) in gx.iter_mut().zip(hx.iter_mut()).take(ihi.saturating_sub(ilo).saturating_add(1)) {
         let g = gauss.g(t.abs());
         *gk = g;
         *hk = g.mul(t);
+        t = t.sub(grid.step_t);
     }
 
     let mut f = zero;
     let mut sx = zero;
     let mut sy = zero;
+    let mut t_next = ty0.sub(grid.step_t.mul(R::from_int(jlo as i32)));
     for j in jlo..=jhi {
-        let t = ty0.sub(grid.step_t.mul(R::from_int(j as i32)));
+        let t = t_next;
+        t_next = t_next.sub(grid.step_t);
         let gy = gauss.g(t.abs());
         if gy == zero {
             continue;

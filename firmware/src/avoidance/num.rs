@@ -31,6 +31,9 @@ pub trait Real: Copy + PartialOrd {
     fn div(self, o: Self) -> Self;
     /// `-self`, saturating.
     fn neg(self) -> Self;
+    /// `self / 2` (an arithmetic shift in fixed point, rounding towards minus infinity; no
+    /// multiplication or division).
+    fn halve(self) -> Self;
     /// `|self|`, saturating.
     fn abs(self) -> Self;
     /// Square root; zero for negative input.
@@ -133,6 +136,10 @@ macro_rules! impl_fixed {
             #[inline]
             fn neg(self) -> Self {
                 self.saturating_neg()
+            }
+            #[inline]
+            fn halve(self) -> Self {
+                <$t>::from_bits(self.to_bits() >> 1)
             }
             #[inline]
             fn abs(self) -> Self {
@@ -239,6 +246,10 @@ macro_rules! impl_float {
             #[inline]
             fn neg(self) -> Self {
                 -self
+            }
+            #[inline]
+            fn halve(self) -> Self {
+                self * 0.5
             }
             #[inline]
             fn abs(self) -> Self {

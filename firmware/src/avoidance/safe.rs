@@ -62,6 +62,38 @@ pub struct Sensed<R> {
     pub tool_y_m: R,
     /// Time since the image was taken, s.
     pub age_s: R,
+    /// The nearest sensed obstacle point when the image was taken, m (for [`Steer`]: far away when
+    /// nothing was sensed).
+    pub nearest_x_m: R,
+    /// See `nearest_x_m`.
+    pub nearest_y_m: R,
+}
+
+/// The barrier that steers the command round what the sensor sees, before the monitor limits it
+/// (ours; off as the thesis wrote it). It keeps the tool where the monitor lets it run at full
+/// speed, so that it goes round an obstacle instead of being stopped by it.
+///
+/// * Obstacle barrier: with `g` the separation at capture less the tool's motion since (the age
+///   term left out: it is the monitor's), the tool's approach speed towards the nearest sensed point
+///   is limited to `rate (g - barrier_m)`, `rate = cap / band_m` (negative below the barrier: it
+///   backs off). The excess is removed along the direction to that point (the radial part: it never
+///   climbs towards an obstacle) and turned, with the same magnitude, along the boundary (a vortex
+///   bounded by the approach it replaces), its side latched while inside the band so that it does not
+///   dither; chosen towards the view's centre when the command is head-on.
+/// * Workspace edge: the sensed view is a barrier of the same kind on each axis, the tool's centre
+///   kept `edge_margin_m` inside it: it never leaves the region where obstacles are seen.
+#[derive(Clone, Copy, Debug)]
+pub struct Steer<R> {
+    /// Separation (from the tool's surface) the barrier holds, m: the host sets it so that the
+    /// monitor still allows the cap there with the oldest frame.
+    pub barrier_m: R,
+    /// Band above the barrier (and inside the view's edges) over which the allowed approach speed
+    /// rises from 0 to the cap, m (> 0).
+    pub band_m: R,
+    /// The sensed view `[x0, y0, x1, y1]`, m.
+    pub view_m: [R; 4],
+    /// How far inside the view the tool's centre stays, m.
+    pub edge_margin_m: R,
 }
 
 /// What the monitor did this step.
@@ -97,10 +129,19 @@ pub struct SafeCommand<R> {
 #[derive(Clone, Copy, Debug)]
 pub struct SafeController<R> {
     params: SsmParams<R>,
+    steer: Option<Steer<R>>,
+    /// `cap / band_m`, 1/s.
+    rate: R,
+    /// Side of the boundary-following turn, latched inside the band (0: none).
+    side: i8,
+    /// `cap / 64`: a command leaning less than this to one side (per unit `|n|^2`) is head-on.
+    lean_tol: R,
     /// `v_h (T_r + T_s) + C + Z_d + Z_r`: the separation at which the limit reaches zero, m.
     stop_separation_m: R,
     /// `T_r + T_s / 2`, s.
     per_speed_s: R,
+    /// `1 / (T_r + T_s / 2)`, 1/s, saturating in fixed point (a smaller factor: a lower limit).
+    inv_per_speed: R,
     /// One half.
     half: R,
 }
@@ -112,9 +153,88 @@ impl<R: Real> SafeController<R> {
         SafeController {
             stop_separation_m: params.human_speed_mps.mul(params.reaction_time_s.add(params.stopping_time_s)).add(params.margin_m),
             per_speed_s: params.reaction_time_s.add(params.stopping_time_s.mul(half)),
+            inv_per_speed: R::ONE.div(params.reaction_time_s.add(params.stopping_time_s.mul(half))),
             params,
             half,
+            steer: None,
+            rate: R::ZERO,
+            side: 0,
+            lean_tol: params.speed_cap_mps.div(R::from_int(64)),
         }
+    }
+
+    /// The same monitor with the [`Steer`] barrier before it.
+    pub fn with_steer(mut self, steer: Steer<R>) -> Self {
+        self.rate = if steer.band_m > R::ZERO { self.params.speed_cap_mps.div(steer.band_m) } else { R::ZERO };
+        self.steer = Some(steer);
+        self
+    }
+
+    /// The [`Steer`] barrier on a requested command (unchanged without one): approach towards the
+    /// nearest sensed point and towards the view's edges limited, the blocked approach turned along
+    /// the boundary. The result still goes through [`Self::limit`].
+    pub fn steer(&mut self, vx: R, vy: R, x: R, y: R, sensed: Option<&Sensed<R>>) -> (R, R) {
+        let Some(st) = self.steer else { return (vx, vy) };
+        let (mut vx, mut vy) = (vx, vy);
+        let [x0, y0, x1, y1] = st.view_m;
+        let mut inside_band = false;
+        if let Some(f) = sensed {
+            let g = f.separation_m.sub(self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m)));
+            let free = g.sub(st.barrier_m);
+            if free < st.band_m {
+                inside_band = true;
+                // Towards the nearest point (not normalised): v.n <= a |n| with a the allowed
+                // approach speed; |n| bounded from above (max + min / 2), which allows up to 11.8 %
+                // more approach in the band and backs off up to 11.8 % faster below it.
+                let (nx, ny) = (f.nearest_x_m.sub(x), f.nearest_y_m.sub(y));
+                let n2 = nx.mul(nx).add(ny.mul(ny));
+                let a = free.mul(self.rate);
+                let vn = vx.mul(nx).add(vy.mul(ny));
+                let over = vn.sub(a.mul(self.norm_bound(nx, ny)));
+                if over > R::ZERO && n2 > R::ZERO {
+                    let e = over.div(n2);
+                    vx = vx.sub(e.mul(nx));
+                    vy = vy.sub(e.mul(ny));
+                    // Left tangent (-ny, nx); the side: latched, else the side the command leans
+                    // to, else towards the view's centre.
+                    if self.side == 0 {
+                        let lean = vy.mul(nx).sub(vx.mul(ny));
+                        let tol = self.lean_tol.mul(n2);
+                        self.side = if lean > tol {
+                            1
+                        } else if lean < tol.neg() {
+                            -1
+                        } else {
+                            let (cx, cy) = (x0.add(x1).mul(self.half).sub(x), y0.add(y1).mul(self.half).sub(y));
+                            if cy.mul(nx).sub(cx.mul(ny)) < R::ZERO {
+                                -1
+                            } else {
+                                1
+                            }
+                        };
+                    }
+                    // The turn, only when the command wanted to approach: as large as the cut
+                    // (the blocked approach, plus the backing off below the barrier: at most
+                    // `vn + 1.118 rate (barrier - g)`), so the tool keeps going round a person who
+                    // comes closer; the monitor's limit bounds the sum.
+                    let t = if vn > R::ZERO { e } else { R::ZERO };
+                    let t = if self.side < 0 { t.neg() } else { t };
+                    vx = vx.sub(t.mul(ny));
+                    vy = vy.add(t.mul(nx));
+                }
+            }
+        }
+        if !inside_band {
+            self.side = 0;
+        }
+        // The view's edges: per axis, the speed towards an edge at most `rate` times the room left.
+        let m = st.edge_margin_m;
+        let clamp = |v: R, lo: R, hi: R| if v < lo { lo } else if v > hi { hi } else { v };
+        let (lox, hix) = (x0.add(m).sub(x).mul(self.rate), x1.sub(m).sub(x).mul(self.rate));
+        let (loy, hiy) = (y0.add(m).sub(y).mul(self.rate), y1.sub(m).sub(y).mul(self.rate));
+        vx = if lox > hix { R::ZERO } else { clamp(vx, lox, hix) };
+        vy = if loy > hiy { R::ZERO } else { clamp(vy, loy, hiy) };
+        (vx, vy)
     }
 
     /// The parameters.
@@ -132,7 +252,9 @@ impl<R: Real> SafeController<R> {
             if free >= cap.mul(self.per_speed_s) {
                 cap
             } else {
-                let v = free.div(self.per_speed_s);
+                // `free / per_speed` as a product (no division a step); where `1 / per_speed`
+                // saturates the product is smaller: a lower limit.
+                let v = free.mul(self.inv_per_speed);
                 if v < cap {
                     v
                 } else {
@@ -171,7 +293,16 @@ impl<R: Real> SafeController<R> {
         if speed > R::ZERO && m > R::ZERO {
             // Unit components `v / m` in [-1, 1] (no overflow), the bound over `m` in [1, 1.5]:
             // the result's bound is the limit (to rounding).
-            let (ux, uy) = (vx.div(m), vy.div(m));
+            // Up to 1 m/s a component (every command of a cruise speed), one division: `1 / m`
+            // has at least as many significant bits as the number type's fraction (it saturates in
+            // I8F24 below 1/128 m/s: both components then get the same smaller factor, the
+            // direction is kept and the result stays under the limit). Above it, two divisions.
+            let (ux, uy) = if m <= R::ONE {
+                let inv = R::ONE.div(m);
+                (vx.mul(inv), vy.mul(inv))
+            } else {
+                (vx.div(m), vy.div(m))
+            };
             let (bx, by) = (ux.abs(), uy.abs());
             let r = R::ONE.add(if bx < by { bx } else { by }.mul(self.half));
             let k = limit.div(r);
@@ -190,7 +321,7 @@ impl<R: Real> SafeController<R> {
             return a.add(b);
         }
         let (m, n) = if aa > bb { (aa, bb) } else { (bb, aa) };
-        m.add(n.mul(self.half))
+        m.add(n.halve())
     }
 }
 
@@ -210,7 +341,7 @@ mod tests {
     }
 
     fn sensed<R: Real>(sep: f64, age: f64) -> Sensed<R> {
-        Sensed { separation_m: R::from_f64(sep), tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age) }
+        Sensed { separation_m: R::from_f64(sep), tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age), nearest_x_m: R::from_f64(sep + 0.05), nearest_y_m: R::ZERO }
     }
 
     #[test]
@@ -297,5 +428,71 @@ mod tests {
         assert!(sp <= 0.2501, "{sp}");
         // Scaled to the bound max + min / 2 = 1.5 m for a diagonal of true length sqrt 2 m.
         assert!(sp > 0.25 * 2f64.sqrt() / 1.5 - 1e-3, "{sp}");
+    }
+
+    fn steered(barrier: f64) -> SafeController<f64> {
+        SafeController::new(params::<f64>()).with_steer(Steer { barrier_m: barrier, band_m: 0.05, view_m: [0.0, 0.0, 2.0, 2.0], edge_margin_m: 0.045 })
+    }
+
+    fn at(sep: f64, nearest: [f64; 2]) -> Sensed<f64> {
+        Sensed { separation_m: sep, tool_x_m: 1.0, tool_y_m: 1.0, age_s: 0.0, nearest_x_m: nearest[0], nearest_y_m: nearest[1] }
+    }
+
+    /// Head-on in the band: the approach is cut to the barrier's rate (its length bound allows at
+    /// most 11.8 % more), the cut turned along the boundary (never a faster command), its side
+    /// latched; below the barrier it backs off and turns; far away nothing changes.
+    #[test]
+    fn the_barrier_cuts_the_approach_and_turns_it() {
+        let mut c = steered(0.4);
+        let rate = 0.25 / 0.05;
+        let near = at(0.42, [1.5, 1.0]);
+        let (vx, vy) = c.steer(0.25, 0.0, 1.0, 1.0, Some(&near));
+        assert!(vx <= rate * 0.02 * 1.1181 + 1e-12 && vx >= 0.0, "{vx}");
+        assert!(vy.abs() > 0.1, "turned along the boundary: {vy}");
+        assert!(vx.hypot(vy) <= 0.25 + 1e-12);
+        let side = vy.signum();
+        // The command now leans the other way: the side stays while in the band.
+        let (_, vy2) = c.steer(0.25, -0.05 * side, 1.0, 1.0, Some(&near));
+        assert_eq!(vy2.signum(), side);
+        // Below the barrier: backs off, and still turns; out of the band the latch is released.
+        let (bx, by) = c.steer(0.25, 0.0, 1.0, 1.0, Some(&at(0.35, [1.5, 1.0])));
+        assert!(bx < 0.0 && by.signum() == side, "{bx} {by}");
+        assert_eq!(c.steer(0.25, 0.1, 1.0, 1.0, Some(&at(1.0, [2.5, 1.0]))), (0.25, 0.1));
+        assert_eq!(c.side, 0);
+        // Moving away from the obstacle is never cut.
+        assert_eq!(c.steer(-0.25, 0.0, 1.0, 1.0, Some(&near)), (-0.25, 0.0));
+    }
+
+    /// The view's edges: the speed towards an edge is at most `rate` times the room left inside
+    /// `edge_margin_m`, and outside it the command points back in.
+    #[test]
+    fn the_view_edges_are_a_barrier() {
+        let mut c = steered(0.4);
+        let far = at(5.0, [9.0, 9.0]);
+        let (vx, vy) = c.steer(0.25, 0.25, 2.0 - 0.045 - 0.01, 1.0, Some(&far));
+        assert!((vx - 0.25 / 0.05 * 0.01).abs() < 1e-12 && vy == 0.25, "{vx} {vy}");
+        let (ox, _) = c.steer(0.25, 0.0, 2.01, 1.0, Some(&far));
+        assert!(ox < 0.0);
+        let (lx, ly) = c.steer(-0.3, -0.3, 0.02, 0.02, None);
+        assert!(lx > 0.0 && ly > 0.0, "{lx} {ly}");
+    }
+
+    /// Whatever comes in (extreme, non-finite), steering then the limit ends at or below the cap
+    /// and never moves towards an obstacle faster than the barrier allows, in I16F16 too.
+    #[test]
+    fn steered_commands_stay_bounded() {
+        let q = |v: f64| I16F16::from_f64(v);
+        let mut c = SafeController::new(params::<I16F16>()).with_steer(Steer { barrier_m: q(0.4), band_m: q(0.05), view_m: [q(0.0), q(0.0), q(2.0), q(2.0)], edge_margin_m: q(0.045) });
+        let s = Sensed { separation_m: q(0.43), tool_x_m: q(1.0), tool_y_m: q(1.0), age_s: q(0.0), nearest_x_m: q(1.4), nearest_y_m: q(1.3) };
+        for (vx, vy) in [(30000.0, 30000.0), (-30000.0, 5.0), (0.3, 0.2), (0.0, 0.0)] {
+            let (sx, sy) = c.steer(q(vx), q(vy), q(1.0), q(1.0), Some(&s));
+            let out = c.limit(sx, sy, q(1.0), q(1.0), Some(&s));
+            let (ox, oy) = (out.vx.to_f64(), out.vy.to_f64());
+            assert!(ox.hypot(oy) <= 0.2502, "{vx} {vy}: {ox} {oy}");
+        }
+        let mut f = steered(0.4);
+        let (nx, ny) = f.steer(f64::NAN, 0.0, 1.0, 1.0, Some(&at(0.42, [1.5, 1.0])));
+        let out = f.limit(nx, ny, 1.0, 1.0, Some(&at(0.42, [1.5, 1.0])));
+        assert_eq!((out.vx, out.vy), (0.0, 0.0));
     }
 }

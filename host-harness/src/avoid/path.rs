@@ -7,7 +7,7 @@
 //! fit is encoded into a serial frame, fed to a [`Receiver`] in `I16F16`, and the step uses the
 //! lookup-table Gaussian over the truncated window plus the weights-age watchdog.
 
-use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Watchdog};
+use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Steer, Watchdog};
 use flinch_firmware::avoidance::num::I16F16;
 use flinch_hal_sim::serial::SimSerial;
 
@@ -70,13 +70,65 @@ pub fn ssm<R: Real>(scene: &Avoid) -> Option<SsmParams<R>> {
     })
 }
 
-fn monitored<R: Real>(safe: &Option<SafeController<R>>, v: [R; 2], p: [f64; 2], sensed: Option<&Sensed<f64>>, cap: f64) -> Cmd {
+/// Capture to command for a scene: the latency plus, when the baud rate is modelled, one frame's
+/// time on the line, s.
+pub fn frame_delay_s(scene: &Avoid) -> Result<f64, String> {
+    Ok(scene.latency_s
+        + match scene.baud {
+            Some(b) => {
+                let cam = scene.camera();
+                let grid = RbfGrid::new(cam.width_px, cam.height_px, scene.fit.grid, cam.m_per_px, scene.fit.sigma_factor)?;
+                link_time(grid.nx, grid.ny, b)?.1
+            }
+            None => 0.0,
+        })
+}
+
+/// Width of the steering barrier's band, m: over it the allowed approach speed rises from 0 to
+/// the cap.
+pub const STEER_BAND_M: f64 = 0.05;
+
+/// The separation (from the tool's surface, at capture, less the motion since) that the steering
+/// barrier holds, m: the monitor's zero-speed separation (with the clearance asked), plus what a
+/// person covers at `v_h` while the oldest frame is in use (capture to command, one camera period,
+/// one control step), plus the robot's own term at the cap, plus 10 mm. There the monitor still
+/// allows the cap, so the tool goes round at its cruise speed instead of being stopped.
+pub fn steer_barrier_m(scene: &Avoid) -> Result<f64, String> {
+    let s = &scene.safety;
+    let stop = s.human_speed_mps * (s.reaction_time_s + s.stopping_time_s) + s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m;
+    let oldest = frame_delay_s(scene)? + scene.frame_period_s + scene.dt_s;
+    Ok(stop + s.human_speed_mps * oldest + scene.speed_mps * (s.reaction_time_s + s.stopping_time_s / 2.0) + 0.01)
+}
+
+/// The monitor with its steering barrier for a scene (`None`: monitor off, as the thesis wrote it).
+pub fn safe_controller<R: Real>(scene: &Avoid) -> Result<Option<SafeController<R>>, String> {
+    let Some(p) = ssm::<R>(scene) else { return Ok(None) };
+    let (w, h) = scene.extent_m();
+    let q = R::from_f64;
+    Ok(Some(SafeController::new(p).with_steer(Steer {
+        barrier_m: q(steer_barrier_m(scene)?),
+        band_m: q(STEER_BAND_M),
+        view_m: [R::ZERO, R::ZERO, q(w), q(h)],
+        edge_margin_m: q(scene.robot.wrist_radius_m),
+    })))
+}
+
+fn monitored<R: Real>(safe: &mut Option<SafeController<R>>, v: [R; 2], p: [f64; 2], sensed: Option<&Sensed<f64>>, cap: f64) -> Cmd {
     match safe {
         None => Cmd { v: [v[0].to_f64(), v[1].to_f64()], limit_mps: cap, state: "field" },
         Some(c) => {
             let q = R::from_f64;
-            let sn = sensed.map(|s| Sensed { separation_m: q(s.separation_m), tool_x_m: q(s.tool_x_m), tool_y_m: q(s.tool_y_m), age_s: q(s.age_s) });
-            let out = c.limit(v[0], v[1], q(p[0]), q(p[1]), sn.as_ref());
+            let sn = sensed.map(|s| Sensed {
+                separation_m: q(s.separation_m),
+                tool_x_m: q(s.tool_x_m),
+                tool_y_m: q(s.tool_y_m),
+                age_s: q(s.age_s),
+                nearest_x_m: q(s.nearest_x_m),
+                nearest_y_m: q(s.nearest_y_m),
+            });
+            let (x, y) = (q(p[0]), q(p[1]));
+            let (vx, vy) = c.steer(v[0], v[1], x, y, sn.as_ref());
+            let out = c.limit(vx, vy, x, y, sn.as_ref());
             Cmd { v: [out.vx.to_f64(), out.vy.to_f64()], limit_mps: out.limit_mps.to_f64(), state: state_name(out.state) }
         }
     }
@@ -93,7 +145,7 @@ pub struct RefEngine {
 impl RefEngine {
     /// For a scene.
     pub fn new(scene: &Avoid) -> Result<Self, String> {
-        Ok(RefEngine { ctl: Controller::new(gains(scene)?), safe: ssm(scene).map(SafeController::new), cap: scene.speed_mps, field: None })
+        Ok(RefEngine { ctl: Controller::new(gains(scene)?), safe: safe_controller(scene)?, cap: scene.speed_mps, field: None })
     }
 }
 
@@ -106,7 +158,7 @@ impl StepEngine for RefEngine {
         let (h, fx, fy) = self.field.as_ref().map_or((0.0, 0.0, 0.0), |f| f.sample(p[0], p[1]));
         let s = fw::FieldSample { height: h, grad_x: fx, grad_y: fy };
         let c = self.ctl.command(p[0], p[1], goal[0], goal[1], &s, 1.0);
-        monitored(&self.safe, [c.vx, c.vy], p, sensed, self.cap)
+        monitored(&mut self.safe, [c.vx, c.vy], p, sensed, self.cap)
     }
 }
 
@@ -129,7 +181,7 @@ impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
     pub fn new(scene: &Avoid, gauss: G) -> Result<Self, String> {
         Ok(FwEngine {
             ctl: Controller::new(gains(scene)?),
-            safe: ssm(scene).map(SafeController::new),
+            safe: safe_controller(scene)?,
             cap: scene.speed_mps,
             rx: Box::new(Receiver::new(200, 20)),
             line: SimSerial::pair(),
@@ -156,7 +208,7 @@ impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
         let s = fw::sample(self.rx.grid(), &self.gauss, q(p[0]), q(p[1]));
         let wd = self.watchdog.factor::<R>(self.rx.weights_age_ms(now_ms));
         let c = self.ctl.command(q(p[0]), q(p[1]), q(goal[0]), q(goal[1]), &s, wd);
-        monitored(&self.safe, [c.vx, c.vy], p, sensed, self.cap)
+        monitored(&mut self.safe, [c.vx, c.vy], p, sensed, self.cap)
     }
     fn rx_stats(&self) -> Option<RxStats> {
         Some(self.rx.stats)
@@ -397,6 +449,13 @@ pub const NOTHING_SENSED_M: f64 = 10.0;
 /// raise) higher than `safety.sense_height_m`, less half a pixel; about [`NOTHING_SENSED_M`] when
 /// there is none.
 pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> (Field, f64) {
+    let (f, sep, _) = fit_and_sense_at(scene, setup, tool, hand, rng);
+    (f, sep)
+}
+
+/// [`fit_and_sense`], and the nearest sensed obstacle point (m; [`NOTHING_SENSED_M`] along x from
+/// the tool when there is none).
+pub fn fit_and_sense_at(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2]) {
     let cam = scene.camera();
     let robot = scene.robot_shape();
     let op = scene.operator_shape();
@@ -408,10 +467,10 @@ pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2
     } else {
         preprocess(&img, &cam, 0.0, Some((&setup.calibration, tool)))
     };
-    let from_centre = if scene.robot.removal == "model" {
-        sensed_separation(&img, &cam, &robot, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
+    let (from_centre, nearest) = if scene.robot.removal == "model" {
+        sensed_nearest(&img, &cam, &robot, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
     } else {
-        nearest_obstacle(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
+        nearest_obstacle_at(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
     };
     // From the tool's surface, as the signed distance is measured.
     let sep = (from_centre - robot.wrist_radius_m).max(0.0);
@@ -423,7 +482,7 @@ pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2
         }
     }
     filter_weights(&mut w);
-    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep)
+    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep, nearest)
 }
 
 /// Robot removal by the robot-only height model: a pixel is cleared only when the robot, at the
@@ -451,7 +510,13 @@ pub fn remove_robot_by_model(map: &mut super::depth::HeightMap, m_per_px: f64, r
 /// [`remove_robot_by_model`]), less half a pixel, m. Null pixels are not filled here: a filled pixel
 /// beside the robot would borrow the robot's height and read as an obstacle.
 pub fn sensed_separation(img: &super::depth::DepthImage, cam: &super::depth::Camera, robot: &super::depth::RobotShape, tool: [f64; 2], margin_m: f64, sense_m: f64) -> f64 {
+    sensed_nearest(img, cam, robot, tool, margin_m, sense_m).0
+}
+
+/// [`sensed_separation`] and the nearest pixel's centre, m.
+pub fn sensed_nearest(img: &super::depth::DepthImage, cam: &super::depth::Camera, robot: &super::depth::RobotShape, tool: [f64; 2], margin_m: f64, sense_m: f64) -> (f64, [f64; 2]) {
     let mut best = f64::INFINITY;
+    let mut at = [tool[0] + NOTHING_SENSED_M, tool[1]];
     let w = img.width;
     for (k, &d) in img.mm.iter().enumerate() {
         if d == 0 {
@@ -463,29 +528,40 @@ pub fn sensed_separation(img: &super::depth::DepthImage, cam: &super::depth::Cam
         if h <= sense_m || (hr > 0.0 && h <= hr + margin_m) {
             continue;
         }
-        best = best.min((p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2));
+        let d2 = (p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2);
+        if d2 < best {
+            (best, at) = (d2, p);
+        }
     }
     if best.is_finite() {
-        (best.sqrt() - 0.5 * cam.m_per_px).max(0.0)
+        ((best.sqrt() - 0.5 * cam.m_per_px).max(0.0), at)
     } else {
-        NOTHING_SENSED_M
+        (NOTHING_SENSED_M, at)
     }
 }
 
 /// Distance from `p` to the nearest pixel above `height_m`, less half a pixel, m.
 pub fn nearest_obstacle(map: &super::depth::HeightMap, m_per_px: f64, p: [f64; 2], height_m: f64) -> f64 {
+    nearest_obstacle_at(map, m_per_px, p, height_m).0
+}
+
+/// [`nearest_obstacle`] and the nearest pixel's centre, m.
+pub fn nearest_obstacle_at(map: &super::depth::HeightMap, m_per_px: f64, p: [f64; 2], height_m: f64) -> (f64, [f64; 2]) {
     let mut best = f64::INFINITY;
+    let mut at = [p[0] + NOTHING_SENSED_M, p[1]];
     for (k, v) in map.m.iter().enumerate() {
         if *v > height_m {
-            let (c, r) = ((k % map.width) as f64, (k / map.width) as f64);
-            let d2 = ((c + 0.5) * m_per_px - p[0]).powi(2) + ((r + 0.5) * m_per_px - p[1]).powi(2);
-            best = best.min(d2);
+            let q = [((k % map.width) as f64 + 0.5) * m_per_px, ((k / map.width) as f64 + 0.5) * m_per_px];
+            let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
+            if d2 < best {
+                (best, at) = (d2, q);
+            }
         }
     }
     if best.is_finite() {
-        (best.sqrt() - 0.5 * m_per_px).max(0.0)
+        ((best.sqrt() - 0.5 * m_per_px).max(0.0), at)
     } else {
-        NOTHING_SENSED_M
+        (NOTHING_SENSED_M, at)
     }
 }
 
@@ -499,6 +575,7 @@ pub fn gains<R: Real>(scene: &Avoid) -> Result<Gains<R>, String> {
         latch_height_m: R::from_f64(scene.latch_height_m),
         slow_height_m: R::from_f64(scene.slow_height_m),
         stop_height_m: R::from_f64(scene.stop_height_m),
+        bounded: scene.safety.on(),
     })
 }
 
@@ -529,19 +606,30 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResu
 /// Where the loop's camera frames come from: the synthetic scene ([`Synthetic`]) or a recording
 /// (`avoid::recorded`).
 pub trait FrameSource {
-    /// The newest frame captured by loop time `t_s` with the tool at `tool`: its field, the
-    /// separation sensed from the tool's surface (m) and its capture time (s, at most `t_s`); `None`
-    /// when there is no new frame since the last call.
-    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<(Field, f64, f64)>, String>;
+    /// The newest frame captured by loop time `t_s` with the tool at `tool`; `None` when there is no
+    /// new frame since the last call.
+    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<Frame>, String>;
+}
+
+/// One camera frame through the pipeline.
+pub struct Frame {
+    /// The field fitted to it.
+    pub field: Field,
+    /// The separation sensed from the tool's surface, m.
+    pub separation_m: f64,
+    /// The nearest sensed obstacle point, m ([`NOTHING_SENSED_M`] along x from the tool when none).
+    pub nearest_m: [f64; 2],
+    /// Its capture time, s (at most the loop time asked for).
+    pub capture_s: f64,
 }
 
 /// The synthetic camera: the scene rendered at every frame, captured when asked.
 pub struct Synthetic(pub Rng);
 
 impl FrameSource for Synthetic {
-    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<(Field, f64, f64)>, String> {
-        let (f, sep) = fit_and_sense(scene, setup, tool, scene.hand_at(t_s), &mut self.0);
-        Ok(Some((f, sep, t_s)))
+    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<Frame>, String> {
+        let (field, separation_m, nearest_m) = fit_and_sense_at(scene, setup, tool, scene.hand_at(t_s), &mut self.0);
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: t_s }))
     }
 }
 
@@ -568,15 +656,14 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     let mut rows = Vec::with_capacity(steps.min(1 << 20));
     // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
     // capture). Each reaches the controller `latency_s` after capture.
-    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2])> = std::collections::VecDeque::new();
-    let Some((f0, sep0, _)) = source.frame(scene, setup, 0.0, p)? else { return Err("no camera frame at t = 0".into()) };
+    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2], [f64; 2])> = std::collections::VecDeque::new();
+    let Some(Frame { field: f0, separation_m: sep0, nearest_m: near0, .. }) = source.frame(scene, setup, 0.0, p)? else {
+        return Err("no camera frame at t = 0".into());
+    };
     let mut field = f0.clone();
     // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
-    let delay = scene.latency_s + match scene.baud {
-        Some(b) => link_time(setup.fitter.grid.nx, setup.fitter.grid.ny, b)?.1,
-        None => 0.0,
-    };
-    in_flight.push_back((delay, 0.0, f0, sep0, p));
+    let delay = frame_delay_s(scene)?;
+    in_flight.push_back((delay, 0.0, f0, sep0, p, near0));
     let mut frames = 1;
     let mut seq: u32 = 0;
     let mut sensed: Option<Sensed<f64>> = None;
@@ -600,21 +687,21 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         let t_prev = t - dt;
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
-            if let Some((f, sep, tc)) = source.frame(scene, setup, t_prev, p)? {
+            if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc }) = source.frame(scene, setup, t_prev, p)? {
                 // The tool where it was at capture (a recorded frame may be older than this step).
                 let at = points[((tc / dt).round().max(0.0) as usize).min(points.len() - 1)];
-                in_flight.push_back((tc + delay, tc, f, sep, at));
+                in_flight.push_back((tc + delay, tc, f, sep, at, near));
                 frames += 1;
             }
             next_frame += scene.frame_period_s;
         }
         while in_flight.front().is_some_and(|f| f.0 <= t_prev + 1e-12) {
-            let Some((_, tc, f, sep, at)) = in_flight.pop_front() else { break };
+            let Some((_, tc, f, sep, at, near)) = in_flight.pop_front() else { break };
             engine.new_field(&f, seq, now)?;
             seq = seq.wrapping_add(1);
             field = f;
             capture_t = tc;
-            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0 });
+            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1] });
         }
         if let Some(sn) = sensed.as_mut() {
             // Counted from capture: latency plus the time since it arrived.
@@ -851,5 +938,101 @@ mod blind_zone {
         // The thesis's masks overstate the separation by centimetres (the test can tell them apart).
         assert!(thesis_worst > 0.03, "thesis removal overstates by {thesis_worst} m");
         assert!(worst <= scene.camera.m_per_px, "{worst}");
+    }
+}
+
+#[cfg(test)]
+mod removal_mismatch {
+    use super::*;
+    use crate::avoid::depth::render;
+
+    /// The robot is not where, or not quite what, its model says (the model's pose 10 mm off in x or
+    /// y, or a wrist 5 mm larger than modelled): the part of the robot the model does not explain
+    /// stays in the image, and the hand beside the tool (20 to 60 mm from the wrist's true edge,
+    /// 8 directions) must still be seen, never farther than its true visible distance plus a
+    /// pixel. The price is availability, not safety: the unexplained rim reads as an obstacle at
+    /// the tool (separation about 0: a protective stop until the model is right).
+    #[test]
+    fn a_mismatched_robot_model_still_sees_the_hand() {
+        let mut scene = tests::small_scene("vortex", [0.5, 0.5]);
+        scene.robot.removal = "model".into();
+        scene.camera.noise_mm = 0.0;
+        scene.camera.null_fraction = 0.0;
+        let cam = scene.camera();
+        let px = scene.camera.m_per_px;
+        let model = scene.robot_shape();
+        let tool = [0.45, 0.45];
+        let mut rng = Rng::new(3);
+        let mut rim_min: f64 = f64::INFINITY;
+        for (off, grow) in [([0.01, 0.0], 0.0), ([0.0, -0.01], 0.0), ([0.0, 0.0], 0.005)] {
+            let mut real = model.clone();
+            real.wrist_radius_m += grow;
+            let at = [tool[0] + off[0], tool[1] + off[1]];
+            // The robot alone: its unexplained rim is seen (separation near 0), not hidden.
+            let img = render(&cam, Some((&real, at)), None, &mut rng);
+            let (alone, _) = sensed_nearest(&img, &cam, &model, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m);
+            rim_min = rim_min.min(alone);
+            for k in 0..8 {
+                let a = k as f64 * std::f64::consts::PI / 4.0;
+                for gap in [0.02, 0.04, 0.06] {
+                    let r = real.wrist_radius_m + scene.operator.hand_radius_m + gap;
+                    let hand = [at[0] + r * a.cos(), at[1] + r * a.sin()];
+                    let mut s = scene.clone();
+                    s.operator.entry_m = hand;
+                    let op = s.operator_shape();
+                    let img = render(&cam, Some((&real, at)), Some((&op, hand)), &mut rng);
+                    // The hand's true visible distance from the reported tool point (where the
+                    // monitor measures from), less half a pixel.
+                    let mut truth = f64::INFINITY;
+                    for q in 0..cam.width_px * cam.height_px {
+                        let p = [((q % cam.width_px) as f64 + 0.5) * px, ((q / cam.width_px) as f64 + 0.5) * px];
+                        let ho = op.height_at(hand, p);
+                        if ho > s.safety.sense_height_m && ho > real.height_at(at, p) {
+                            truth = truth.min(((p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2)).sqrt() - 0.5 * px);
+                        }
+                    }
+                    let (sep, _) = sensed_nearest(&img, &cam, &model, tool, s.robot.removal_margin_m, s.safety.sense_height_m);
+                    assert!(sep <= truth + px, "model off by {off:?}, wrist +{grow} m, hand at {a:.2} rad {gap} m: sensed {sep} m, true {truth} m");
+                }
+            }
+        }
+        assert!(rim_min < model.wrist_radius_m + 2.0 * px, "the unexplained rim is seen at the tool: {rim_min} m");
+    }
+
+    /// The hidden area (ours: what the robot occludes; the thesis: its grown masks), measured on the
+    /// thesis's set-up (`avoid_thesis_reach.toml`, 210 x 210 px at 5 mm) at 5 tool positions. Ours
+    /// clears the robot's footprint and nothing else (within the pixels its edge cuts); the thesis's
+    /// masks clear several times more. Printed for docs/avoidance.md:
+    /// `cargo test -p flinch-harness --lib avoid::path::removal_mismatch -- --nocapture`.
+    #[test]
+    fn the_hidden_area_is_the_robot_footprint() {
+        let scene = Avoid::parse(include_str!("../../../scenes/avoid_thesis_reach.toml")).unwrap();
+        let mut thesis = scene.clone();
+        thesis.thesis_mode();
+        let setup = Setup::new(&thesis, None).unwrap();
+        let cam = scene.camera();
+        let robot = scene.robot_shape();
+        let n = (cam.width_px * cam.height_px) as f64;
+        let mut rng = Rng::new(5);
+        for tool in [[0.12, 0.5], [0.3, 0.5], [0.52, 0.52], [0.7, 0.3], [0.93, 0.5]] {
+            let img = render(&cam, Some((&robot, tool)), None, &mut rng);
+            let mut ours = preprocess(&img, &cam, 0.0, None);
+            let cleared = remove_robot_by_model(&mut ours, cam.m_per_px, &robot, tool, scene.robot.removal_margin_m) as f64;
+            let footprint = (0..cam.width_px * cam.height_px)
+                .filter(|&k| robot.height_at(tool, [((k % cam.width_px) as f64 + 0.5) * cam.m_per_px, ((k / cam.width_px) as f64 + 0.5) * cam.m_per_px]) > 0.0)
+                .count() as f64;
+            // The thesis clears the nearest stored mask (count its pixels on a map of ones).
+            let mut ones = crate::avoid::depth::HeightMap { width: cam.width_px, height: cam.height_px, m: vec![1.0; cam.width_px * cam.height_px] };
+            let masked = setup.calibration.clear(tool, &mut ones) as f64;
+            println!(
+                "hidden at tool {tool:?}: ours {:.2} % of the image (robot footprint {:.2} %), thesis masks {:.2} %",
+                100.0 * cleared / n,
+                100.0 * footprint / n,
+                100.0 * masked / n
+            );
+            assert!(cleared <= footprint, "ours clears only the robot: {cleared} of {footprint} px");
+            assert!(cleared >= 0.95 * footprint, "and all of it (noise-free pixels): {cleared} of {footprint}");
+            assert!(masked > 1.5 * footprint, "the thesis's masks hide more: {masked} px against {footprint}");
+        }
     }
 }

@@ -96,6 +96,45 @@ where
         .collect();
     chart.draw_series(std::iter::once(PathElement::new(circle, red.stroke_width(2)))).map_err(e)?.label("operator at min clearance").legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2)));
 
+    // Static obstacles (boxes and discs), as they stand.
+    let grey = RGBColor(235, 235, 235);
+    for o in &scene.operator.obstacles {
+        let [cx, cy] = o.center_m;
+        if o.kind == "box" {
+            let [sx, sy] = o.size_m;
+            let r = [(cx - sx / 2.0, cy - sy / 2.0), (cx + sx / 2.0, cy - sy / 2.0), (cx + sx / 2.0, cy + sy / 2.0), (cx - sx / 2.0, cy + sy / 2.0), (cx - sx / 2.0, cy - sy / 2.0)];
+            chart.draw_series(std::iter::once(PathElement::new(r.to_vec(), grey.stroke_width(2)))).map_err(e)?;
+        } else {
+            let c: Vec<(f64, f64)> = (0..=48).map(|k| k as f64 / 48.0 * std::f64::consts::TAU).map(|a| (cx + o.radius_m * a.cos(), cy + o.radius_m * a.sin())).collect();
+            chart.draw_series(std::iter::once(PathElement::new(c, grey.stroke_width(2)))).map_err(e)?;
+        }
+    }
+
+    // A moving hand: its path over the run, and where the hand and the tool were at every whole
+    // second (labelled with the time), so that one can see which was where when.
+    let t_end = res.rows.last().map_or(0.0, |r| r.t_s);
+    let moves = scene.operator.keyframes.windows(2).any(|k| k[0].hand_m != k[1].hand_m);
+    if moves {
+        let orange = RGBColor(255, 150, 40);
+        let steps = (t_end / 0.05).ceil().max(1.0) as usize;
+        let trail: Vec<(f64, f64)> = (0..=steps).map(|k| scene.hand_at(k as f64 * 0.05)).map(|h| (h[0], h[1])).collect();
+        chart
+            .draw_series(std::iter::once(PathElement::new(trail, orange.stroke_width(2))))
+            .map_err(e)?
+            .label("hand path (dots: hand and tool every 1 s)")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(2)));
+        for sec in 0..=(t_end.floor() as usize) {
+            let t = sec as f64;
+            let h = scene.hand_at(t);
+            let tool = res.points.get(((t / res.dt_s).round() as usize).min(res.points.len().saturating_sub(1))).copied().unwrap_or(scene.start_m);
+            let label = format!("{sec}");
+            chart.draw_series(std::iter::once(Circle::new((h[0], h[1]), 4, orange.filled()))).map_err(e)?;
+            chart.draw_series(std::iter::once(Text::new(label.clone(), (h[0] + 0.012 * w, h[1]), ("sans-serif", 13).into_font().color(&orange)))).map_err(e)?;
+            chart.draw_series(std::iter::once(Circle::new((tool[0], tool[1]), 3, WHITE.filled()))).map_err(e)?;
+            chart.draw_series(std::iter::once(Text::new(label, (tool[0] + 0.012 * w, tool[1]), ("sans-serif", 13).into_font().color(&WHITE)))).map_err(e)?;
+        }
+    }
+
     // The path, start, goal, tool at the snapshot.
     chart
         .draw_series(std::iter::once(PathElement::new(res.points.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(), WHITE.stroke_width(2))))

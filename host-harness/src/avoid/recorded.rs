@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 
 use super::camera::{reproject, Cell, Pinhole, PlaneRaster};
 use super::depth::{DepthImage, HeightMap};
-use super::path::{FrameSource, Setup, NOTHING_SENSED_M};
+use super::path::{Frame, FrameSource, Setup, NOTHING_SENSED_M};
 use super::rbf::{filter_weights, Field};
 use super::scene::Avoid;
 
@@ -203,7 +203,7 @@ impl RecordedSource {
 
 /// One recorded frame through the pipeline: reprojection (robot removed at its pose), the bounded
 /// fill, unknown cells as obstacles; the field and the separation from the tool's surface.
-pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthImage, pose: Option<[f64; 2]>, tool: [f64; 2]) -> (Field, f64, FrameInfo) {
+pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthImage, pose: Option<[f64; 2]>, tool: [f64; 2]) -> (Field, f64, [f64; 2], FrameInfo) {
     let c = &scene.camera;
     let plane = PlaneRaster { width: c.width_px, height: c.height_px, m_per_px: c.m_per_px };
     let robot = scene.robot_shape();
@@ -243,6 +243,7 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
     }
     let sense = scene.safety.sense_height_m;
     let mut best = f64::INFINITY;
+    let mut nearest = [tool[0] + NOTHING_SENSED_M, tool[1]];
     let mut unknown = 0;
     let mut m = Vec::with_capacity(w * h);
     for (k, cell) in cells.iter().enumerate() {
@@ -255,7 +256,10 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
         };
         if obstacle {
             let q = plane.centre(k);
-            best = best.min((q[0] - tool[0]).powi(2) + (q[1] - tool[1]).powi(2));
+            let d2 = (q[0] - tool[0]).powi(2) + (q[1] - tool[1]).powi(2);
+            if d2 < best {
+                (best, nearest) = (d2, q);
+            }
         }
         m.push(height);
     }
@@ -271,7 +275,7 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
     }
     filter_weights(&mut wts);
     let info = FrameInfo { unknown_cells: unknown, filled_cells: filled, robot_points: rep.robot_points };
-    (Field::new(&setup.fitter.grid, wts, scene.fit.eval_sigma_factor), sep, info)
+    (Field::new(&setup.fitter.grid, wts, scene.fit.eval_sigma_factor), sep, nearest, info)
 }
 
 /// Counts of one processed frame.
@@ -299,7 +303,7 @@ fn hidden_by_robot(cam: &Pinhole, robot: &super::depth::RobotShape, pose: [f64; 
 }
 
 impl FrameSource for RecordedSource {
-    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<(Field, f64, f64)>, String> {
+    fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<Frame>, String> {
         // The newest frame captured by now.
         let k = self.rec.frames.partition_point(|f| f.0 <= t_s + 1e-9);
         if k == 0 || k <= self.next {
@@ -317,13 +321,13 @@ impl FrameSource for RecordedSource {
             ));
         }
         let pose = self.rec.pose_at(tc, &path)?;
-        let (field, sep, info) = process_frame(scene, setup, &self.cam, &img, pose, tool);
+        let (field, separation_m, nearest_m, info) = process_frame(scene, setup, &self.cam, &img, pose, tool);
         let cells = (scene.camera.width_px * scene.camera.height_px) as f64;
         let s = &mut self.stats;
         s.frames_used += 1;
         s.max_unknown_fraction = s.max_unknown_fraction.max(info.unknown_cells as f64 / cells);
         s.max_filled_cells = s.max_filled_cells.max(info.filled_cells);
-        Ok(Some((field, sep, tc)))
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc }))
     }
 }
 
