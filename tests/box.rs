@@ -71,6 +71,47 @@ fn numeric_keys(doc: &DocumentMut) -> Vec<(Vec<String>, Key)> {
     out
 }
 
+/// Every numeric key the validator's table lists for the tables this scene has (for its decoupler,
+/// target and sensor kind) and for `[solver]`, given or not: a key no shipped scene sets (an optional key left at its default) is in the box
+/// too, so its range is tested as well.
+fn box_keys(doc: &DocumentMut) -> Vec<(Vec<String>, Key)> {
+    let mut out = numeric_keys(doc);
+    let kind_of = |top: &str| doc.get(top).and_then(|t| t.get("kind")).and_then(|k| k.as_str()).map(str::to_string);
+    for t in scene::key_tables() {
+        if t.when == AVOID_SCENE || t.path.ends_with("[]") {
+            continue;
+        }
+        let path: Vec<String> = if t.path.is_empty() { Vec::new() } else { t.path.split('.').map(str::to_string).collect() };
+        // The table must be in the scene, except `[solver]`, whose keys are all optional and
+        // independent. Adding other tables mostly builds refused combinations (a stopping table
+        // beside `decel`, end stops on a rigid decoupler, `[controller]` without its scan cycle),
+        // which would spend the cases on refusals.
+        let top = path.first().map(String::as_str).unwrap_or("");
+        let present = {
+            let mut item = Some(doc.as_item());
+            for p in &path {
+                item = item.and_then(|i| i.get(p));
+            }
+            item.is_some_and(Item::is_table_like)
+        };
+        if !present && top != "solver" {
+            continue;
+        }
+        if !t.when.is_empty() && !kind_of(top).is_some_and(|kd| t.when == format!("kind = \"{kd}\"")) {
+            continue;
+        }
+        for key in t.keys {
+            if !matches!(key.ty, Ty::Number(_) | Ty::Integer { .. }) {
+                continue;
+            }
+            if !out.iter().any(|(p, k)| *p == path && k.name == key.name) {
+                out.push((path.clone(), *key));
+            }
+        }
+    }
+    out
+}
+
 /// A value within the key's accepted range from `u` in [0, 1) and `edge` (0, 1: the lower or upper
 /// end; otherwise inside).
 fn sample(key: &Key, u: f64, edge: u8) -> Item {
@@ -105,6 +146,11 @@ fn sample(key: &Key, u: f64, edge: u8) -> Item {
 fn set(doc: &mut DocumentMut, path: &[String], name: &str, v: Item) {
     let mut item = doc.as_item_mut();
     for p in path {
+        // A table the scene does not have yet is added (an optional table, or a key's sub-table).
+        let t = item.as_table_like_mut().expect("a table");
+        if t.get(p).is_none() {
+            t.insert(p, Item::Table(toml_edit::Table::new()));
+        }
         item = &mut item[p.as_str()];
     }
     match item.as_table_like_mut() {
@@ -155,7 +201,7 @@ fn physical(s: &Summary) -> Result<(), String> {
 fn case(scenes: &[(String, String)], which: prop::sample::Index, picks: &[(prop::sample::Index, f64, u8)]) -> Result<bool, String> {
     let (path, text) = which.get(scenes);
     let mut doc: DocumentMut = text.parse().unwrap();
-    let keys = numeric_keys(&doc);
+    let keys = box_keys(&doc);
     assert!(!keys.is_empty(), "{path}");
     let mut changed = Vec::new();
     for (i, u, edge) in picks {
@@ -258,4 +304,62 @@ fn found_corners_are_refused_with_the_reason() {
     // Just inside the cap, it runs.
     let sc = scene::parse(&text.replacen("orifice_radius = 0.008", "orifice_radius = 0.00015", 1), "h.toml").unwrap();
     sim::run(&sc, false).unwrap();
+}
+
+/// The box is wider than the shipped scenes: keys that no shipped scene sets (optional keys at
+/// their defaults, optional tables) are sampled too, so their ranges are tested as well.
+#[test]
+fn the_box_includes_keys_no_shipped_scene_sets() {
+    let mut given = std::collections::BTreeSet::new();
+    let mut boxed = std::collections::BTreeSet::new();
+    for (_, text) in shipped() {
+        let doc: DocumentMut = text.parse().unwrap();
+        for (p, k) in numeric_keys(&doc) {
+            given.insert(format!("{}.{}", p.join("."), k.name));
+        }
+        for (p, k) in box_keys(&doc) {
+            boxed.insert(format!("{}.{}", p.join("."), k.name));
+        }
+    }
+    let extra: Vec<_> = boxed.difference(&given).collect();
+    assert!(given.is_subset(&boxed));
+    assert!(extra.len() >= 5, "only {} keys beyond the shipped scenes: {extra:?}", extra.len());
+}
+
+/// Found by the box test: table11 with a slow brake (decel = 0.159 m/s^2) over 19 s drives the
+/// tool 36 mm into its back stop and the polystyrene; at standstill the Hunt-Crossley back stop's
+/// damping (about 7e5 1/s over the 0.23 kg tool) held the explicit method at its stability limit:
+/// 3,806,159 steps (sim before `at_rest`, `flinch run` in release, 2.2 s of CPU), 3e4 estimated.
+/// Now the plant is found at rest a few seconds after the robot stops and held (summary
+/// `at_rest_from_s`), with the same answer: the decoupler impulse of that run was 249377.0059 N s.
+#[test]
+fn a_plant_at_rest_after_the_robot_stopped_is_held_not_integrated() {
+    let text = std::fs::read_to_string(flinch_tests::scene_path("table11_z_prototype.toml")).unwrap();
+    let text = text.replacen("decel = 2.0 ", "decel = 0.1586649517661958 ", 1).replacen("duration = 0.8 ", "duration = 19.15437625214566 ", 1);
+    let sc = scene::parse(&text, "t11.toml").unwrap();
+    let (s, _) = sim::run(&sc, false).unwrap();
+    let t_stop = s.t_stop.unwrap();
+    let rest = s.at_rest_from_s.expect("at rest before the end");
+    assert!(rest > t_stop && rest < 7.0, "at rest from {rest} s (robot stopped at {t_stop} s)");
+    assert!(s.steps < 1_500_000, "{} steps", s.steps);
+    assert_eq!((s.mode, s.stroke_exhausted, s.safe), (Some(3), true, false));
+    assert!((s.decoupler_impulse / 249377.0059 - 1.0).abs() < 1e-8, "{}", s.decoupler_impulse);
+    // The held run and a run that ends just after the rest instant agree on the peaks.
+    let short = scene::parse(&text.replacen("duration = 19.15437625214566 ", &format!("duration = {} ", rest + 0.1), 1), "t11.toml").unwrap();
+    let (s2, _) = sim::run(&short, false).unwrap();
+    assert_eq!(s2.peak_robot_force, s.peak_robot_force);
+    assert_eq!(s2.max_travel, s.max_travel);
+}
+
+/// A plant still moving after the robot stopped is not held: the object Table 2's tool hits
+/// slides away for good (no floor friction), so the run must integrate to its end.
+#[test]
+fn a_plant_still_moving_after_the_robot_stopped_is_not_held() {
+    let text = std::fs::read_to_string(flinch_tests::scene_path("table2_linear.toml")).unwrap();
+    let d = text.lines().find(|l| l.starts_with("duration")).unwrap();
+    let sc = scene::parse(&text.replacen(d, "duration = 3.0", 1), "t2.toml").unwrap();
+    let (s, _) = sim::run(&sc, false).unwrap();
+    assert!(s.t_stop.is_some_and(|t| t < 3.0), "{:?}", s.t_stop);
+    assert!(s.object_final_velocity.is_some_and(|v| v > 1e-3), "{:?}", s.object_final_velocity);
+    assert_eq!(s.at_rest_from_s, None);
 }

@@ -71,6 +71,9 @@ pub fn human(s: &Summary) -> String {
         let _ = writeln!(o, "  peak gas pressure {:.2} kPa", p * 1e-3);
     }
     let _ = writeln!(o, "  solver {}: {} steps ({} rejected), {} RHS evaluations, {} events", s.method, s.steps, s.rejected_steps, s.rhs_evals, s.events);
+    if let Some(t) = s.at_rest_from_s {
+        let _ = writeln!(o, "  at rest from t = {t:.3} s (robot stopped, every body settled): the state is held from there to the end");
+    }
     for w in &s.warnings {
         let _ = writeln!(o, "  note: {w}");
     }
