@@ -153,7 +153,13 @@ fn a_null_hole_over_the_hand_is_an_obstacle() {
     let (hole, st) = recorded::simulate(&scene, &setup, Engine::Reference, &dir, Some(&poses)).unwrap();
     assert!(st.max_unknown_fraction > 0.015, "the hole is unknown: {st:?}");
     assert!(hole.min_signed_distance_m > 0.0, "never inside the hand: {}", hole.min_signed_distance_m);
-    assert!(matches!(hole.status, Status::Stopped(_)), "{:?}", hole.status);
+    // The unknown region is an obstacle: the tool stops short of it, or the steering takes it
+    // round with the clearance asked for (issue 9's barrier on the sensed separation).
+    match hole.status {
+        Status::Stopped(_) => {}
+        Status::Reached => assert!(hole.min_signed_distance_m >= scene.clearance_m, "reached, but {} from the hand", hole.min_signed_distance_m),
+        ref s => panic!("{s:?}"),
+    }
     let (erased, _) = recorded::simulate(&scene, &setup, Engine::Reference, &table, Some(&poses)).unwrap();
     assert!(erased.min_signed_distance_m < 0.0, "painted as table, it goes in: {}", erased.min_signed_distance_m);
     std::fs::remove_dir_all(&root).ok();
