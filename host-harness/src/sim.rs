@@ -5,7 +5,9 @@
 //! the contact, the front stop or the back stop stops pushing (or starts again) while still
 //! penetrated: its damping term cancels the spring term and the clamp at zero force (no adhesion)
 //! takes over. That clamp is a kink in the right-hand side; located as an event, the step ends on
-//! it instead of the error control hacking at it with a dozen rejected steps (docs/accuracy.md). Breakpoints: end of the
+//! it instead of the error control hacking at it with a dozen rejected steps (docs/accuracy.md).
+//! Event 7 switches a Coulomb slide (`decoupler.friction.law = "stick-slip"`, `plant::friction`)
+//! between sticking and slipping. Breakpoints: end of the
 //! acceleration, start and end of braking. Contact dampings chi are fixed at each onset from the
 //! approach velocity (eq 7).
 
@@ -19,7 +21,7 @@ use serde::Serialize;
 use std::cell::Cell;
 
 /// Number of event functions.
-pub const E: usize = 7;
+pub const E: usize = 8;
 const EV_CONTACT: usize = 0;
 const EV_FRONT: usize = 1;
 const EV_BACK: usize = 2;
@@ -27,6 +29,7 @@ const EV_SWITCH: usize = 3;
 const EV_CONTACT_PUSH: usize = 4;
 const EV_FRONT_PUSH: usize = 5;
 const EV_BACK_PUSH: usize = 6;
+const EV_SLIDE: usize = 7;
 
 /// One recorded instant of the time history.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -312,6 +315,9 @@ pub struct Simulation {
     rest_tol: (f64, f64, f64),
     /// From this instant on the plant is at rest and held (`at_rest_from_s`).
     at_rest_from: Option<f64>,
+    /// Instants a Coulomb slide switched between sticking and slipping (event 7), with the state
+    /// taken.
+    slide_switches: Vec<(f64, plant::friction::Slide)>,
 }
 
 impl System<N> for Simulation {
@@ -351,7 +357,16 @@ impl Hybrid<N, E> for Simulation {
         if let Some(b) = self.plant.decoupler.back_stop() {
             g[EV_BACK_PUSH] = b.contact.stiffness - self.plant.back_chi * k.s_dot;
         }
+        if let Some(v) = self.plant.slide_event(&k) {
+            g[EV_SLIDE] = v;
+        }
         g
+    }
+
+    fn fires_at_once(&self, i: usize) -> bool {
+        // The required friction jumps with the motion law's acceleration at a breakpoint: a
+        // stick that fails there must be let go there, not carried on.
+        i == EV_SLIDE
     }
 
     fn watching(&self, i: usize) -> Option<Crossing> {
@@ -364,6 +379,7 @@ impl Hybrid<N, E> for Simulation {
             EV_CONTACT_PUSH if self.in_contact => dir(self.contact_push),
             EV_FRONT_PUSH if self.on_front => dir(self.front_push),
             EV_BACK_PUSH if self.on_back => dir(self.back_push),
+            EV_SLIDE if self.plant.slide.is_some() => Some(Crossing::Down),
             _ => None,
         }
     }
@@ -407,6 +423,12 @@ impl Hybrid<N, E> for Simulation {
             EV_CONTACT_PUSH => self.contact_push = !self.contact_push,
             EV_FRONT_PUSH => self.front_push = !self.front_push,
             EV_BACK_PUSH => self.back_push = !self.back_push,
+            EV_SLIDE => {
+                self.plant.switch_slide(t, y);
+                if let Some(now) = self.plant.slide {
+                    self.slide_switches.push((t, now));
+                }
+            }
             EV_BACK => {
                 self.on_back = !self.on_back;
                 if self.on_back {
@@ -694,6 +716,7 @@ impl Simulation {
             duration: scene.duration_s,
             rest_tol: (scene.solver.rtol, scene.solver.atol, scene.motion.speed),
             at_rest_from: None,
+            slide_switches: Vec::new(),
         };
         if let Some(TargetKind::Object { floor_friction: Some(_), .. }) = Some(scene.target.kind) {
             sim.warnings.push(format!("target.floor_friction regularised with v0 = {} m/s", plant::friction::V0_MIN));
@@ -916,7 +939,8 @@ impl Run {
     /// Prepares a run of `scene` (see [`Simulation::new`]).
     pub fn new(scene: &Scene, external_brake: bool, record: bool) -> Self {
         let mut sim = Simulation::new(scene, external_brake, record);
-        let y0 = sim.plant.initial_state(scene.motion.start_at_speed, scene.motion.speed);
+        let mut y0 = sim.plant.initial_state(scene.motion.start_at_speed, scene.motion.speed);
+        sim.plant.init_slide(0.0, &mut y0);
         sim.init_flags(0.0, &y0);
         let s = &scene.solver;
         let stepper = match s.method {
@@ -937,6 +961,11 @@ impl Run {
     /// Integrates to the end of the scene.
     pub fn finish(&mut self) -> Result<(), SolveError> {
         self.advance_to(self.duration)
+    }
+
+    /// The state vector now.
+    pub fn state(&self) -> State {
+        self.driver.y
     }
 
     /// Current time, s.
@@ -988,6 +1017,12 @@ impl Run {
     /// The step the solver would take next, s (0 before its first estimate).
     pub fn next_step(&self) -> f64 {
         self.driver.next_step()
+    }
+
+    /// The Coulomb slide's stick/slip switches so far: instant and the state taken (empty without
+    /// one).
+    pub fn slide_switches(&self) -> &[(f64, plant::friction::Slide)] {
+        &self.sim.slide_switches
     }
 
     /// Integration cost so far.

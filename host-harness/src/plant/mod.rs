@@ -21,6 +21,7 @@ pub mod target;
 use crate::scene::Scene;
 use contact::Contact;
 use decoupler::{Decoupler, DecouplerForce};
+use friction::Slide;
 use motion_law::MotionLaw;
 use robot::CompliantRobot;
 use sensor::Detector;
@@ -119,6 +120,10 @@ pub struct Plant {
     /// right-hand side, which would make the impulse's rate jump inside a step: that jump alone
     /// cost a dozen rejected steps at every contact onset (docs/accuracy.md).
     pub in_contact: bool,
+    /// The stick/slip state of a Coulomb slide (`decoupler.friction.law = "stick-slip"`), set at
+    /// located events (`sim.rs`); `None` for every other decoupler. While sticking, the tool's
+    /// position is the flange's plus the stuck stroke, whatever the state vector says.
+    pub slide: Option<Slide>,
 }
 
 impl Plant {
@@ -144,6 +149,7 @@ impl Plant {
             front_chi: 0.0,
             s_rest: 0.0,
             in_contact: false,
+            slide: None,
         };
         plant.s_rest = plant.rest_stroke();
         // A tool resting on a Hunt-Crossley front stop at t = 0: a landing at (the floor of) zero speed.
@@ -210,7 +216,11 @@ impl Plant {
     pub fn kinematics(&self, t: f64, y: &State) -> Kinematics {
         let c = self.motion.at(t);
         let (xr, vr) = if self.robot.is_some() { (y[XR], y[VR]) } else { (c.x, c.v) };
-        let (xt, vt) = if self.decoupler.is_rigid() { (xr, vr) } else { (y[XT], y[VT]) };
+        let (xt, vt) = match self.slide {
+            _ if self.decoupler.is_rigid() => (xr, vr),
+            Some(Slide::Stick { s }) => (xr + s, vr),
+            _ => (y[XT], y[VT]),
+        };
         let (xp, vp) = match self.target {
             Target::Obstacle { surface } => (surface, 0.0),
             Target::Object { .. } => (y[XP], y[VP]),
@@ -221,9 +231,82 @@ impl Plant {
     /// Forces at one instant.
     pub fn forces(&self, k: &Kinematics) -> Forces {
         let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
-        let decoupler = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi);
+        let mut decoupler = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi);
+        if self.slide.is_some() {
+            self.add_slide_friction(k, contact, &mut decoupler);
+        }
         let robot = if self.decoupler.is_rigid() { -contact } else { -decoupler.total };
         Forces { contact, decoupler, robot }
+    }
+
+    /// Adds a Coulomb slide's friction to the decoupler's force. Kept out of [`Self::forces`] so
+    /// that stays small enough to be inlined: with this code inside it, it was not, and every scene
+    /// without a Coulomb slide ran 5 % more instructions (callgrind, Tables 5-7).
+    #[inline(never)]
+    fn add_slide_friction(&self, k: &Kinematics, contact: f64, decoupler: &mut DecouplerForce) {
+        if let Some(slide) = self.slide {
+            let (limit, req, _) = self.slide_terms(k, contact, decoupler.total);
+            decoupler.friction = slide.force(limit, req);
+            decoupler.total += decoupler.friction;
+        }
+    }
+
+    /// For a Coulomb slide: the friction limit mu |F_n| (N), the friction that would keep s'' = 0
+    /// (N), and s'' without friction (m/s^2), given the contact force and the decoupler's force
+    /// without the Coulomb friction (`others`). s'' = a0 + b F_f with b = 1/m_t + 1/m_r (a rigid
+    /// robot follows its law whatever the force: b = 1/m_t).
+    fn slide_terms(&self, k: &Kinematics, contact: f64, others: f64) -> (f64, f64, f64) {
+        let limit = self.decoupler.friction_limit(k.s);
+        let a_t = (others - contact + self.tool_mass * self.gravity) / self.tool_mass;
+        let (a_r, inv_mr) = match &self.robot {
+            Some(r) => {
+                let c = motion_law::Commanded { x: k.xc, v: k.vc, a: k.ac };
+                (r.accel(&c, k.xr, k.vr, -others), 1.0 / r.mass)
+            }
+            None => (k.ac, 0.0),
+        };
+        let a0 = a_t - a_r;
+        (limit, friction::required(a0, 1.0 / self.tool_mass + inv_mr), a0)
+    }
+
+    /// The Coulomb slide's event function at (t, y) (positive while its state holds), or `None`
+    /// without one.
+    pub fn slide_event(&self, k: &Kinematics) -> Option<f64> {
+        let slide = self.slide?;
+        let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
+        let others = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi).total;
+        let (limit, req, _) = self.slide_terms(k, contact, others);
+        Some(slide.event(limit, req, k.s_dot))
+    }
+
+    /// Switches the Coulomb slide at t (a located event, or the start): the tool's state is set to
+    /// the relative velocity zero it has there (to within [`friction::SLIP_END`]; while sticking,
+    /// to the stuck position), and the state is chosen again ([`Slide::decide`]).
+    pub fn switch_slide(&mut self, t: f64, y: &mut State) {
+        if self.slide.is_none() || self.stick_slip_off() {
+            return;
+        }
+        let k = self.kinematics(t, y);
+        y[XT] = k.xt;
+        y[VT] = k.vr;
+        self.slide = Some(Slide::Slip { dir: 1.0 });
+        let k = self.kinematics(t, y);
+        let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
+        let others = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi).total;
+        let (limit, req, a0) = self.slide_terms(&k, contact, others);
+        self.slide = Some(Slide::decide(k.s, limit, req, a0));
+    }
+
+    fn stick_slip_off(&self) -> bool {
+        self.decoupler.stick_slip_mu().is_none()
+    }
+
+    /// Arms the Coulomb slide's state at the start (t, y), if the decoupler has one.
+    pub fn init_slide(&mut self, t: f64, y: &mut State) {
+        if self.decoupler.stick_slip_mu().is_some() {
+            self.slide = Some(Slide::Slip { dir: 1.0 });
+            self.switch_slide(t, y);
+        }
     }
 
     /// The right-hand side, with the kinematics and forces it used.
@@ -241,7 +324,12 @@ impl Plant {
         }
         if !self.decoupler.is_rigid() {
             dy[XT] = k.vt;
-            dy[VT] = (f.decoupler.total - f.contact + weight) / self.tool_mass;
+            dy[VT] = match self.slide {
+                // Sticking: the tool moves with the flange (the same acceleration to the last bit,
+                // so the state stays with the kinematics above).
+                Some(Slide::Stick { .. }) => if self.robot.is_some() { dy[VR] } else { k.ac },
+                _ => (f.decoupler.total - f.contact + weight) / self.tool_mass,
+            };
         }
         if self.target.is_object() {
             dy[XP] = k.vp;

@@ -212,13 +212,26 @@ pub struct NonlinearStop {
     pub damping: ContactDamping,
 }
 
-/// Friction `F = mu F_n tanh(v_rel / v0)` (eq 41-42).
+/// Slide friction (eq 41-42): `F = mu F_n tanh(v_rel / v0)`, or with v0 = 0 the Coulomb law the
+/// thesis writes (Tables 4, 8, 11, 13), integrated as a stick/slip hybrid (`plant::friction`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TanhFriction {
     /// mu, >= 0.
     pub mu: f64,
-    /// v0, m/s, >= 0; 0 is the Coulomb limit and is regularised (see `plant::friction`).
+    /// v0, m/s, >= 0; 0 is the Coulomb limit (see `law`).
     pub v0: f64,
+    /// How the law is integrated.
+    pub law: FrictionLaw,
+}
+
+/// How the slide's dry friction is integrated (`decoupler.friction.law`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrictionLaw {
+    /// Coulomb with v0 = 0: sticking and slipping as discrete states switched by located events
+    /// (Karnopp); the default when v0 = 0.
+    StickSlip,
+    /// `mu F_n tanh(v / v0)`, v0 raised to 1 mm/s if smaller; the default when v0 > 0.
+    Regularised,
 }
 
 /// How the damping constant chi of a nonlinear contact is obtained.

@@ -38,6 +38,12 @@ pub trait Hybrid<const N: usize, const E: usize>: System<N> {
     fn watching(&self, i: usize) -> Option<Crossing>;
     /// Reaction to event `i` located at `t`; may change `y` and the system's own state.
     fn on_event(&mut self, i: usize, t: f64, y: &mut [f64; N]);
+    /// True for an event that must fire as soon as its function is found on the new side at the
+    /// start of a step, without a crossing inside one: its function can jump (with the right-hand
+    /// side at a breakpoint), so a crossing may happen between steps. Default: none.
+    fn fires_at_once(&self, _i: usize) -> bool {
+        false
+    }
     /// The next instant strictly after `t` where the right-hand side is not smooth in time.
     fn next_breakpoint(&self, t: f64) -> Option<f64>;
     /// Called after each accepted (possibly event-truncated) step over [t0, t1], with the end
@@ -160,9 +166,26 @@ impl<const N: usize, const E: usize> Driver<N, E> {
         let adaptive = stepper.adaptive();
         let expo = 1.0 / (stepper.order() + 1.0) - 0.75 * BETA;
         let (rtol, atol) = stepper.tolerances();
+        // Events fired at once at the same instant (a guard against a reaction that does not
+        // move its function off the new side).
+        let mut at_once = 0u32;
         while self.t < t_end {
             if self.stats.steps + self.stats.rejected >= self.settings.max_steps {
                 return Err(SolveError::TooManySteps { t: self.t });
+            }
+            if at_once < 4 {
+                let now = (0..E).find(|&i| sys.fires_at_once(i) && sys.watching(i).is_some_and(|dir| dir.new_side(self.g[i])));
+                if let Some(i) = now {
+                    at_once += 1;
+                    let mut y = self.y;
+                    sys.on_event(i, self.t, &mut y);
+                    self.stats.events += 1;
+                    self.y = y;
+                    sys.rhs(self.t, &self.y, &mut self.f);
+                    self.g = sys.events(self.t, &self.y);
+                    self.err_old = 1e-4;
+                    continue;
+                }
             }
             if adaptive && self.h <= 0.0 {
                 self.h = initial_step(&*sys, self.t, &self.y, &self.f, stepper.order(), rtol, atol, self.settings.max_step);
@@ -239,6 +262,7 @@ impl<const N: usize, const E: usize> Driver<N, E> {
                 return Err(SolveError::NonFinite { t: self.t });
             }
             self.stats.steps += 1;
+            at_once = 0;
             let t1 = if lands { limit } else { self.t + h };
             let g1 = sys.events(t1, &y1);
             // Earliest armed event crossing in this step.

@@ -7,7 +7,20 @@
 
 use super::end_stop::{BackStop, FrontStop};
 use crate::plant::friction::TanhFriction;
-use crate::scene::Bistable;
+use crate::scene::{Bistable, FrictionLaw};
+
+/// The slide's friction law.
+#[derive(Debug, Clone, Copy)]
+pub enum SlideFriction {
+    /// `mu |F_n| tanh(v / v0)`.
+    Regularised(TanhFriction),
+    /// Coulomb, v0 = 0: the plant carries the stick/slip state (`plant::friction::Slide`) and
+    /// computes the force ([`BistableMechanism::friction_force`] returns 0).
+    StickSlip {
+        /// mu.
+        mu: f64,
+    },
+}
 
 /// The mechanism, ready to evaluate.
 #[derive(Debug, Clone, Copy)]
@@ -21,7 +34,7 @@ pub struct BistableMechanism {
     /// Back end-stop at s = -C2.
     pub back: BackStop,
     /// Slide friction, if any.
-    pub friction: Option<TanhFriction>,
+    pub friction: Option<SlideFriction>,
 }
 
 impl BistableMechanism {
@@ -33,7 +46,10 @@ impl BistableMechanism {
             h: p.height,
             front: FrontStop::new(p.front_stroke, &p.front_stop),
             back: BackStop::new(-p.back_stroke, &p.back_stop),
-            friction: p.friction.map(|f| TanhFriction::new(f.mu, f.v0)),
+            friction: p.friction.map(|f| match f.law {
+                FrictionLaw::Regularised => SlideFriction::Regularised(TanhFriction::new(f.mu, f.v0)),
+                FrictionLaw::StickSlip => SlideFriction::StickSlip { mu: f.mu },
+            }),
         }
     }
 
@@ -57,11 +73,30 @@ impl BistableMechanism {
         self.nk * (self.l0 - l) / l
     }
 
-    /// Friction on the tool for relative velocity s' = x_t' - x_r', N.
+    /// Spring force along the slide and the regularised friction on the tool for relative
+    /// velocity s' = x_t' - x_r' (0 without friction or with the stick-slip law), N: one square
+    /// root for both.
+    pub fn spring_and_friction(&self, s: f64, s_dot: f64) -> (f64, f64) {
+        let l = (self.h * self.h + s * s).sqrt();
+        let stretch = self.nk * (self.l0 - l) / l;
+        let friction = match &self.friction {
+            Some(SlideFriction::Regularised(f)) => f.force(stretch * self.h, -s_dot),
+            _ => 0.0,
+        };
+        (stretch * s, friction)
+    }
+
+    /// Friction on the tool for relative velocity s' = x_t' - x_r', N (regularised law only; the
+    /// stick-slip law's force is the plant's).
     pub fn friction_force(&self, s: f64, s_dot: f64) -> f64 {
-        match &self.friction {
-            Some(f) => f.force(self.normal_force(s), -s_dot),
-            None => 0.0,
+        self.spring_and_friction(s, s_dot).1
+    }
+
+    /// mu of a stick-slip (Coulomb) slide.
+    pub fn stick_slip_mu(&self) -> Option<f64> {
+        match self.friction {
+            Some(SlideFriction::StickSlip { mu }) => Some(mu),
+            _ => None,
         }
     }
 }

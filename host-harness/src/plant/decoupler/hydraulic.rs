@@ -8,6 +8,11 @@
 //! - force on the tool `F_hyd + F_f` (eq 53-56), end-stops as the bi-stable one.
 //! Units: m, m^2, m^3, Pa, kg/m^3, N. Small-displacement stiffness `k_hyd = A_p^2 kappa p10 / V_g0`
 //! (eq 63). p10 is used as the thesis does (eq 47 applied to the given pressure).
+//!
+//! Cost (issue 12, callgrind on Table 12): eq 47's `powf` is about 19 % of a run's instructions
+//! and stays: a Chebyshev interpolant of `(V_g0 / V_g)^kappa` accurate to 1e-13 needed degree 16
+//! and cost more per evaluation than glibc's `pow` (docs/accuracy.md). Dry friction is not
+//! evaluated when d = 0 (Tables 12 and 14): its `tanh` was 9 % of the run.
 
 use super::end_stop::{BackStop, FrontStop};
 use crate::plant::friction::TanhFriction;
@@ -82,7 +87,7 @@ impl HydraulicCylinder {
         HydraulicForce {
             gas_pressure: p1,
             hydraulic: p1 * self.area + self.orifice * v * v.abs(),
-            friction: self.dry.force(1.0, v) + self.viscous * v,
+            friction: if self.dry.mu > 0.0 { self.dry.force(1.0, v) } else { 0.0 } + self.viscous * v,
         }
     }
 

@@ -85,10 +85,9 @@ impl Decoupler {
             Self::Rigid => {}
             Self::Linear(l) => f.spring = l.force(s, s_dot),
             Self::Bistable(b) => {
-                f.spring = b.spring_force(s);
+                (f.spring, f.friction) = b.spring_and_friction(s, s_dot);
                 f.front_stop = b.front.force(s, s_dot, front_chi);
                 f.back_stop = b.back.force(s, s_dot, back_chi);
-                f.friction = b.friction_force(s, s_dot);
             }
             Self::Hydraulic(h) => {
                 let hf = h.force(s, s_dot);
@@ -105,6 +104,22 @@ impl Decoupler {
 
     /// True when the scene's friction v0 was below the floor and was raised (reported to the user).
     pub fn friction_regularised(&self) -> bool {
-        matches!(self, Self::Bistable(BistableMechanism { friction: Some(f), .. }) if f.regularised)
+        matches!(self, Self::Bistable(BistableMechanism { friction: Some(bistable::SlideFriction::Regularised(f)), .. }) if f.regularised)
+    }
+
+    /// mu of a bi-stable slide with stick-slip (Coulomb) friction.
+    pub fn stick_slip_mu(&self) -> Option<f64> {
+        match self {
+            Self::Bistable(b) => b.stick_slip_mu(),
+            _ => None,
+        }
+    }
+
+    /// mu |F_n| at s: the stick-slip slide's friction limit, N (0 without one).
+    pub fn friction_limit(&self, s: f64) -> f64 {
+        match self {
+            Self::Bistable(b) => b.stick_slip_mu().map_or(0.0, |mu| mu * b.normal_force(s).abs()),
+            _ => 0.0,
+        }
     }
 }

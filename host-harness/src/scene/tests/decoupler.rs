@@ -391,7 +391,7 @@ case!(
     "v0 = -0.001 }",
     "decoupler.friction.v0",
     "friction",
-    "allowed range [0, 0.1] m/s (0 is the Coulomb limit (regularised); 1e-3 m/s in the thesis (eq 41); beyond 0.1 m/s friction is no longer dry), got -0.001"
+    "allowed range [0, 0.1] m/s (0 is the Coulomb limit (Tables 4, 8, 11, 13); 1e-3 m/s in Table 15; beyond 0.1 m/s friction is no longer dry), got -0.001"
 );
 case!(
     friction_v0_missing,
@@ -409,8 +409,41 @@ case!(
     "friction = 0.12",
     "decoupler.friction",
     "friction",
-    "must be a table ({ mu, v0 }"
+    "must be a table ({ mu, v0, law }"
 );
+case!(
+    friction_law_unknown,
+    BASE,
+    "friction = { mu = 0.12, v0 = 0.001 }",
+    "friction = { mu = 0.12, v0 = 0.001, law = \"karnopp\" }",
+    "decoupler.friction.law",
+    "karnopp",
+    "must be one of \"stick-slip\" | \"regularised\", got \"karnopp\""
+);
+case!(
+    friction_stick_slip_with_v0,
+    BASE,
+    "friction = { mu = 0.12, v0 = 0.001 }",
+    "friction = { mu = 0.12, v0 = 0.001, law = \"stick-slip\" }",
+    "decoupler.friction.law",
+    "law = \"stick-slip\"",
+    "needs v0 = 0, got v0 = 0.001 m/s"
+);
+
+#[test]
+fn friction_law_defaults_follow_v0() {
+    use crate::scene::{Decoupler, FrictionLaw};
+    let law = |from: &str, to: &str| {
+        let s = parse(&mutate(BASE, from, to), "f.toml").unwrap();
+        let Decoupler::Bistable(b) = s.decoupler else { panic!("not bi-stable") };
+        b.friction.unwrap().law
+    };
+    let f = "friction = { mu = 0.12, v0 = 0.001 }";
+    assert_eq!(law(f, f), FrictionLaw::Regularised);
+    assert_eq!(law(f, "friction = { mu = 0.12, v0 = 0.0 }"), FrictionLaw::StickSlip);
+    assert_eq!(law(f, "friction = { mu = 0.12, v0 = 0.0, law = \"regularised\" }"), FrictionLaw::Regularised);
+    assert_eq!(law(f, "friction = { mu = 0.12, v0 = 0.0, law = \"stick-slip\" }"), FrictionLaw::StickSlip);
+}
 
 // Hydraulic.
 case!(
