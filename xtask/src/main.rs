@@ -52,6 +52,10 @@ fn main() -> ExitCode {
             let log = run_board_qemu()?;
             println!("{}", check_board_log(&log)?);
             println!("{}", check_board_vectors(&elf_path("board"))?);
+            build_board_qemu_io()?;
+            let (out, log) = run_board_edge()?;
+            print!("{out}");
+            println!("{}", check_board_edge(&out, &log)?);
             Ok(())
         }),
         Some("size") => single(|| {
@@ -161,6 +165,20 @@ fn test() -> ExitCode {
                     .and_then(|log| check_board_log(&log))
                     .and_then(|m| check_board_vectors(&elf_path("board")).map(|v| format!("{m}; {v}")))
                 {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
+        results.push((
+            "board ELF edge in QEMU",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match build_board_qemu_io().and_then(|()| run_board_edge()).and_then(|(out, log)| {
+                    print!("{out}");
+                    check_board_edge(&out, &log)
+                }) {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }
@@ -374,6 +392,146 @@ fn check_board_vectors(path: &Path) -> Result<String, String> {
         }
     }
     Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping".into())
+}
+
+/// The `qemu-io` build of the board binary (`firmware/src/bin/support/board_bench.rs`): the same
+/// `board.rs`, with GPIOA's input register and GPIOD's output register read from RAM that a bench in
+/// thread mode drives, because QEMU 7.2 does not model the F405's GPIO. Its own target directory, so
+/// the production ELF is never overwritten by it.
+fn build_board_qemu_io() -> Result<(), String> {
+    let status = cargo()
+        .args(["build", "--release", "--target", TARGET, "--bin", "board", "--features", "qemu-io", "--target-dir"])
+        .arg(qemu_io_dir())
+        .current_dir(repo_root().join("firmware"))
+        .status()
+        .map_err(|e| format!("could not run cargo: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-io exited with {status}"))
+    }
+}
+
+fn qemu_io_dir() -> PathBuf {
+    target_dir().join("board-qemu-io")
+}
+
+/// Run the `qemu-io` board ELF on netduinoplus2 until its bench exits (semihosting), deterministic
+/// time (`-icount shift=3`); returns the bench's output and the `-d unimp` register trace.
+fn run_board_edge() -> Result<(String, String), String> {
+    let log = target_dir().join("board-edge.log");
+    let _ = fs::remove_file(&log);
+    let elf = qemu_io_dir().join(TARGET).join("release").join("board");
+    let mut cmd = Command::new("qemu-system-arm");
+    cmd.args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none"])
+        .args(["-semihosting-config", "enable=on,target=native", "-icount", "shift=3"])
+        .args(["-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(&elf);
+    let (out, status) = run_captured(cmd, "qemu-system-arm -M netduinoplus2 (board edge bench)", QEMU_TIMEOUT)?;
+    if !status.success() {
+        return Err(format!("the board edge bench failed ({status}):\n{out}"));
+    }
+    let trace = fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))?;
+    Ok((out, trace))
+}
+
+/// The bench's markers (GPIOI BSRR writes, `board_bench.rs`).
+fn bench_marker(v: u32) -> &'static str {
+    match v {
+        1 => "reset pressed",
+        2 => "reset released",
+        3 => "edge on channel A pended (EXTI0)",
+        4 => "edge on channel B pended (EXTI4)",
+        5 => "obstacle gone",
+        6 => "edge on channel B pended (EXTI4)",
+        7 => "edge on channel A pended (EXTI0)",
+        8 => "end",
+        _ => "unknown marker",
+    }
+}
+
+/// The board edge run's trace reduced to what a person checks: the bench's markers and every change
+/// of the three outputs (PD12 stop, PD13 escalation, PD14 sensor supply; 1 = energised). Repeated
+/// de-energise writes of the stopped ticks change nothing and do not appear.
+fn board_edge_timeline(trace: &[&str]) -> Vec<String> {
+    let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+    let mut odr = 0u32;
+    let mut out = Vec::new();
+    for l in trace {
+        let Some(v) = value(l) else { continue };
+        if l.starts_with("GPIOI:") && l.contains("offset 0x018") {
+            out.push(format!("bench {v}: {}", bench_marker(v)));
+        } else if l.starts_with("GPIOD:") && l.contains("offset 0x018") {
+            let new = (odr & !(v >> 16)) | (v & 0xFFFF);
+            for (bit, name) in [(12, "PD12 stop"), (13, "PD13 escalation"), (14, "PD14 sensor supply")] {
+                if (new ^ odr) & (1 << bit) != 0 {
+                    out.push(format!("{name} -> {}", (new >> bit) & 1));
+                }
+            }
+            odr = new;
+        }
+    }
+    out
+}
+
+/// Check the board edge run: the bench passed; the boot is the production board's
+/// (`firmware/qemu/board-boot.txt`); the markers and output changes equal
+/// `firmware/qemu/board-edge.txt`; and after each edge pended while armed the very next device
+/// access is the stop write (GPIOD BSRR 0x10000000): nothing, not even a tick, comes between.
+fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
+    if !out.contains("bench: PASS") {
+        return Err(format!("the board edge bench did not pass:\n{out}"));
+    }
+    let lines: Vec<&str> = trace.lines().collect();
+    let expected_boot = read_expected("firmware/qemu/board-boot.txt")?;
+    if lines.len() < expected_boot.len() || lines.iter().zip(&expected_boot).any(|(a, b)| a != b) {
+        return Err(format!(
+            "the qemu-io board's boot differs from firmware/qemu/board-boot.txt:\n--- got\n{}",
+            lines.iter().take(expected_boot.len()).copied().collect::<Vec<_>>().join("\n")
+        ));
+    }
+    let rest = &lines[expected_boot.len()..];
+    let got = board_edge_timeline(rest);
+    let want = read_expected("firmware/qemu/board-edge.txt")?;
+    if got != want {
+        return Err(format!(
+            "the board edge run differs from firmware/qemu/board-edge.txt:\n--- got\n{}\n--- expected\n{}",
+            got.join("\n"),
+            want.join("\n")
+        ));
+    }
+    let stop_write = "GPIOD: unimplemented device write (size 4, offset 0x018, value 0x10000000)";
+    let mut direct = 0;
+    for marker in ["value 0x00000003)", "value 0x00000006)"] {
+        let i = rest
+            .iter()
+            .position(|l| l.starts_with("GPIOI:") && l.ends_with(marker))
+            .ok_or_else(|| format!("no bench marker {marker} in the trace"))?;
+        match rest.get(i + 1) {
+            Some(next) if *next == stop_write => direct += 1,
+            next => {
+                return Err(format!(
+                    "after the edge pend ({}) the next device access is {:?}, not the stop write",
+                    rest[i],
+                    next.copied().unwrap_or("nothing")
+                ))
+            }
+        }
+    }
+    let ticks = rest.iter().filter(|l| l.ends_with("value 0x0000aaaa)")).count();
+    Ok(format!(
+        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks",
+        got.len()
+    ))
+}
+
+/// A checked-in expected file without its `#` comments and blank lines.
+fn read_expected(rel: &str) -> Result<Vec<String>, String> {
+    let path = repo_root().join(rel);
+    let text = fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
+    Ok(text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()).map(String::from).collect())
 }
 
 fn target_installed() -> bool {

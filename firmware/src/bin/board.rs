@@ -51,6 +51,10 @@ fn main() {
 #[path = "support/isr_cell.rs"]
 mod isr_cell;
 
+#[cfg(all(target_os = "none", feature = "qemu-io"))]
+#[path = "support/board_bench.rs"]
+mod bench;
+
 #[cfg(target_os = "none")]
 mod board {
     use super::isr_cell::IsrCell;
@@ -106,7 +110,17 @@ mod board {
     const PRIO_EDGE: u8 = 0x00;
     const PRIO_TICK: u8 = 0x80;
 
-    const HSI_HZ: u32 = 16_000_000;
+    /// The core clock (SysTick) and TIM2's input clock: the 16 MHz HSI on the board. QEMU 7.2's
+    /// netduinoplus2 clocks the core at 168 MHz and its timers at 1 GHz whatever RCC says, so the
+    /// `qemu-io` build scales both to keep a 1 MHz `Clock` and a `TICK_US` tick there.
+    #[cfg(not(feature = "qemu-io"))]
+    const CORE_HZ: u32 = 16_000_000;
+    #[cfg(not(feature = "qemu-io"))]
+    const TIM2_HZ: u32 = 16_000_000;
+    #[cfg(feature = "qemu-io")]
+    const CORE_HZ: u32 = 168_000_000;
+    #[cfg(feature = "qemu-io")]
+    const TIM2_HZ: u32 = 1_000_000_000;
     const TICK_US: u32 = 1_000;
 
     #[inline(always)]
@@ -123,6 +137,34 @@ mod board {
         wr(addr, (rd(addr) & !clear) | set);
     }
 
+    // ---- The three pin accesses: GPIO in the production build, the QEMU bench's RAM with
+    // `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_bench.rs`) -------------------
+    /// A port's input register.
+    #[inline(always)]
+    fn idr(port: u32) -> u32 {
+        #[cfg(not(feature = "qemu-io"))]
+        return rd(port + IDR);
+        #[cfg(feature = "qemu-io")]
+        return if port == GPIOA { super::bench::PINS.load(Relaxed) } else { rd(port + IDR) };
+    }
+    /// A port's output register (the stop's read-back).
+    #[inline(always)]
+    fn odr(port: u32) -> u32 {
+        #[cfg(not(feature = "qemu-io"))]
+        return rd(port + ODR);
+        #[cfg(feature = "qemu-io")]
+        return if port == GPIOD { super::bench::ODR_D.load(Relaxed) } else { rd(port + ODR) };
+    }
+    /// A write to a port's bit set/reset register.
+    #[inline(always)]
+    fn bsrr(port: u32, v: u32) {
+        wr(port + BSRR, v);
+        #[cfg(feature = "qemu-io")]
+        if port == GPIOD {
+            super::bench::bsrr(v);
+        }
+    }
+
     // ---- Pins: zero-sized, the port and pin are constants, so a write is a single `str` ------------
     /// A push-pull output on `PORT`, pin `N`, written through BSRR (atomic, no read-modify-write).
     pub struct Out<const PORT: u32, const N: u32>;
@@ -132,12 +174,12 @@ mod board {
     impl<const PORT: u32, const N: u32> OutputPin for Out<PORT, N> {
         #[inline(always)]
         fn set_low(&mut self) -> Result<(), Infallible> {
-            wr(PORT + BSRR, 1 << (N + 16));
+            bsrr(PORT, 1 << (N + 16));
             Ok(())
         }
         #[inline(always)]
         fn set_high(&mut self) -> Result<(), Infallible> {
-            wr(PORT + BSRR, 1 << N);
+            bsrr(PORT, 1 << N);
             Ok(())
         }
     }
@@ -149,11 +191,11 @@ mod board {
     impl<const PORT: u32, const N: u32> InputPin for In<PORT, N> {
         #[inline(always)]
         fn is_high(&mut self) -> Result<bool, Infallible> {
-            Ok(rd(PORT + IDR) & (1 << N) != 0)
+            Ok(idr(PORT) & (1 << N) != 0)
         }
         #[inline(always)]
         fn is_low(&mut self) -> Result<bool, Infallible> {
-            Ok(rd(PORT + IDR) & (1 << N) == 0)
+            Ok(idr(PORT) & (1 << N) == 0)
         }
     }
 
@@ -202,7 +244,7 @@ mod board {
     /// Drop both outputs with raw register writes (usable from any context, even before init).
     #[inline(always)]
     fn emergency_stop() {
-        wr(GPIOD + BSRR, (1 << (12 + 16)) | (1 << (13 + 16)));
+        bsrr(GPIOD, (1 << (12 + 16)) | (1 << (13 + 16)));
     }
 
     /// The latch that survives a reset: not zeroed by the start-up code (cortex-m-rt `.uninit`).
@@ -244,7 +286,7 @@ mod board {
         modify(GPIOA + MODER, 0x3FF, 0); // PA0..PA4 input
         modify(GPIOA + PUPDR, 0x3FF, 0b01_10_10_10_10); // PA0..PA3 pull-down, PA4 pull-up
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
-        wr(TIM2_PSC, HSI_HZ / 1_000_000 - 1);
+        wr(TIM2_PSC, TIM2_HZ / 1_000_000 - 1);
         wr(TIM2_ARR, u32::MAX);
         wr(TIM2_EGR, 1); // load the prescaler
         wr(TIM2_CR1, 1);
@@ -299,11 +341,14 @@ mod board {
         }
 
         cp.SYST.set_clock_source(SystClkSource::Core);
-        cp.SYST.set_reload(HSI_HZ / 1_000_000 * TICK_US - 1);
+        cp.SYST.set_reload(CORE_HZ / 1_000_000 * TICK_US - 1);
         cp.SYST.clear_current();
         cp.SYST.enable_interrupt();
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
+        #[cfg(feature = "qemu-io")]
+        super::bench::run_scenario(|| rd(TIM2_CNT));
+        #[cfg(not(feature = "qemu-io"))]
         loop {
             cortex_m::asm::wfi();
         }
@@ -342,12 +387,12 @@ mod board {
     /// hand-over. Everything else is the bookkeeping's, at the tick's priority.
     #[inline(always)]
     fn edge(line: u32) {
-        let idr = rd(GPIOA + IDR);
+        let idr = idr(GPIOA);
         if EDGE_FAST.load(Relaxed)
-            && rd(GPIOD + ODR) & (1 << 12) != 0
+            && odr(GPIOD) & (1 << 12) != 0
             && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B)
         {
-            wr(GPIOD + BSRR, 1 << (12 + 16)); // the stop
+            bsrr(GPIOD, 1 << (12 + 16)); // the stop
             wr(EXTI_PR, line); // right after the stop write: a new edge from here on pends again
             EDGE_AT.store(rd(TIM2_CNT), Relaxed);
             EDGE_STOPPED.store(true, Relaxed);
