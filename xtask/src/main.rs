@@ -52,6 +52,7 @@ fn main() -> ExitCode {
             let log = run_board_qemu()?;
             println!("{}", check_board_log(&log)?);
             println!("{}", check_board_vectors(&elf_path("board"))?);
+            println!("{}", check_board_corrupt()?);
             build_board_qemu_io()?;
             let (out, log) = run_board_edge()?;
             print!("{out}");
@@ -164,6 +165,7 @@ fn test() -> ExitCode {
                 match run_board_qemu()
                     .and_then(|log| check_board_log(&log))
                     .and_then(|m| check_board_vectors(&elf_path("board")).map(|v| format!("{m}; {v}")))
+                    .and_then(|m| check_board_corrupt().map(|c| format!("{m}; {c}")))
                 {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
@@ -312,13 +314,17 @@ const BOARD_RUN: Duration = Duration::from_secs(3);
 /// trace. GPIO inputs read 0, i.e. the switch reads "tripped", the reset button is not pressed and
 /// both EDM relays read "not released": the firmware must stay stopped for the whole run.
 fn run_board_qemu() -> Result<String, String> {
-    let log = target_dir().join("board-qemu.log");
+    run_board_elf(&elf_path("board"), "board-qemu.log")
+}
+
+fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
+    let log = target_dir().join(log_name);
     let _ = fs::remove_file(&log);
     let mut child = Command::new("qemu-system-arm")
         .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none", "-d", "unimp,guest_errors", "-D"])
         .arg(&log)
         .arg("-kernel")
-        .arg(elf_path("board"))
+        .arg(elf)
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -361,6 +367,41 @@ fn check_board_log(log: &str) -> Result<String, String> {
         ));
     }
     Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
+}
+
+/// The start-up flash CRC acts: a copy of the board ELF with one byte of .rodata flipped (the CRC
+/// word left as patched) must stop right after the boot's register set-up: the boot trace up to
+/// the brown-out read, then one write of both outputs low, and nothing after it (no tick, no
+/// de-energise by the library, no "go": the firmware is never built).
+fn check_board_corrupt() -> Result<String, String> {
+    use object::{Object, ObjectSection};
+    let good = elf_path("board");
+    let mut b = fs::read(&good).map_err(|e| format!("{}: {e}", good.display()))?;
+    let (_, crc_file, _) = flash_image(&b)?;
+    let off = {
+        let elf = object::File::parse(&*b).map_err(|e| format!("not an ELF object: {e}"))?;
+        let ro = elf.section_by_name(".rodata").ok_or("no .rodata in the board ELF")?;
+        let (start, size) = ro.file_range().ok_or(".rodata has no file data")?;
+        let mid = (start + size / 2) as usize;
+        if (crc_file..crc_file + 4).contains(&mid) { mid + 8 } else { mid }
+    };
+    b[off] ^= 0x01;
+    let bad = target_dir().join("board-corrupt.elf");
+    fs::write(&bad, &b).map_err(|e| format!("writing {}: {e}", bad.display()))?;
+    let log = run_board_elf(&bad, "board-corrupt.log")?;
+    let want = read_expected("firmware/qemu/board-boot.txt")?;
+    let upto = want.iter().position(|l| l.starts_with("Flash Int:")).ok_or("board-boot.txt has no brown-out read")? + 1;
+    let mut expected: Vec<String> = want[..upto].to_vec();
+    expected.push("GPIOD: unimplemented device write (size 4, offset 0x018, value 0x30000000)".into());
+    let got: Vec<&str> = log.lines().collect();
+    if got.len() != expected.len() || got.iter().zip(&expected).any(|(a, b)| a != b) {
+        return Err(format!(
+            "a board ELF with one flipped flash byte (file offset {off:#x}) did not stop after the boot:\n--- got (first 40)\n{}\n--- expected\n{}",
+            got.iter().take(40).copied().collect::<Vec<_>>().join("\n"),
+            expected.join("\n")
+        ));
+    }
+    Ok(format!("one flipped flash byte: stopped after {} boot accesses, outputs low, no tick in {} s", got.len(), BOARD_RUN.as_secs()))
 }
 
 /// The board's vector table (`__INTERRUPTS`): both switch channels' EXTI lines (EXTI0 = IRQ 6, PA0;
@@ -406,7 +447,7 @@ fn build_board_qemu_io() -> Result<(), String> {
         .status()
         .map_err(|e| format!("could not run cargo: {e}"))?;
     if status.success() {
-        Ok(())
+        patch_flash_crc(&qemu_io_dir().join(TARGET).join("release").join("board")).map(|_| ())
     } else {
         Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-io exited with {status}"))
     }
@@ -534,6 +575,63 @@ fn read_expected(rel: &str) -> Result<Vec<String>, String> {
     Ok(text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()).map(String::from).collect())
 }
 
+const FLASH_ORIGIN: u64 = 0x0800_0000;
+const FLASH_END: u64 = 0x0810_0000;
+
+/// The board ELF's flash image as the part holds it: every loaded section in flash at its address,
+/// and .data at its load address `__sidata`; from the start of flash to the end of .data's load
+/// image, which must be covered without gaps (the board's `flash_crc_ok` reads exactly that range).
+/// Returns the image, the file offset of `FLINCH_FLASH_CRC`, and its offset in the image.
+fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
+    use object::{Object, ObjectSection, ObjectSymbol, SectionKind};
+    let elf = object::File::parse(b).map_err(|e| format!("not an ELF object: {e}"))?;
+    let sym = |name: &str| {
+        elf.symbols().find(|s| s.name() == Ok(name)).map(|s| s.address()).ok_or_else(|| format!("no symbol {name} in the board ELF"))
+    };
+    let (sidata, sdata, edata, crc) = (sym("__sidata")?, sym("__sdata")?, sym("__edata")?, sym("FLINCH_FLASH_CRC")?);
+    let end = sidata + (edata - sdata);
+    let mut image = vec![None::<u8>; (end - FLASH_ORIGIN) as usize];
+    let mut crc_file = None;
+    for sec in elf.sections() {
+        if sec.size() == 0 || matches!(sec.kind(), SectionKind::UninitializedData | SectionKind::Metadata | SectionKind::Other | SectionKind::Debug) {
+            continue;
+        }
+        let name = sec.name().unwrap_or("?");
+        let at = if name == ".data" { sidata } else { sec.address() };
+        if !(FLASH_ORIGIN..FLASH_END).contains(&at) {
+            continue;
+        }
+        let data = sec.data().map_err(|e| format!("reading {name}: {e}"))?;
+        for (i, &byte) in data.iter().enumerate() {
+            let a = at + i as u64;
+            if a >= end {
+                return Err(format!("section {name} reaches past the end of .data's load image ({end:#x})"));
+            }
+            image[(a - FLASH_ORIGIN) as usize] = Some(byte);
+        }
+        if (sec.address()..sec.address() + sec.size()).contains(&crc) {
+            let (off, _) = sec.file_range().ok_or("FLINCH_FLASH_CRC's section has no file data")?;
+            crc_file = Some((off + (crc - sec.address())) as usize);
+        }
+    }
+    if let Some(gap) = image.iter().position(Option::is_none) {
+        return Err(format!("the board's flash image has a gap at {:#x}: the CRC range is not contiguous", FLASH_ORIGIN + gap as u64));
+    }
+    let image: Vec<u8> = image.into_iter().flatten().collect();
+    Ok((image, crc_file.ok_or("FLINCH_FLASH_CRC is not in a flash section")?, (crc - FLASH_ORIGIN) as usize))
+}
+
+/// Write the flash image's CRC-32 (`flinch_firmware::integrity::image_crc`, the routine the board
+/// runs at start-up) into the ELF's `FLINCH_FLASH_CRC`. Idempotent: the word itself counts as zeros.
+fn patch_flash_crc(path: &Path) -> Result<u32, String> {
+    let mut b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let (image, file_off, crc_at) = flash_image(&b).map_err(|e| format!("{}: {e}", path.display()))?;
+    let crc = flinch_firmware::integrity::image_crc(&image, crc_at);
+    b[file_off..file_off + 4].copy_from_slice(&crc.to_le_bytes());
+    fs::write(path, &b).map_err(|e| format!("writing {}: {e}", path.display()))?;
+    Ok(crc)
+}
+
 fn target_installed() -> bool {
     // The target's standard library exists when `rustc --print target-libdir` names a real directory.
     let out = Command::new(env::var("RUSTC").unwrap_or_else(|_| "rustc".into()))
@@ -557,7 +655,7 @@ fn build_firmware() -> Result<(), String> {
         .status()
         .map_err(|e| format!("could not run cargo: {e}"))?;
     if status.success() {
-        Ok(())
+        patch_flash_crc(&elf_path("board")).map(|_| ())
     } else {
         Err(format!("cargo build --release --target {TARGET} (in firmware/) exited with {status}"))
     }

@@ -67,6 +67,7 @@ mod board {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
+    use flinch_firmware::integrity;
     use flinch_firmware::{
         Boot, BudgetConfig, Cause, Clock, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
         SwitchKind,
@@ -247,6 +248,96 @@ mod board {
         bsrr(GPIOD, (1 << (12 + 16)) | (1 << (13 + 16)));
     }
 
+    // ---- Start-up integrity checks (`flinch_firmware::integrity`) ---------------------------------
+    /// The CRC-32 of the flash image with this word counted as zeros; written into the ELF after the
+    /// link by `cargo xtask` (`patch_flash_crc`). An image that was not patched (0) or was changed
+    /// after patching fails the check and never arms.
+    #[no_mangle]
+    #[used]
+    static FLINCH_FLASH_CRC: u32 = 0;
+
+    extern "C" {
+        // cortex-m-rt's linker script (link.x): .data's run and load addresses, the end of .bss.
+        static mut __sdata: u32;
+        static mut __edata: u32;
+        static mut __ebss: u32;
+        static __sidata: u32;
+    }
+    const FLASH_START: u32 = 0x0800_0000;
+    const RAM_START: u32 = 0x2000_0000;
+    /// Stack kept out of the RAM test: main's and the test's own frames live there.
+    const STACK_KEEP: u32 = 1024;
+
+    /// The flash image: the vector table, .text and .rodata (contiguous from the start of flash, as
+    /// cortex-m-rt's link.x lays them out and xtask checks), then .data's load image.
+    fn flash_crc_ok() -> bool {
+        let end = core::ptr::addr_of!(__sidata) as u32 + (core::ptr::addr_of!(__edata) as u32 - core::ptr::addr_of!(__sdata) as u32);
+        let crc_at = core::ptr::addr_of!(FLINCH_FLASH_CRC) as u32;
+        // SAFETY: flash from its start to the end of .data's load image: mapped, read-only,
+        // never written while running.
+        let image = unsafe { core::slice::from_raw_parts(FLASH_START as *const u8, (end - FLASH_START) as usize) };
+        // SAFETY: a static in flash; volatile so that the compiler does not fold in the 0 it was
+        // linked with (xtask patched the ELF afterwards).
+        let stored = unsafe { read_volatile(core::ptr::addr_of!(FLINCH_FLASH_CRC)) };
+        integrity::image_crc(image, (crc_at - FLASH_START) as usize) == stored
+    }
+
+    /// March C- with four data backgrounds over the RAM the firmware will use: .data and .bss, and
+    /// the stack region below the frames in use now (flip-link puts the stack at the bottom of RAM);
+    /// not the retained latch (.uninit, after .bss) and not the top `STACK_KEEP` bytes of the stack.
+    /// Restores .data from its load image afterwards (the test leaves zeros, which is .bss's value).
+    ///
+    /// # Safety
+    /// Only as the first thing in `main`: no reference to a static may be live.
+    unsafe fn ram_test() -> bool {
+        let sdata = core::ptr::addr_of_mut!(__sdata);
+        let data_words = (core::ptr::addr_of!(__edata) as usize - sdata as usize) / 4;
+        let ram_words = (core::ptr::addr_of!(__ebss) as usize - sdata as usize) / 4;
+        let sp = cortex_m::register::msp::read();
+        let stack_words = (sp.saturating_sub(STACK_KEEP).saturating_sub(RAM_START) / 4) as usize;
+        let statics_ok = integrity::march_c_minus(&mut integrity::RawRam::new(sdata, ram_words), &integrity::BACKGROUNDS).is_ok();
+        let stack_ok = integrity::march_c_minus(&mut integrity::RawRam::new(RAM_START as *mut u32, stack_words), &integrity::BACKGROUNDS).is_ok();
+        let sidata = core::ptr::addr_of!(__sidata);
+        for i in 0..data_words {
+            write_volatile(sdata.wrapping_add(i), read_volatile(sidata.wrapping_add(i)));
+        }
+        statics_ok && stack_ok
+    }
+
+    const FLASH_OPTKEYR: u32 = 0x4002_3C08; // RM0090 sec. 3.9.3
+    const FLASH_SR: u32 = 0x4002_3C0C; // sec. 3.9.4
+    const FLASH_OPTCR: u32 = 0x4002_3C14; // sec. 3.9.6
+    const FLASH_SR_BSY: u32 = 1 << 16;
+    const OPTCR_OPTLOCK: u32 = 1 << 0;
+    const OPTCR_OPTSTRT: u32 = 1 << 1;
+    /// BOR_LEV = 00: BOR level 3, the highest threshold (about 2.7 V, DS8626 "BOR thresholds").
+    const BOR_LEV_MASK: u32 = 0b11 << 2;
+    const BOR_LEV_3: u32 = 0b00 << 2;
+
+    /// The brown-out reset at level 3 (the factory default is off, BOR_LEV = 11): read the option
+    /// byte; if it differs, program BOR_LEV alone (read-modify-write: read protection, write
+    /// protection and the user bits are kept), wait for the flash interface, relock, read again.
+    /// False if it still differs. Programming happens once in the life of a part, not at every start.
+    fn brown_out_level_set() -> bool {
+        let optcr = rd(FLASH_OPTCR);
+        if optcr & BOR_LEV_MASK == BOR_LEV_3 {
+            return true;
+        }
+        wr(FLASH_OPTKEYR, 0x0819_2A3B);
+        wr(FLASH_OPTKEYR, 0x4C5D_6E7F);
+        wr(FLASH_OPTCR, (rd(FLASH_OPTCR) & !BOR_LEV_MASK) | BOR_LEV_3);
+        modify(FLASH_OPTCR, 0, OPTCR_OPTSTRT);
+        // Bounded wait; the IWDG (started, 8 ms) is fed meanwhile so that it cannot reset the part
+        // in the middle of an option byte write.
+        let mut spins: u32 = 0;
+        while rd(FLASH_SR) & FLASH_SR_BSY != 0 && spins < 10_000_000 {
+            wr(IWDG_KR, 0xAAAA);
+            spins = spins.wrapping_add(1);
+        }
+        modify(FLASH_OPTCR, 0, OPTCR_OPTLOCK);
+        rd(FLASH_OPTCR) & BOR_LEV_MASK == BOR_LEV_3
+    }
+
     /// The latch that survives a reset: not zeroed by the start-up code (cortex-m-rt `.uninit`).
     #[link_section = ".uninit.flinch_retained"]
     static mut RETAINED: core::mem::MaybeUninit<[u32; 4]> = core::mem::MaybeUninit::uninit();
@@ -273,6 +364,11 @@ mod board {
 
     #[entry]
     fn main() -> ! {
+        // First, before anything uses RAM: the start-up integrity checks (`flinch_firmware::integrity`).
+        // SAFETY: nothing has used .data/.bss yet (no reference to a static is live); `ram_test`
+        // restores .data and leaves .bss zeroed, as the start-up code left them.
+        let ram_ok = unsafe { ram_test() };
+        let flash_ok = flash_crc_ok();
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
             emergency_stop();
         });
@@ -299,6 +395,18 @@ mod board {
         // Why did the part reset? Read the flags, then clear them so the next reset reads its own.
         let cause = ResetCause::from_rcc_csr(rd(RCC_CSR));
         modify(RCC_CSR, 0, RCC_CSR_RMVF);
+        let bor_ok = brown_out_level_set();
+        if !(ram_ok && flash_ok && bor_ok) {
+            // Never build the firmware on bad memory: outputs low (they already are, and are
+            // outputs now), latch SelfCheck for the next start, and wait for the IWDG, which is
+            // running and never fed here: the part resets and checks again.
+            emergency_stop();
+            let boots = retained_load().words[2];
+            retained_store(Retained::new(Some(Cause::SelfCheck), boots));
+            loop {
+                cortex_m::asm::wfi();
+            }
+        }
         let boot = Boot { cause, retained: retained_load() };
 
         let sensor = DualSwitch::new(In::<GPIOA, 0>, SWITCH_KIND, In::<GPIOA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
