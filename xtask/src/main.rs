@@ -22,8 +22,11 @@
 //!   there a missing target, QEMU or tool is a failure, never a quiet pass.
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
-//! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stage
-//!   "board ELF in QEMU" of `cargo xtask test`).
+//! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stages
+//!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop; and
+//!   "board ELF edge in QEMU": the `qemu-io` build's edges against `firmware/qemu/board-edge.txt`).
+//!
+//! Every build of the firmware patches the board ELF's flash CRC (`patch_flash_crc`).
 
 use std::env;
 use std::fs;

@@ -30,6 +30,11 @@
 //! HardFault and default (NMI, any unexpected interrupt) handlers write the stop and escalation pins
 //! low before anything else and record `Cause::FaultHandler` in the retained latch.
 //!
+//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, a March C- RAM test over
+//! .data/.bss and the stack region, then a CRC-32 of the flash image against `FLINCH_FLASH_CRC`
+//! (patched into the ELF by `cargo xtask`), and after the register set-up the brown-out level
+//! (BOR level 3, programmed once if the option byte differs). A failure never builds the firmware.
+//!
 //! Resets (`flinch_firmware::reset`): `main` reads why the part reset from `RCC_CSR` (then clears the
 //! flags with RMVF) and the retained latch from `RETAINED`, four words in cortex-m-rt's `.uninit`
 //! section, which the start-up code does not zero: it survives watchdog, software, pin and fault
