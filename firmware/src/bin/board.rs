@@ -462,8 +462,67 @@ mod board {
         #[cfg(feature = "qemu-io")]
         super::bench::run_scenario(|| rd(TIM2_CNT));
         #[cfg(not(feature = "qemu-io"))]
-        loop {
-            cortex_m::asm::wfi();
+        {
+            let mut drain = LogDrain { next_seq: 0, state: None };
+            loop {
+                drain.run();
+                cortex_m::asm::wfi();
+            }
+        }
+    }
+
+    /// Logging from thread mode only. The library's own messages are compiled out on the board
+    /// (`DEFMT_LOG` in firmware/.cargo/config.toml: `flinch_firmware=off`), because they would run in
+    /// the tick and the bookkeeping interrupts; instead the tick and the bookkeeping fill the
+    /// firmware's event log (a fixed 16-entry ring, `EventLog`) and this drain, in thread mode between
+    /// ticks, copies the new entries and the state out under a priority ceiling (BASEPRI = the tick's
+    /// priority: the tick and the bookkeeping cannot run meanwhile, the edge interrupt still can) and
+    /// logs them afterwards, with every interrupt enabled. defmt-rtt runs with `drop-on-contention`
+    /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
+    /// truncates the message; only an attached probe-rs switches it to blocking).
+    #[cfg(not(feature = "qemu-io"))]
+    struct LogDrain {
+        next_seq: u16,
+        state: Option<flinch_firmware::State>,
+    }
+
+    #[cfg(not(feature = "qemu-io"))]
+    impl LogDrain {
+        fn run(&mut self) {
+            let mut batch: heapless::Vec<flinch_firmware::TripEvent, 16> = heapless::Vec::new();
+            // SAFETY: BASEPRI = PRIO_TICK masks SysTick and the bookkeeping, FW's only other users
+            // (the edge, at priority 0, never touches FW), so this is the one reference meanwhile.
+            let state = unsafe {
+                cortex_m::register::basepri::write(PRIO_TICK);
+                let fw = FW.get();
+                for e in fw.log().iter().filter(|e| e.seq.wrapping_sub(self.next_seq) < 0x8000) {
+                    let _ = batch.push(*e);
+                }
+                let state = fw.state();
+                cortex_m::register::basepri::write(0);
+                state
+            };
+            for e in &batch {
+                defmt::warn!(
+                    "event {=u16}: {=str} flags {=u8:#x} at {=u32} us (first seen {=u32} us), travel {=i32} um",
+                    e.seq,
+                    e.cause.name(),
+                    e.flags,
+                    e.at.0,
+                    e.first_seen.0,
+                    e.travel_um
+                );
+                self.next_seq = e.seq.wrapping_add(1);
+            }
+            if self.state != Some(state) {
+                self.state = Some(state);
+                match state {
+                    flinch_firmware::State::SelfTest(_) => defmt::info!("state: self-test"),
+                    flinch_firmware::State::Armed => defmt::info!("state: armed"),
+                    flinch_firmware::State::Tripped => defmt::warn!("state: tripped (stopped)"),
+                    flinch_firmware::State::Fault(c) => defmt::warn!("state: fault {=str} (stopped)", c.name()),
+                }
+            }
         }
     }
 
