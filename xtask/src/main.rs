@@ -564,7 +564,7 @@ fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
             }
         }
     }
-    let ticks = rest.iter().filter(|l| l.ends_with("value 0x0000aaaa)")).count();
+    let ticks = rest.iter().filter(|l| l.starts_with("I2S2ext:") && (l.ends_with("value 0xaaaa)") || l.ends_with("value 0x0000aaaa)"))).count();
     Ok(format!(
         "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks",
         got.len()

@@ -78,38 +78,48 @@ mod board {
         SwitchKind,
     };
 
-    // ---- Registers (RM0090 Rev 19) --------------------------------------------------------------
-    const RCC: u32 = 0x4002_3800; // sec. 7.3
-    const RCC_AHB1ENR: u32 = RCC + 0x30;
-    const RCC_APB1ENR: u32 = RCC + 0x40;
-    const RCC_APB2ENR: u32 = RCC + 0x44;
-    const RCC_CSR: u32 = RCC + 0x74; // sec. 7.3.21: reset flags
-    const RCC_CSR_RMVF: u32 = 1 << 24;
-    const GPIOA: u32 = 0x4002_0000; // sec. 8.4
+    // ---- Registers: the `stm32f4` PAC (feature stm32f407, generated from ST's SVD; RM0090 Rev 19) ---
+    use stm32f4::stm32f407 as pac;
+    /// GPIOA's and GPIOD's base addresses (RM0090 sec. 2.3), as the pins' const-generic port; the
+    /// registers behind them are the PAC's (`gpio`).
+    const GPIOA: u32 = 0x4002_0000;
     const GPIOD: u32 = 0x4002_0C00;
-    const MODER: u32 = 0x00;
-    const PUPDR: u32 = 0x0C;
-    const IDR: u32 = 0x10;
-    const BSRR: u32 = 0x18;
-    const SYSCFG_EXTICR1: u32 = 0x4001_3800 + 0x08; // sec. 9.2.3
-    const EXTI: u32 = 0x4001_3C00; // sec. 12.3
-    const EXTI_IMR: u32 = EXTI;
-    const EXTI_RTSR: u32 = EXTI + 0x08;
-    const EXTI_FTSR: u32 = EXTI + 0x0C;
-    const EXTI_PR: u32 = EXTI + 0x14;
-    const TIM2: u32 = 0x4000_0000; // sec. 18.4
-    const TIM2_CR1: u32 = TIM2;
-    const TIM2_EGR: u32 = TIM2 + 0x14;
-    const TIM2_CNT: u32 = TIM2 + 0x24;
-    const TIM2_PSC: u32 = TIM2 + 0x28;
-    const TIM2_ARR: u32 = TIM2 + 0x2C;
-    const IWDG_KR: u32 = 0x4000_3000; // sec. 21.4
-    const IWDG_PR: u32 = 0x4000_3004;
-    const IWDG_RLR: u32 = 0x4000_3008;
-    const ODR: u32 = 0x14;
+
+    /// The PAC's register blocks. SAFETY (all of them): fixed peripheral addresses of this part,
+    /// valid for the whole program; every access through them is a volatile register access.
+    #[inline(always)]
+    fn rcc() -> &'static pac::rcc::RegisterBlock {
+        unsafe { &*pac::RCC::ptr() }
+    }
+    #[inline(always)]
+    fn tim2() -> &'static pac::tim2::RegisterBlock {
+        unsafe { &*pac::TIM2::ptr() }
+    }
+    #[inline(always)]
+    fn iwdg() -> &'static pac::iwdg::RegisterBlock {
+        unsafe { &*pac::IWDG::ptr() }
+    }
+    #[inline(always)]
+    fn exti() -> &'static pac::exti::RegisterBlock {
+        unsafe { &*pac::EXTI::ptr() }
+    }
+    #[inline(always)]
+    fn syscfg() -> &'static pac::syscfg::RegisterBlock {
+        unsafe { &*pac::SYSCFG::ptr() }
+    }
+    #[inline(always)]
+    fn flash() -> &'static pac::flash::RegisterBlock {
+        unsafe { &*pac::FLASH::ptr() }
+    }
+    /// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4; `PORT` is GPIOA or
+    /// GPIOD above). Only MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so
+    /// GPIOA's reset values in the PAC's type never leak into another port.
+    #[inline(always)]
+    fn gpio(port: u32) -> &'static pac::gpioa::RegisterBlock {
+        unsafe { &*(port as *const pac::gpioa::RegisterBlock) }
+    }
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
     const EXTI4_IRQ: u16 = 10;
-    const SYSCFG_EXTICR2: u32 = 0x4001_3800 + 0x0C; // sec. 9.2.4: EXTI4..7
     /// The bookkeeping interrupt: UART5's line (RM0090 Table 61), pended by software only.
     const BOOK_IRQ: u16 = 53;
     /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
@@ -129,42 +139,29 @@ mod board {
     const TIM2_HZ: u32 = 1_000_000_000;
     const TICK_US: u32 = 1_000;
 
-    #[inline(always)]
-    fn rd(addr: u32) -> u32 {
-        // SAFETY: `addr` is one of the register constants above, valid and aligned on this part.
-        unsafe { read_volatile(addr as *const u32) }
-    }
-    #[inline(always)]
-    fn wr(addr: u32, v: u32) {
-        // SAFETY: as for `rd`; the registers written here have no memory-safety side effects.
-        unsafe { write_volatile(addr as *mut u32, v) }
-    }
-    fn modify(addr: u32, clear: u32, set: u32) {
-        wr(addr, (rd(addr) & !clear) | set);
-    }
-
     // ---- The three pin accesses: GPIO in the production build, the QEMU bench's RAM with
     // `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_bench.rs`) -------------------
     /// A port's input register.
     #[inline(always)]
     fn idr(port: u32) -> u32 {
         #[cfg(not(feature = "qemu-io"))]
-        return rd(port + IDR);
+        return gpio(port).idr().read().bits();
         #[cfg(feature = "qemu-io")]
-        return if port == GPIOA { super::bench::PINS.load(Relaxed) } else { rd(port + IDR) };
+        return if port == GPIOA { super::bench::PINS.load(Relaxed) } else { gpio(port).idr().read().bits() };
     }
     /// A port's output register (the stop's read-back).
     #[inline(always)]
     fn odr(port: u32) -> u32 {
         #[cfg(not(feature = "qemu-io"))]
-        return rd(port + ODR);
+        return gpio(port).odr().read().bits();
         #[cfg(feature = "qemu-io")]
-        return if port == GPIOD { super::bench::ODR_D.load(Relaxed) } else { rd(port + ODR) };
+        return if port == GPIOD { super::bench::ODR_D.load(Relaxed) } else { gpio(port).odr().read().bits() };
     }
     /// A write to a port's bit set/reset register.
     #[inline(always)]
     fn bsrr(port: u32, v: u32) {
-        wr(port + BSRR, v);
+        // SAFETY: BSRR takes any bit pattern (a set or reset request per pin).
+        gpio(port).bsrr().write(|w| unsafe { w.bits(v) });
         #[cfg(feature = "qemu-io")]
         if port == GPIOD {
             super::bench::bsrr(v);
@@ -210,7 +207,7 @@ mod board {
     impl Clock for Tim2 {
         #[inline(always)]
         fn now(&mut self) -> Micros {
-            Micros(rd(TIM2_CNT))
+            Micros(tim2().cnt().read().bits())
         }
     }
 
@@ -245,7 +242,7 @@ mod board {
     static EDGE_STOPPED: AtomicBool = AtomicBool::new(false);
     static EDGE_AT: AtomicU32 = AtomicU32::new(0);
 
-    defmt::timestamp!("{=u32:us}", rd(TIM2_CNT));
+    defmt::timestamp!("{=u32:us}", tim2().cnt().read().bits());
 
     /// Drop both outputs with raw register writes (usable from any context, even before init).
     #[inline(always)]
@@ -309,38 +306,33 @@ mod board {
         statics_ok && stack_ok
     }
 
-    const FLASH_OPTKEYR: u32 = 0x4002_3C08; // RM0090 sec. 3.9.3
-    const FLASH_SR: u32 = 0x4002_3C0C; // sec. 3.9.4
-    const FLASH_OPTCR: u32 = 0x4002_3C14; // sec. 3.9.6
-    const FLASH_SR_BSY: u32 = 1 << 16;
-    const OPTCR_OPTLOCK: u32 = 1 << 0;
-    const OPTCR_OPTSTRT: u32 = 1 << 1;
-    /// BOR_LEV = 00: BOR level 3, the highest threshold (about 2.7 V, DS8626 "BOR thresholds").
-    const BOR_LEV_MASK: u32 = 0b11 << 2;
-    const BOR_LEV_3: u32 = 0b00 << 2;
+    /// BOR_LEV = 00: BOR level 3, the highest threshold (about 2.7 V, DS8626 "BOR thresholds");
+    /// FLASH_OPTCR, RM0090 sec. 3.9.6.
+    const BOR_LEV_3: u8 = 0b00;
 
     /// The brown-out reset at level 3 (the factory default is off, BOR_LEV = 11): read the option
     /// byte; if it differs, program BOR_LEV alone (read-modify-write: read protection, write
     /// protection and the user bits are kept), wait for the flash interface, relock, read again.
     /// False if it still differs. Programming happens once in the life of a part, not at every start.
     fn brown_out_level_set() -> bool {
-        let optcr = rd(FLASH_OPTCR);
-        if optcr & BOR_LEV_MASK == BOR_LEV_3 {
+        let f = flash();
+        if f.optcr().read().bor_lev().bits() == BOR_LEV_3 {
             return true;
         }
-        wr(FLASH_OPTKEYR, 0x0819_2A3B);
-        wr(FLASH_OPTKEYR, 0x4C5D_6E7F);
-        wr(FLASH_OPTCR, (rd(FLASH_OPTCR) & !BOR_LEV_MASK) | BOR_LEV_3);
-        modify(FLASH_OPTCR, 0, OPTCR_OPTSTRT);
+        // SAFETY (both): the unlock keys of RM0090 sec. 3.6.2 and a valid BOR_LEV value.
+        f.optkeyr().write(|w| unsafe { w.optkeyr().bits(0x0819_2A3B) });
+        f.optkeyr().write(|w| unsafe { w.optkeyr().bits(0x4C5D_6E7F) });
+        f.optcr().modify(|_, w| unsafe { w.bor_lev().bits(BOR_LEV_3) });
+        f.optcr().modify(|_, w| w.optstrt().set_bit());
         // Bounded wait; the IWDG (started, 8 ms) is fed meanwhile so that it cannot reset the part
         // in the middle of an option byte write.
         let mut spins: u32 = 0;
-        while rd(FLASH_SR) & FLASH_SR_BSY != 0 && spins < 10_000_000 {
-            wr(IWDG_KR, 0xAAAA);
+        while f.sr().read().bsy().bit_is_set() && spins < 10_000_000 {
+            iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
             spins = spins.wrapping_add(1);
         }
-        modify(FLASH_OPTCR, 0, OPTCR_OPTLOCK);
-        rd(FLASH_OPTCR) & BOR_LEV_MASK == BOR_LEV_3
+        f.optcr().modify(|_, w| w.optlock().set_bit());
+        f.optcr().read().bor_lev().bits() == BOR_LEV_3
     }
 
     /// The latch that survives a reset: not zeroed by the start-up code (cortex-m-rt `.uninit`).
@@ -378,28 +370,31 @@ mod board {
             emergency_stop();
         });
         // Clocks for GPIOA, GPIOD, TIM2, SYSCFG.
-        modify(RCC_AHB1ENR, 0, (1 << 0) | (1 << 3));
-        modify(RCC_APB1ENR, 0, 1 << 0);
-        modify(RCC_APB2ENR, 0, 1 << 14);
+        rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioden().set_bit());
+        rcc().apb1enr().modify(|_, w| w.tim2en().set_bit());
+        rcc().apb2enr().modify(|_, w| w.syscfgen().set_bit());
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
-        modify(GPIOD + MODER, 0b11_11_11 << 24, 0b01_01_01 << 24); // PD12..14 output
-        modify(GPIOA + MODER, 0x3FF, 0); // PA0..PA4 input
-        modify(GPIOA + PUPDR, 0x3FF, 0b01_10_10_10_10); // PA0..PA3 pull-down, PA4 pull-up
+        // SAFETY (the three): two-bit mode fields, 0b01 = output, 0b00 = input; pull 0b10 = down, 0b01 = up.
+        gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) }); // PD12..14 output
+        gpio(GPIOA).moder().modify(|r, w| unsafe { w.bits(r.bits() & !0x3FF) }); // PA0..PA4 input
+        gpio(GPIOA).pupdr().modify(|r, w| unsafe { w.bits((r.bits() & !0x3FF) | 0b01_10_10_10_10) }); // PA0..PA3 pull-down, PA4 pull-up
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
-        wr(TIM2_PSC, TIM2_HZ / 1_000_000 - 1);
-        wr(TIM2_ARR, u32::MAX);
-        wr(TIM2_EGR, 1); // load the prescaler
-        wr(TIM2_CR1, 1);
+        // SAFETY: PSC is 16 bits (15 here, 999 in the qemu-io build); ARR takes any 32-bit value.
+        tim2().psc().write(|w| unsafe { w.psc().bits((TIM2_HZ / 1_000_000 - 1) as u16) });
+        tim2().arr().write(|w| unsafe { w.arr().bits(u32::MAX) });
+        tim2().egr().write(|w| w.ug().set_bit()); // load the prescaler
+        tim2().cr1().write(|w| w.cen().set_bit());
         // Independent watchdog: LSI ~32 kHz / 4 = 8 kHz, reload 64 -> about 8 ms.
-        wr(IWDG_KR, 0x5555);
-        wr(IWDG_PR, 0);
-        wr(IWDG_RLR, 64);
-        wr(IWDG_KR, 0xCCCC);
+        // SAFETY: the key values of RM0090 sec. 21.4.1, prescaler /4 (0), a 12-bit reload.
+        iwdg().kr().write(|w| unsafe { w.key().bits(0x5555) });
+        iwdg().pr().write(|w| unsafe { w.pr().bits(0) });
+        iwdg().rlr().write(|w| unsafe { w.rl().bits(64) });
+        iwdg().kr().write(|w| unsafe { w.key().bits(0xCCCC) });
 
         // Why did the part reset? Read the flags, then clear them so the next reset reads its own.
-        let cause = ResetCause::from_rcc_csr(rd(RCC_CSR));
-        modify(RCC_CSR, 0, RCC_CSR_RMVF);
+        let cause = ResetCause::from_rcc_csr(rcc().csr().read().bits());
+        rcc().csr().modify(|_, w| w.rmvf().set_bit());
         let bor_ok = brown_out_level_set();
         if !(ram_ok && flash_ok && bor_ok) {
             // Never build the firmware on bad memory: outputs low (they already are, and are
@@ -433,11 +428,12 @@ mod board {
         }
 
         // EXTI0 <- PA0, EXTI4 <- PA4 (EXTICRx field 0 is port A), both edges.
-        modify(SYSCFG_EXTICR1, 0xF, 0);
-        modify(SYSCFG_EXTICR2, 0xF, 0);
-        modify(EXTI_RTSR, 0, 0b1_0001);
-        modify(EXTI_FTSR, 0, 0b1_0001);
-        modify(EXTI_IMR, 0, 0b1_0001);
+        // SAFETY (both): field value 0 selects port A.
+        syscfg().exticr1().modify(|_, w| unsafe { w.exti0().bits(0) });
+        syscfg().exticr2().modify(|_, w| unsafe { w.exti4().bits(0) });
+        exti().rtsr().modify(|_, w| w.tr0().set_bit().tr4().set_bit());
+        exti().ftsr().modify(|_, w| w.tr0().set_bit().tr4().set_bit());
+        exti().imr().modify(|_, w| w.mr0().set_bit().mr4().set_bit());
         // The edge above the tick and the bookkeeping, set before any of them can run.
         // SAFETY: priorities only; the sharing they allow is the one described at the top.
         unsafe {
@@ -460,7 +456,7 @@ mod board {
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
         #[cfg(feature = "qemu-io")]
-        super::bench::run_scenario(|| rd(TIM2_CNT));
+        super::bench::run_scenario(|| tim2().cnt().read().bits());
         #[cfg(not(feature = "qemu-io"))]
         {
             let mut drain = LogDrain { next_seq: 0, state: None };
@@ -565,11 +561,12 @@ mod board {
             && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B)
         {
             bsrr(GPIOD, 1 << (12 + 16)); // the stop
-            wr(EXTI_PR, line); // right after the stop write: a new edge from here on pends again
-            EDGE_AT.store(rd(TIM2_CNT), Relaxed);
+            // SAFETY (both PR writes): one pending bit, write 1 to clear.
+            exti().pr().write(|w| unsafe { w.bits(line) }); // right after the stop write: a new edge from here on pends again
+            EDGE_AT.store(tim2().cnt().read().bits(), Relaxed);
             EDGE_STOPPED.store(true, Relaxed);
         } else {
-            wr(EXTI_PR, line);
+            exti().pr().write(|w| unsafe { w.bits(line) });
         }
         NVIC::pend(Book);
     }
@@ -593,7 +590,7 @@ mod board {
         let fw = unsafe { FW.get() };
         fw.tick();
         retained_store(fw.retained());
-        wr(IWDG_KR, 0xAAAA); // the tick ran: feed the watchdog
+        iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) }); // the tick ran: feed the watchdog (SAFETY: the reload key)
     }
 
     #[exception]
