@@ -428,14 +428,14 @@ fn check_board_vectors(path: &Path) -> Result<String, String> {
         let w = data.get(off..off + 4).ok_or("vector table truncated")?;
         Ok(u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) & !1)
     };
-    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)")] {
+    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)"), (50, "tim5_entry", "TIM5 (the LSI capture, clock check)")] {
         let want = sym(handler).ok_or_else(|| format!("no {handler} in the board ELF"))? & !1;
         let got = entry(irq)?;
         if got != want {
             return Err(format!("vector {irq}, {what}: {got:#x}, want {handler} at {want:#x}"));
         }
     }
-    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping".into())
+    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping, TIM5 -> LSI capture".into())
 }
 
 /// The `qemu-io` build of the board binary (`firmware/src/bin/support/board_bench.rs`): the same
@@ -492,6 +492,7 @@ fn bench_marker(v: u32) -> &'static str {
         6 => "edge on channel B pended (EXTI4)",
         7 => "edge on channel A pended (EXTI0)",
         8 => "end",
+        9 => "the LSI stops (the clock check's reference)",
         _ => "unknown marker",
     }
 }

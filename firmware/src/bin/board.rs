@@ -74,7 +74,7 @@ mod board {
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
     use flinch_firmware::integrity;
     use flinch_firmware::{
-        Boot, BudgetConfig, Cause, Clock, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
+        Boot, BudgetConfig, Cause, Clock, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
         SwitchKind,
     };
 
@@ -100,6 +100,10 @@ mod board {
         unsafe { &*pac::IWDG::ptr() }
     }
     #[inline(always)]
+    fn tim5() -> &'static pac::tim5::RegisterBlock {
+        unsafe { &*pac::TIM5::ptr() }
+    }
+    #[inline(always)]
     fn exti() -> &'static pac::exti::RegisterBlock {
         unsafe { &*pac::EXTI::ptr() }
     }
@@ -122,6 +126,8 @@ mod board {
     const EXTI4_IRQ: u16 = 10;
     /// The bookkeeping interrupt: UART5's line (RM0090 Table 61), pended by software only.
     const BOOK_IRQ: u16 = 53;
+    /// TIM5's line (RM0090 Table 61): its channel 4 captures the LSI (the clock check's reference).
+    const TIM5_IRQ: u16 = 50;
     /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
     const PRIO_EDGE: u8 = 0x00;
     const PRIO_TICK: u8 = 0x80;
@@ -209,6 +215,34 @@ mod board {
         fn now(&mut self) -> Micros {
             Micros(tim2().cnt().read().bits())
         }
+        /// LSI periods counted by TIM5's channel 4 (`lsi_capture`): the independent reference.
+        fn reference_ticks(&mut self) -> Option<u32> {
+            Some(LSI_PERIODS.load(Relaxed))
+        }
+    }
+
+    /// The clock check's reference: the LSI (the IWDG's own RC oscillator, independent of the HSI
+    /// behind TIM2 and SysTick). The F4 can only route it to TIM5's channel 4 capture input
+    /// (`TIM5_OR.TI4_RMP = 01`, RM0090 sec. 18.4.21), which timestamps edges and does not count
+    /// them; the counting adapter is the capture interrupt: every 8th LSI rising edge
+    /// (`IC4PSC = /8`) captures, and `lsi_capture` adds 8 (16 if the capture before was overwritten).
+    /// 4 kHz of a short interrupt at the tick's priority, below the edge.
+    static LSI_PERIODS: AtomicU32 = AtomicU32::new(0);
+    /// Nominal LSI, hertz; DS8626 specifies 17 to 47 kHz, hence the wide tolerance in `config`.
+    const LSI_HZ: u32 = 32_000;
+
+    fn lsi_capture() {
+        let t = tim5();
+        let _ = t.ccr4().read(); // reading CCR4 clears CC4IF
+        let sr = t.sr().read().bits();
+        let mut n = 8;
+        if sr & (1 << 12) != 0 {
+            // CC4OF: a capture was overwritten before this one was read: 8 more periods.
+            n += 8;
+            // SAFETY: rc_w0 flags: write 0 to CC4OF only, 1 elsewhere leaves the others.
+            t.sr().write(|w| unsafe { w.bits(!(1 << 12)) });
+        }
+        LSI_PERIODS.fetch_add(n, Relaxed);
     }
 
     type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
@@ -220,10 +254,15 @@ mod board {
     /// cycle), d_sw = 5 mm (Ch. 3 simulations); deceleration 1 m/s^2 and a 10 mm stroke are
     /// placeholders for the robot's braking and the module's C1 + C2.
     const fn config() -> Config {
-        Config::new(
+        let mut c = Config::new(
             TICK_US,
             BudgetConfig { robot_speed_um_per_s: 50_000, dead_time_us: 16_000, decel_um_per_s2: 1_000_000, stroke_um: 10_000 },
-        )
+        );
+        // The LSI's spread (17..47 kHz around 32 kHz, DS8626) sets the tolerance: +-50 % catches a
+        // stopped, halved or doubled HSI or a wrong prescaler, not a drift of a few percent (that
+        // needs an HSE crystal as the reference). 100 ms windows: about 3,200 LSI periods each.
+        c.clock_check = Some(ClockCheck { reference_hz: LSI_HZ, window_us: 100_000, tolerance_pct: 50 });
+        c
     }
     const SWITCH_TRAVEL_UM: i32 = 5_000;
     /// Channel A (PA0): the inductive switch, high at rest, low when tripped (a cut wire too).
@@ -371,7 +410,7 @@ mod board {
         });
         // Clocks for GPIOA, GPIOD, TIM2, SYSCFG.
         rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioden().set_bit());
-        rcc().apb1enr().modify(|_, w| w.tim2en().set_bit());
+        rcc().apb1enr().modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
         rcc().apb2enr().modify(|_, w| w.syscfgen().set_bit());
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
@@ -385,6 +424,16 @@ mod board {
         tim2().arr().write(|w| unsafe { w.arr().bits(u32::MAX) });
         tim2().egr().write(|w| w.ug().set_bit()); // load the prescaler
         tim2().cr1().write(|w| w.cen().set_bit());
+        // TIM5 channel 4 captures every 8th rising edge of the LSI (remap TI4 <- LSI); the LSI itself
+        // runs once the IWDG is started below, LSION makes it explicit.
+        rcc().csr().modify(|_, w| w.lsion().set_bit());
+        // SAFETY (all): field values of RM0090 sec. 18.4: TI4_RMP 01 = LSI, CC4S 01 = input TI4,
+        // IC4PSC 11 = every 8th edge.
+        tim5().or().write(|w| unsafe { w.it4_rmp().bits(0b01) });
+        tim5().ccmr2_input().write(|w| unsafe { w.cc4s().bits(0b01).ic4psc().bits(0b11) });
+        tim5().ccer().write(|w| w.cc4e().set_bit());
+        tim5().dier().write(|w| w.cc4ie().set_bit());
+        tim5().cr1().write(|w| w.cen().set_bit());
         // Independent watchdog: LSI ~32 kHz / 4 = 8 kHz, reload 64 -> about 8 ms.
         // SAFETY: the key values of RM0090 sec. 21.4.1, prescaler /4 (0), a 12-bit reload.
         iwdg().kr().write(|w| unsafe { w.key().bits(0x5555) });
@@ -440,11 +489,13 @@ mod board {
             cp.NVIC.set_priority(Exti0, PRIO_EDGE);
             cp.NVIC.set_priority(Exti4, PRIO_EDGE);
             cp.NVIC.set_priority(Book, PRIO_TICK);
+            cp.NVIC.set_priority(Tim5, PRIO_TICK);
             cp.SCB.set_priority(SystemHandler::SysTick, PRIO_TICK);
         }
         // SAFETY: the bookkeeping's data (FW) is initialised; EXTI0 uses atomics only.
         unsafe {
             NVIC::unmask(Book);
+            NVIC::unmask(Tim5);
             NVIC::unmask(Exti0);
             NVIC::unmask(Exti4);
         }
@@ -537,6 +588,15 @@ mod board {
     unsafe impl cortex_m::interrupt::InterruptNumber for Exti4 {
         fn number(self) -> u16 {
             EXTI4_IRQ
+        }
+    }
+
+    #[derive(Copy, Clone)]
+    struct Tim5;
+    // SAFETY: 50 is TIM5's position in the STM32F407 vector table (RM0090 Table 61).
+    unsafe impl cortex_m::interrupt::InterruptNumber for Tim5 {
+        fn number(self) -> u16 {
+            TIM5_IRQ
         }
     }
 
@@ -635,6 +695,7 @@ mod board {
         v[EXTI0_IRQ as usize] = Vector { handler: exti0_entry };
         v[EXTI4_IRQ as usize] = Vector { handler: exti4_entry };
         v[BOOK_IRQ as usize] = Vector { handler: book_entry };
+        v[TIM5_IRQ as usize] = Vector { handler: tim5_entry };
         v
     }
     unsafe extern "C" fn exti0_entry() {
@@ -642,6 +703,9 @@ mod board {
     }
     unsafe extern "C" fn exti4_entry() {
         edge(1 << 4)
+    }
+    unsafe extern "C" fn tim5_entry() {
+        lsi_capture()
     }
     unsafe extern "C" fn book_entry() {
         book()

@@ -58,11 +58,20 @@ fn write(addr: u32, v: u32) {
     unsafe { core::ptr::write_volatile(addr as *mut u32, v) }
 }
 
-/// The switch as the obstacle leaves it, before the wiring model.
+/// NVIC_ISPR1: set-pending for IRQs 32..63 (TIM5 = 50).
+const NVIC_ISPR1: u32 = 0xE000_E204;
+/// One TIM5 capture per 8 LSI periods at a nominal 32 kHz: every 250 us.
+const LSI_CAPTURE_US: u32 = 250;
+
+/// The switch as the obstacle leaves it, before the wiring model; and the LSI.
 struct World {
     a_tripped: bool,
     b_tripped: bool,
     reset: bool,
+    /// The LSI runs: TIM5's capture interrupt is pended every `LSI_CAPTURE_US` (QEMU's TIM5 has no
+    /// input capture; on the part the capture unit pends it).
+    lsi_on: bool,
+    lsi_next: Option<u32>,
 }
 
 impl World {
@@ -85,22 +94,35 @@ impl World {
         }
         p
     }
+
+    /// One pass of the world: the pins, and the LSI's capture when it is due.
+    fn step(&mut self, now: u32) {
+        PINS.store(self.pins(), Relaxed);
+        if !self.lsi_on {
+            return;
+        }
+        let next = *self.lsi_next.get_or_insert(now);
+        if now.wrapping_sub(next) < 0x8000_0000 {
+            write(NVIC_ISPR1, 1 << (50 - 32));
+            self.lsi_next = Some(next.wrapping_add(LSI_CAPTURE_US));
+        }
+    }
 }
 
 /// Run the world for `us` microseconds of TIM2 time (the bench's pins follow the outputs meanwhile).
-fn run(w: &World, now: &impl Fn() -> u32, us: u32) {
+fn run(w: &mut World, now: &impl Fn() -> u32, us: u32) {
     let start = now();
     while now().wrapping_sub(start) < us {
-        PINS.store(w.pins(), Relaxed);
+        w.step(now());
     }
-    PINS.store(w.pins(), Relaxed);
+    w.step(now());
 }
 
 /// Run until the stop output reads `want`, at most `us`; false on time-out.
-fn until_stop(w: &World, now: &impl Fn() -> u32, want: bool, us: u32) -> bool {
+fn until_stop(w: &mut World, now: &impl Fn() -> u32, want: bool, us: u32) -> bool {
     let start = now();
     while now().wrapping_sub(start) < us {
-        PINS.store(w.pins(), Relaxed);
+        w.step(now());
         if (ODR_D.load(Relaxed) & STOP != 0) == want {
             return true;
         }
@@ -128,17 +150,17 @@ fn reset_press(w: &mut World, now: &impl Fn() -> u32, press_us: u32) {
 
 /// The scenario; `now` reads TIM2 (microseconds of firmware time).
 pub fn run_scenario(now: impl Fn() -> u32) -> ! {
-    let mut w = World { a_tripped: false, b_tripped: false, reset: false };
-    run(&w, &now, 200_000); // latched after the reset: nothing happens untouched
+    let mut w = World { a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
+    run(&mut w, &now, 200_000); // latched after the reset: nothing happens untouched
     if ODR_D.load(Relaxed) & STOP != 0 {
         fail("'go' before any reset press");
     }
     reset_press(&mut w, &now, 100_000);
-    if !until_stop(&w, &now, true, 2_000_000) {
+    if !until_stop(&mut w, &now, true, 2_000_000) {
         fail("not armed within 2 s of the reset press");
     }
     hprintln!("bench: armed after the reset press");
-    run(&w, &now, 50_000);
+    run(&mut w, &now, 50_000);
 
     // The obstacle: channel A first, then B 1 ms later, as a real actuator moves both contacts.
     write(MARK, 3); // marker 3: edge on channel A pended
@@ -147,12 +169,12 @@ pub fn run_scenario(now: impl Fn() -> u32) -> ! {
     write(NVIC_ISPR0, 1 << 6);
     // EXTI0 has priority 0 and thread mode none: it ran before this line.
     let stopped_a = ODR_D.load(Relaxed) & STOP == 0;
-    run(&w, &now, 1_000);
+    run(&mut w, &now, 1_000);
     write(MARK, 4); // marker 4: edge on channel B pended
     w.b_tripped = true;
     PINS.store(w.pins(), Relaxed);
     write(NVIC_ISPR0, 1 << 10);
-    run(&w, &now, 100_000);
+    run(&mut w, &now, 100_000);
     if !stopped_a {
         fail("the stop was not written when the EXTI0 pend returned");
     }
@@ -162,31 +184,52 @@ pub fn run_scenario(now: impl Fn() -> u32) -> ! {
     write(MARK, 5); // marker 5: obstacle gone
     w.a_tripped = false;
     w.b_tripped = false;
-    run(&w, &now, 100_000);
+    run(&mut w, &now, 100_000);
     if ODR_D.load(Relaxed) & STOP != 0 {
         fail("re-armed without a reset press");
     }
     reset_press(&mut w, &now, 100_000);
-    if !until_stop(&w, &now, true, 2_000_000) {
+    if !until_stop(&mut w, &now, true, 2_000_000) {
         fail("not re-armed within 2 s of the second reset press");
     }
     hprintln!("bench: re-armed after the second reset press");
-    run(&w, &now, 50_000);
+    run(&mut w, &now, 50_000);
     write(MARK, 6); // marker 6: edge on channel B pended
     w.b_tripped = true;
     PINS.store(w.pins(), Relaxed);
     write(NVIC_ISPR0, 1 << 10);
     let stopped_b = ODR_D.load(Relaxed) & STOP == 0;
-    run(&w, &now, 1_000);
+    run(&mut w, &now, 1_000);
     write(MARK, 7); // marker 7: edge on channel A pended
     w.a_tripped = true;
     PINS.store(w.pins(), Relaxed);
     write(NVIC_ISPR0, 1 << 6);
-    run(&w, &now, 100_000);
+    run(&mut w, &now, 100_000);
     if !stopped_b {
         fail("the stop was not written when the EXTI4 pend returned");
     }
     hprintln!("bench: channel B edge: stop written before the pend returned");
+
+    // The clock check: obstacle gone, reset, re-arm; then the LSI stops (the reference dies) while
+    // armed. The firmware must drop both outputs (ClockDrift) within a window (100 ms) and a tick.
+    write(MARK, 5); // marker 5: obstacle gone
+    w.a_tripped = false;
+    w.b_tripped = false;
+    run(&mut w, &now, 100_000);
+    reset_press(&mut w, &now, 100_000);
+    if !until_stop(&mut w, &now, true, 2_000_000) {
+        fail("not re-armed within 2 s of the third reset press");
+    }
+    run(&mut w, &now, 50_000);
+    write(MARK, 9); // marker 9: the LSI stops
+    w.lsi_on = false;
+    let t0 = now();
+    if !until_stop(&mut w, &now, false, 250_000) {
+        fail("still 'go' 250 ms after the clock check's reference stopped");
+    }
+    let took_ms = now().wrapping_sub(t0) / 1_000;
+    hprintln!("bench: LSI stopped while armed: stopped (clock check) after {} ms", took_ms);
+    run(&mut w, &now, 10_000);
     write(MARK, 8); // marker 8: end
     hprintln!("bench: PASS");
     debug::exit(debug::EXIT_SUCCESS);
