@@ -47,6 +47,9 @@ pub enum Cause {
     EdmMismatch = 11,
     /// The firmware's clock disagreed with the independent reference oscillator (`clock_check.rs`).
     ClockDrift = 12,
+    /// A start-up integrity check failed (`integrity.rs`): the flash CRC or the RAM test. The board
+    /// never arms after it; no reset press clears it, only a start whose checks pass.
+    SelfCheck = 13,
 }
 
 impl Cause {
@@ -65,6 +68,7 @@ impl Cause {
             10 => Cause::Discrepancy,
             11 => Cause::EdmMismatch,
             12 => Cause::ClockDrift,
+            13 => Cause::SelfCheck,
             _ => return None,
         })
     }
@@ -84,6 +88,7 @@ impl Cause {
             Cause::Discrepancy => "discrepancy",
             Cause::EdmMismatch => "edm-mismatch",
             Cause::ClockDrift => "clock-drift",
+            Cause::SelfCheck => "self-check",
         }
     }
 }

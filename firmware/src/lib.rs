@@ -121,6 +121,7 @@ panic_free_modules! {
     edm;
     event_log;
     firmware;
+    integrity;
     pins;
     reset;
     selftest;

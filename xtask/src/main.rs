@@ -27,8 +27,11 @@
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
-//! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stage
-//!   "board ELF in QEMU" of `cargo xtask test`).
+//! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stages
+//!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop; and
+//!   "board ELF edge in QEMU": the `qemu-io` build's edges against `firmware/qemu/board-edge.txt`).
+//!
+//! Every build of the firmware patches the board ELF's flash CRC (`patch_flash_crc`).
 
 use std::env;
 use std::fs;
@@ -57,6 +60,11 @@ fn main() -> ExitCode {
             let log = run_board_qemu()?;
             println!("{}", check_board_log(&log)?);
             println!("{}", check_board_vectors(&elf_path("board"))?);
+            println!("{}", check_board_corrupt()?);
+            build_board_qemu_io()?;
+            let (out, log) = run_board_edge()?;
+            print!("{out}");
+            println!("{}", check_board_edge(&out, &log)?);
             Ok(())
         }),
         Some("python") => single(|| match python_stage() {
@@ -172,7 +180,22 @@ fn test() -> ExitCode {
                 match run_board_qemu()
                     .and_then(|log| check_board_log(&log))
                     .and_then(|m| check_board_vectors(&elf_path("board")).map(|v| format!("{m}; {v}")))
+                    .and_then(|m| check_board_corrupt().map(|c| format!("{m}; {c}")))
                 {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
+        results.push((
+            "board ELF edge in QEMU",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match build_board_qemu_io().and_then(|()| run_board_edge()).and_then(|(out, log)| {
+                    print!("{out}");
+                    check_board_edge(&out, &log)
+                }) {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }
@@ -312,13 +335,17 @@ const BOARD_RUN: Duration = Duration::from_secs(3);
 /// trace. GPIO inputs read 0, i.e. the switch reads "tripped", the reset button is not pressed and
 /// both EDM relays read "not released": the firmware must stay stopped for the whole run.
 fn run_board_qemu() -> Result<String, String> {
-    let log = target_dir().join("board-qemu.log");
+    run_board_elf(&elf_path("board"), "board-qemu.log")
+}
+
+fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
+    let log = target_dir().join(log_name);
     let _ = fs::remove_file(&log);
     let mut child = Command::new("qemu-system-arm")
         .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none", "-d", "unimp,guest_errors", "-D"])
         .arg(&log)
         .arg("-kernel")
-        .arg(elf_path("board"))
+        .arg(elf)
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -363,6 +390,41 @@ fn check_board_log(log: &str) -> Result<String, String> {
     Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
 }
 
+/// The start-up flash CRC acts: a copy of the board ELF with one byte of .rodata flipped (the CRC
+/// word left as patched) must stop right after the boot's register set-up: the boot trace up to
+/// the brown-out read, then one write of both outputs low, and nothing after it (no tick, no
+/// de-energise by the library, no "go": the firmware is never built).
+fn check_board_corrupt() -> Result<String, String> {
+    use object::{Object, ObjectSection};
+    let good = elf_path("board");
+    let mut b = fs::read(&good).map_err(|e| format!("{}: {e}", good.display()))?;
+    let (_, crc_file, _) = flash_image(&b)?;
+    let off = {
+        let elf = object::File::parse(&*b).map_err(|e| format!("not an ELF object: {e}"))?;
+        let ro = elf.section_by_name(".rodata").ok_or("no .rodata in the board ELF")?;
+        let (start, size) = ro.file_range().ok_or(".rodata has no file data")?;
+        let mid = (start + size / 2) as usize;
+        if (crc_file..crc_file + 4).contains(&mid) { mid + 8 } else { mid }
+    };
+    b[off] ^= 0x01;
+    let bad = target_dir().join("board-corrupt.elf");
+    fs::write(&bad, &b).map_err(|e| format!("writing {}: {e}", bad.display()))?;
+    let log = run_board_elf(&bad, "board-corrupt.log")?;
+    let want = read_expected("firmware/qemu/board-boot.txt")?;
+    let upto = want.iter().position(|l| l.starts_with("Flash Int:")).ok_or("board-boot.txt has no brown-out read")? + 1;
+    let mut expected: Vec<String> = want[..upto].to_vec();
+    expected.push("GPIOD: unimplemented device write (size 4, offset 0x018, value 0x30000000)".into());
+    let got: Vec<&str> = log.lines().collect();
+    if got.len() != expected.len() || got.iter().zip(&expected).any(|(a, b)| a != b) {
+        return Err(format!(
+            "a board ELF with one flipped flash byte (file offset {off:#x}) did not stop after the boot:\n--- got (first 40)\n{}\n--- expected\n{}",
+            got.iter().take(40).copied().collect::<Vec<_>>().join("\n"),
+            expected.join("\n")
+        ));
+    }
+    Ok(format!("one flipped flash byte: stopped after {} boot accesses, outputs low, no tick in {} s", got.len(), BOARD_RUN.as_secs()))
+}
+
 /// The board's vector table (`__INTERRUPTS`): both switch channels' EXTI lines (EXTI0 = IRQ 6, PA0;
 /// EXTI4 = IRQ 10, PA4) go to the edge handler and the bookkeeping line (UART5 = IRQ 53) to the
 /// bookkeeping. QEMU does not model the F405's GPIO, so the edges cannot be driven there; this
@@ -384,14 +446,212 @@ fn check_board_vectors(path: &Path) -> Result<String, String> {
         let w = data.get(off..off + 4).ok_or("vector table truncated")?;
         Ok(u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) & !1)
     };
-    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)")] {
+    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)"), (50, "tim5_entry", "TIM5 (the LSI capture, clock check)")] {
         let want = sym(handler).ok_or_else(|| format!("no {handler} in the board ELF"))? & !1;
         let got = entry(irq)?;
         if got != want {
             return Err(format!("vector {irq}, {what}: {got:#x}, want {handler} at {want:#x}"));
         }
     }
-    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping".into())
+    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping, TIM5 -> LSI capture".into())
+}
+
+/// The `qemu-io` build of the board binary (`firmware/src/bin/support/board_bench.rs`): the same
+/// `board.rs`, with GPIOA's input register and GPIOD's output register read from RAM that a bench in
+/// thread mode drives, because QEMU 7.2 does not model the F405's GPIO. Its own target directory, so
+/// the production ELF is never overwritten by it.
+fn build_board_qemu_io() -> Result<(), String> {
+    let status = cargo()
+        .args(["build", "--release", "--target", TARGET, "--bin", "board", "--features", "qemu-io", "--target-dir"])
+        .arg(qemu_io_dir())
+        .current_dir(repo_root().join("firmware"))
+        .status()
+        .map_err(|e| format!("could not run cargo: {e}"))?;
+    if status.success() {
+        patch_flash_crc(&qemu_io_dir().join(TARGET).join("release").join("board")).map(|_| ())
+    } else {
+        Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-io exited with {status}"))
+    }
+}
+
+fn qemu_io_dir() -> PathBuf {
+    target_dir().join("board-qemu-io")
+}
+
+/// Run the `qemu-io` board ELF on netduinoplus2 until its bench exits (semihosting), deterministic
+/// time (`-icount shift=3`); returns the bench's output and the `-d unimp` register trace.
+fn run_board_edge() -> Result<(String, String), String> {
+    let log = target_dir().join("board-edge.log");
+    let _ = fs::remove_file(&log);
+    let elf = qemu_io_dir().join(TARGET).join("release").join("board");
+    let mut cmd = Command::new("qemu-system-arm");
+    cmd.args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none"])
+        .args(["-semihosting-config", "enable=on,target=native", "-icount", "shift=3"])
+        .args(["-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(&elf);
+    let (out, status) = run_captured(cmd, "qemu-system-arm -M netduinoplus2 (board edge bench)", QEMU_TIMEOUT)?;
+    if !status.success() {
+        return Err(format!("the board edge bench failed ({status}):\n{out}"));
+    }
+    let trace = fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))?;
+    Ok((out, trace))
+}
+
+/// The bench's markers (GPIOI BSRR writes, `board_bench.rs`).
+fn bench_marker(v: u32) -> &'static str {
+    match v {
+        1 => "reset pressed",
+        2 => "reset released",
+        3 => "edge on channel A pended (EXTI0)",
+        4 => "edge on channel B pended (EXTI4)",
+        5 => "obstacle gone",
+        6 => "edge on channel B pended (EXTI4)",
+        7 => "edge on channel A pended (EXTI0)",
+        8 => "end",
+        9 => "the LSI stops (the clock check's reference)",
+        _ => "unknown marker",
+    }
+}
+
+/// The board edge run's trace reduced to what a person checks: the bench's markers and every change
+/// of the three outputs (PD12 stop, PD13 escalation, PD14 sensor supply; 1 = energised). Repeated
+/// de-energise writes of the stopped ticks change nothing and do not appear.
+fn board_edge_timeline(trace: &[&str]) -> Vec<String> {
+    let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+    let mut odr = 0u32;
+    let mut out = Vec::new();
+    for l in trace {
+        let Some(v) = value(l) else { continue };
+        if l.starts_with("GPIOI:") && l.contains("offset 0x018") {
+            out.push(format!("bench {v}: {}", bench_marker(v)));
+        } else if l.starts_with("GPIOD:") && l.contains("offset 0x018") {
+            let new = (odr & !(v >> 16)) | (v & 0xFFFF);
+            for (bit, name) in [(12, "PD12 stop"), (13, "PD13 escalation"), (14, "PD14 sensor supply")] {
+                if (new ^ odr) & (1 << bit) != 0 {
+                    out.push(format!("{name} -> {}", (new >> bit) & 1));
+                }
+            }
+            odr = new;
+        }
+    }
+    out
+}
+
+/// Check the board edge run: the bench passed; the boot is the production board's
+/// (`firmware/qemu/board-boot.txt`); the markers and output changes equal
+/// `firmware/qemu/board-edge.txt`; and after each edge pended while armed the very next device
+/// access is the stop write (GPIOD BSRR 0x10000000): nothing, not even a tick, comes between.
+fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
+    if !out.contains("bench: PASS") {
+        return Err(format!("the board edge bench did not pass:\n{out}"));
+    }
+    let lines: Vec<&str> = trace.lines().collect();
+    let expected_boot = read_expected("firmware/qemu/board-boot.txt")?;
+    if lines.len() < expected_boot.len() || lines.iter().zip(&expected_boot).any(|(a, b)| a != b) {
+        return Err(format!(
+            "the qemu-io board's boot differs from firmware/qemu/board-boot.txt:\n--- got\n{}",
+            lines.iter().take(expected_boot.len()).copied().collect::<Vec<_>>().join("\n")
+        ));
+    }
+    let rest = &lines[expected_boot.len()..];
+    let got = board_edge_timeline(rest);
+    let want = read_expected("firmware/qemu/board-edge.txt")?;
+    if got != want {
+        return Err(format!(
+            "the board edge run differs from firmware/qemu/board-edge.txt:\n--- got\n{}\n--- expected\n{}",
+            got.join("\n"),
+            want.join("\n")
+        ));
+    }
+    let stop_write = "GPIOD: unimplemented device write (size 4, offset 0x018, value 0x10000000)";
+    let mut direct = 0;
+    for marker in ["value 0x00000003)", "value 0x00000006)"] {
+        let i = rest
+            .iter()
+            .position(|l| l.starts_with("GPIOI:") && l.ends_with(marker))
+            .ok_or_else(|| format!("no bench marker {marker} in the trace"))?;
+        match rest.get(i + 1) {
+            Some(next) if *next == stop_write => direct += 1,
+            next => {
+                return Err(format!(
+                    "after the edge pend ({}) the next device access is {:?}, not the stop write",
+                    rest[i],
+                    next.copied().unwrap_or("nothing")
+                ))
+            }
+        }
+    }
+    let ticks = rest.iter().filter(|l| l.starts_with("I2S2ext:") && (l.ends_with("value 0xaaaa)") || l.ends_with("value 0x0000aaaa)"))).count();
+    Ok(format!(
+        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks",
+        got.len()
+    ))
+}
+
+/// A checked-in expected file without its `#` comments and blank lines.
+fn read_expected(rel: &str) -> Result<Vec<String>, String> {
+    let path = repo_root().join(rel);
+    let text = fs::read_to_string(&path).map_err(|e| format!("reading {}: {e}", path.display()))?;
+    Ok(text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()).map(String::from).collect())
+}
+
+const FLASH_ORIGIN: u64 = 0x0800_0000;
+const FLASH_END: u64 = 0x0810_0000;
+
+/// The board ELF's flash image as the part holds it: every loaded section in flash at its address,
+/// and .data at its load address `__sidata`; from the start of flash to the end of .data's load
+/// image, which must be covered without gaps (the board's `flash_crc_ok` reads exactly that range).
+/// Returns the image, the file offset of `FLINCH_FLASH_CRC`, and its offset in the image.
+fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
+    use object::{Object, ObjectSection, ObjectSymbol, SectionKind};
+    let elf = object::File::parse(b).map_err(|e| format!("not an ELF object: {e}"))?;
+    let sym = |name: &str| {
+        elf.symbols().find(|s| s.name() == Ok(name)).map(|s| s.address()).ok_or_else(|| format!("no symbol {name} in the board ELF"))
+    };
+    let (sidata, sdata, edata, crc) = (sym("__sidata")?, sym("__sdata")?, sym("__edata")?, sym("FLINCH_FLASH_CRC")?);
+    let end = sidata + (edata - sdata);
+    let mut image = vec![None::<u8>; (end - FLASH_ORIGIN) as usize];
+    let mut crc_file = None;
+    for sec in elf.sections() {
+        if sec.size() == 0 || matches!(sec.kind(), SectionKind::UninitializedData | SectionKind::Metadata | SectionKind::Other | SectionKind::Debug) {
+            continue;
+        }
+        let name = sec.name().unwrap_or("?");
+        let at = if name == ".data" { sidata } else { sec.address() };
+        if !(FLASH_ORIGIN..FLASH_END).contains(&at) {
+            continue;
+        }
+        let data = sec.data().map_err(|e| format!("reading {name}: {e}"))?;
+        for (i, &byte) in data.iter().enumerate() {
+            let a = at + i as u64;
+            if a >= end {
+                return Err(format!("section {name} reaches past the end of .data's load image ({end:#x})"));
+            }
+            image[(a - FLASH_ORIGIN) as usize] = Some(byte);
+        }
+        if (sec.address()..sec.address() + sec.size()).contains(&crc) {
+            let (off, _) = sec.file_range().ok_or("FLINCH_FLASH_CRC's section has no file data")?;
+            crc_file = Some((off + (crc - sec.address())) as usize);
+        }
+    }
+    if let Some(gap) = image.iter().position(Option::is_none) {
+        return Err(format!("the board's flash image has a gap at {:#x}: the CRC range is not contiguous", FLASH_ORIGIN + gap as u64));
+    }
+    let image: Vec<u8> = image.into_iter().flatten().collect();
+    Ok((image, crc_file.ok_or("FLINCH_FLASH_CRC is not in a flash section")?, (crc - FLASH_ORIGIN) as usize))
+}
+
+/// Write the flash image's CRC-32 (`flinch_firmware::integrity::image_crc`, the routine the board
+/// runs at start-up) into the ELF's `FLINCH_FLASH_CRC`. Idempotent: the word itself counts as zeros.
+fn patch_flash_crc(path: &Path) -> Result<u32, String> {
+    let mut b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let (image, file_off, crc_at) = flash_image(&b).map_err(|e| format!("{}: {e}", path.display()))?;
+    let crc = flinch_firmware::integrity::image_crc(&image, crc_at);
+    b[file_off..file_off + 4].copy_from_slice(&crc.to_le_bytes());
+    fs::write(path, &b).map_err(|e| format!("writing {}: {e}", path.display()))?;
+    Ok(crc)
 }
 
 fn target_installed() -> bool {
@@ -417,7 +677,7 @@ fn build_firmware() -> Result<(), String> {
         .status()
         .map_err(|e| format!("could not run cargo: {e}"))?;
     if status.success() {
-        Ok(())
+        patch_flash_crc(&elf_path("board")).map(|_| ())
     } else {
         Err(format!("cargo build --release --target {TARGET} (in firmware/) exited with {status}"))
     }

@@ -30,6 +30,11 @@
 //! HardFault and default (NMI, any unexpected interrupt) handlers write the stop and escalation pins
 //! low before anything else and record `Cause::FaultHandler` in the retained latch.
 //!
+//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, a March C- RAM test over
+//! .data/.bss and the stack region, then a CRC-32 of the flash image against `FLINCH_FLASH_CRC`
+//! (patched into the ELF by `cargo xtask`), and after the register set-up the brown-out level
+//! (BOR level 3, programmed once if the option byte differs). A failure never builds the firmware.
+//!
 //! Resets (`flinch_firmware::reset`): `main` reads why the part reset from `RCC_CSR` (then clears the
 //! flags with RMVF) and the retained latch from `RETAINED`, four words in cortex-m-rt's `.uninit`
 //! section, which the start-up code does not zero: it survives watchdog, software, pin and fault
@@ -51,6 +56,10 @@ fn main() {
 #[path = "support/isr_cell.rs"]
 mod isr_cell;
 
+#[cfg(all(target_os = "none", feature = "qemu-io"))]
+#[path = "support/board_bench.rs"]
+mod bench;
+
 #[cfg(target_os = "none")]
 mod board {
     use super::isr_cell::IsrCell;
@@ -63,64 +72,106 @@ mod board {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
+    use flinch_firmware::integrity;
     use flinch_firmware::{
-        Boot, BudgetConfig, Cause, Clock, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
+        Boot, BudgetConfig, Cause, Clock, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
         SwitchKind,
     };
 
-    // ---- Registers (RM0090 Rev 19) --------------------------------------------------------------
-    const RCC: u32 = 0x4002_3800; // sec. 7.3
-    const RCC_AHB1ENR: u32 = RCC + 0x30;
-    const RCC_APB1ENR: u32 = RCC + 0x40;
-    const RCC_APB2ENR: u32 = RCC + 0x44;
-    const RCC_CSR: u32 = RCC + 0x74; // sec. 7.3.21: reset flags
-    const RCC_CSR_RMVF: u32 = 1 << 24;
-    const GPIOA: u32 = 0x4002_0000; // sec. 8.4
+    // ---- Registers: the `stm32f4` PAC (feature stm32f407, generated from ST's SVD; RM0090 Rev 19) ---
+    use stm32f4::stm32f407 as pac;
+    /// GPIOA's and GPIOD's base addresses (RM0090 sec. 2.3), as the pins' const-generic port; the
+    /// registers behind them are the PAC's (`gpio`).
+    const GPIOA: u32 = 0x4002_0000;
     const GPIOD: u32 = 0x4002_0C00;
-    const MODER: u32 = 0x00;
-    const PUPDR: u32 = 0x0C;
-    const IDR: u32 = 0x10;
-    const BSRR: u32 = 0x18;
-    const SYSCFG_EXTICR1: u32 = 0x4001_3800 + 0x08; // sec. 9.2.3
-    const EXTI: u32 = 0x4001_3C00; // sec. 12.3
-    const EXTI_IMR: u32 = EXTI;
-    const EXTI_RTSR: u32 = EXTI + 0x08;
-    const EXTI_FTSR: u32 = EXTI + 0x0C;
-    const EXTI_PR: u32 = EXTI + 0x14;
-    const TIM2: u32 = 0x4000_0000; // sec. 18.4
-    const TIM2_CR1: u32 = TIM2;
-    const TIM2_EGR: u32 = TIM2 + 0x14;
-    const TIM2_CNT: u32 = TIM2 + 0x24;
-    const TIM2_PSC: u32 = TIM2 + 0x28;
-    const TIM2_ARR: u32 = TIM2 + 0x2C;
-    const IWDG_KR: u32 = 0x4000_3000; // sec. 21.4
-    const IWDG_PR: u32 = 0x4000_3004;
-    const IWDG_RLR: u32 = 0x4000_3008;
-    const ODR: u32 = 0x14;
+
+    /// The PAC's register blocks. SAFETY (all of them): fixed peripheral addresses of this part,
+    /// valid for the whole program; every access through them is a volatile register access.
+    #[inline(always)]
+    fn rcc() -> &'static pac::rcc::RegisterBlock {
+        unsafe { &*pac::RCC::ptr() }
+    }
+    #[inline(always)]
+    fn tim2() -> &'static pac::tim2::RegisterBlock {
+        unsafe { &*pac::TIM2::ptr() }
+    }
+    #[inline(always)]
+    fn iwdg() -> &'static pac::iwdg::RegisterBlock {
+        unsafe { &*pac::IWDG::ptr() }
+    }
+    #[inline(always)]
+    fn tim5() -> &'static pac::tim5::RegisterBlock {
+        unsafe { &*pac::TIM5::ptr() }
+    }
+    #[inline(always)]
+    fn exti() -> &'static pac::exti::RegisterBlock {
+        unsafe { &*pac::EXTI::ptr() }
+    }
+    #[inline(always)]
+    fn syscfg() -> &'static pac::syscfg::RegisterBlock {
+        unsafe { &*pac::SYSCFG::ptr() }
+    }
+    #[inline(always)]
+    fn flash() -> &'static pac::flash::RegisterBlock {
+        unsafe { &*pac::FLASH::ptr() }
+    }
+    /// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4; `PORT` is GPIOA or
+    /// GPIOD above). Only MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so
+    /// GPIOA's reset values in the PAC's type never leak into another port.
+    #[inline(always)]
+    fn gpio(port: u32) -> &'static pac::gpioa::RegisterBlock {
+        unsafe { &*(port as *const pac::gpioa::RegisterBlock) }
+    }
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
     const EXTI4_IRQ: u16 = 10;
-    const SYSCFG_EXTICR2: u32 = 0x4001_3800 + 0x0C; // sec. 9.2.4: EXTI4..7
     /// The bookkeeping interrupt: UART5's line (RM0090 Table 61), pended by software only.
     const BOOK_IRQ: u16 = 53;
+    /// TIM5's line (RM0090 Table 61): its channel 4 captures the LSI (the clock check's reference).
+    const TIM5_IRQ: u16 = 50;
     /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
     const PRIO_EDGE: u8 = 0x00;
     const PRIO_TICK: u8 = 0x80;
 
-    const HSI_HZ: u32 = 16_000_000;
+    /// The core clock (SysTick) and TIM2's input clock: the 16 MHz HSI on the board. QEMU 7.2's
+    /// netduinoplus2 clocks the core at 168 MHz and its timers at 1 GHz whatever RCC says, so the
+    /// `qemu-io` build scales both to keep a 1 MHz `Clock` and a `TICK_US` tick there.
+    #[cfg(not(feature = "qemu-io"))]
+    const CORE_HZ: u32 = 16_000_000;
+    #[cfg(not(feature = "qemu-io"))]
+    const TIM2_HZ: u32 = 16_000_000;
+    #[cfg(feature = "qemu-io")]
+    const CORE_HZ: u32 = 168_000_000;
+    #[cfg(feature = "qemu-io")]
+    const TIM2_HZ: u32 = 1_000_000_000;
     const TICK_US: u32 = 1_000;
 
+    // ---- The three pin accesses: GPIO in the production build, the QEMU bench's RAM with
+    // `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_bench.rs`) -------------------
+    /// A port's input register.
     #[inline(always)]
-    fn rd(addr: u32) -> u32 {
-        // SAFETY: `addr` is one of the register constants above, valid and aligned on this part.
-        unsafe { read_volatile(addr as *const u32) }
+    fn idr(port: u32) -> u32 {
+        #[cfg(not(feature = "qemu-io"))]
+        return gpio(port).idr().read().bits();
+        #[cfg(feature = "qemu-io")]
+        return if port == GPIOA { super::bench::PINS.load(Relaxed) } else { gpio(port).idr().read().bits() };
     }
+    /// A port's output register (the stop's read-back).
     #[inline(always)]
-    fn wr(addr: u32, v: u32) {
-        // SAFETY: as for `rd`; the registers written here have no memory-safety side effects.
-        unsafe { write_volatile(addr as *mut u32, v) }
+    fn odr(port: u32) -> u32 {
+        #[cfg(not(feature = "qemu-io"))]
+        return gpio(port).odr().read().bits();
+        #[cfg(feature = "qemu-io")]
+        return if port == GPIOD { super::bench::ODR_D.load(Relaxed) } else { gpio(port).odr().read().bits() };
     }
-    fn modify(addr: u32, clear: u32, set: u32) {
-        wr(addr, (rd(addr) & !clear) | set);
+    /// A write to a port's bit set/reset register.
+    #[inline(always)]
+    fn bsrr(port: u32, v: u32) {
+        // SAFETY: BSRR takes any bit pattern (a set or reset request per pin).
+        gpio(port).bsrr().write(|w| unsafe { w.bits(v) });
+        #[cfg(feature = "qemu-io")]
+        if port == GPIOD {
+            super::bench::bsrr(v);
+        }
     }
 
     // ---- Pins: zero-sized, the port and pin are constants, so a write is a single `str` ------------
@@ -132,12 +183,12 @@ mod board {
     impl<const PORT: u32, const N: u32> OutputPin for Out<PORT, N> {
         #[inline(always)]
         fn set_low(&mut self) -> Result<(), Infallible> {
-            wr(PORT + BSRR, 1 << (N + 16));
+            bsrr(PORT, 1 << (N + 16));
             Ok(())
         }
         #[inline(always)]
         fn set_high(&mut self) -> Result<(), Infallible> {
-            wr(PORT + BSRR, 1 << N);
+            bsrr(PORT, 1 << N);
             Ok(())
         }
     }
@@ -149,11 +200,11 @@ mod board {
     impl<const PORT: u32, const N: u32> InputPin for In<PORT, N> {
         #[inline(always)]
         fn is_high(&mut self) -> Result<bool, Infallible> {
-            Ok(rd(PORT + IDR) & (1 << N) != 0)
+            Ok(idr(PORT) & (1 << N) != 0)
         }
         #[inline(always)]
         fn is_low(&mut self) -> Result<bool, Infallible> {
-            Ok(rd(PORT + IDR) & (1 << N) == 0)
+            Ok(idr(PORT) & (1 << N) == 0)
         }
     }
 
@@ -162,8 +213,36 @@ mod board {
     impl Clock for Tim2 {
         #[inline(always)]
         fn now(&mut self) -> Micros {
-            Micros(rd(TIM2_CNT))
+            Micros(tim2().cnt().read().bits())
         }
+        /// LSI periods counted by TIM5's channel 4 (`lsi_capture`): the independent reference.
+        fn reference_ticks(&mut self) -> Option<u32> {
+            Some(LSI_PERIODS.load(Relaxed))
+        }
+    }
+
+    /// The clock check's reference: the LSI (the IWDG's own RC oscillator, independent of the HSI
+    /// behind TIM2 and SysTick). The F4 can only route it to TIM5's channel 4 capture input
+    /// (`TIM5_OR.TI4_RMP = 01`, RM0090 sec. 18.4.21), which timestamps edges and does not count
+    /// them; the counting adapter is the capture interrupt: every 8th LSI rising edge
+    /// (`IC4PSC = /8`) captures, and `lsi_capture` adds 8 (16 if the capture before was overwritten).
+    /// 4 kHz of a short interrupt at the tick's priority, below the edge.
+    static LSI_PERIODS: AtomicU32 = AtomicU32::new(0);
+    /// Nominal LSI, hertz; DS8626 specifies 17 to 47 kHz, hence the wide tolerance in `config`.
+    const LSI_HZ: u32 = 32_000;
+
+    fn lsi_capture() {
+        let t = tim5();
+        let _ = t.ccr4().read(); // reading CCR4 clears CC4IF
+        let sr = t.sr().read().bits();
+        let mut n = 8;
+        if sr & (1 << 12) != 0 {
+            // CC4OF: a capture was overwritten before this one was read: 8 more periods.
+            n += 8;
+            // SAFETY: rc_w0 flags: write 0 to CC4OF only, 1 elsewhere leaves the others.
+            t.sr().write(|w| unsafe { w.bits(!(1 << 12)) });
+        }
+        LSI_PERIODS.fetch_add(n, Relaxed);
     }
 
     type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
@@ -175,10 +254,15 @@ mod board {
     /// cycle), d_sw = 5 mm (Ch. 3 simulations); deceleration 1 m/s^2 and a 10 mm stroke are
     /// placeholders for the robot's braking and the module's C1 + C2.
     const fn config() -> Config {
-        Config::new(
+        let mut c = Config::new(
             TICK_US,
             BudgetConfig { robot_speed_um_per_s: 50_000, dead_time_us: 16_000, decel_um_per_s2: 1_000_000, stroke_um: 10_000 },
-        )
+        );
+        // The LSI's spread (17..47 kHz around 32 kHz, DS8626) sets the tolerance: +-50 % catches a
+        // stopped, halved or doubled HSI or a wrong prescaler, not a drift of a few percent (that
+        // needs an HSE crystal as the reference). 100 ms windows: about 3,200 LSI periods each.
+        c.clock_check = Some(ClockCheck { reference_hz: LSI_HZ, window_us: 100_000, tolerance_pct: 50 });
+        c
     }
     const SWITCH_TRAVEL_UM: i32 = 5_000;
     /// Channel A (PA0): the inductive switch, high at rest, low when tripped (a cut wire too).
@@ -197,12 +281,97 @@ mod board {
     static EDGE_STOPPED: AtomicBool = AtomicBool::new(false);
     static EDGE_AT: AtomicU32 = AtomicU32::new(0);
 
-    defmt::timestamp!("{=u32:us}", rd(TIM2_CNT));
+    defmt::timestamp!("{=u32:us}", tim2().cnt().read().bits());
 
     /// Drop both outputs with raw register writes (usable from any context, even before init).
     #[inline(always)]
     fn emergency_stop() {
-        wr(GPIOD + BSRR, (1 << (12 + 16)) | (1 << (13 + 16)));
+        bsrr(GPIOD, (1 << (12 + 16)) | (1 << (13 + 16)));
+    }
+
+    // ---- Start-up integrity checks (`flinch_firmware::integrity`) ---------------------------------
+    /// The CRC-32 of the flash image with this word counted as zeros; written into the ELF after the
+    /// link by `cargo xtask` (`patch_flash_crc`). An image that was not patched (0) or was changed
+    /// after patching fails the check and never arms.
+    #[no_mangle]
+    #[used]
+    static FLINCH_FLASH_CRC: u32 = 0;
+
+    extern "C" {
+        // cortex-m-rt's linker script (link.x): .data's run and load addresses, the end of .bss.
+        static mut __sdata: u32;
+        static mut __edata: u32;
+        static mut __ebss: u32;
+        static __sidata: u32;
+    }
+    const FLASH_START: u32 = 0x0800_0000;
+    const RAM_START: u32 = 0x2000_0000;
+    /// Stack kept out of the RAM test: main's and the test's own frames live there.
+    const STACK_KEEP: u32 = 1024;
+
+    /// The flash image: the vector table, .text and .rodata (contiguous from the start of flash, as
+    /// cortex-m-rt's link.x lays them out and xtask checks), then .data's load image.
+    fn flash_crc_ok() -> bool {
+        let end = core::ptr::addr_of!(__sidata) as u32 + (core::ptr::addr_of!(__edata) as u32 - core::ptr::addr_of!(__sdata) as u32);
+        let crc_at = core::ptr::addr_of!(FLINCH_FLASH_CRC) as u32;
+        // SAFETY: flash from its start to the end of .data's load image: mapped, read-only,
+        // never written while running.
+        let image = unsafe { core::slice::from_raw_parts(FLASH_START as *const u8, (end - FLASH_START) as usize) };
+        // SAFETY: a static in flash; volatile so that the compiler does not fold in the 0 it was
+        // linked with (xtask patched the ELF afterwards).
+        let stored = unsafe { read_volatile(core::ptr::addr_of!(FLINCH_FLASH_CRC)) };
+        integrity::image_crc(image, (crc_at - FLASH_START) as usize) == stored
+    }
+
+    /// March C- with four data backgrounds over the RAM the firmware will use: .data and .bss, and
+    /// the stack region below the frames in use now (flip-link puts the stack at the bottom of RAM);
+    /// not the retained latch (.uninit, after .bss) and not the top `STACK_KEEP` bytes of the stack.
+    /// Restores .data from its load image afterwards (the test leaves zeros, which is .bss's value).
+    ///
+    /// # Safety
+    /// Only as the first thing in `main`: no reference to a static may be live.
+    unsafe fn ram_test() -> bool {
+        let sdata = core::ptr::addr_of_mut!(__sdata);
+        let data_words = (core::ptr::addr_of!(__edata) as usize - sdata as usize) / 4;
+        let ram_words = (core::ptr::addr_of!(__ebss) as usize - sdata as usize) / 4;
+        let sp = cortex_m::register::msp::read();
+        let stack_words = (sp.saturating_sub(STACK_KEEP).saturating_sub(RAM_START) / 4) as usize;
+        let statics_ok = integrity::march_c_minus(&mut integrity::RawRam::new(sdata, ram_words), &integrity::BACKGROUNDS).is_ok();
+        let stack_ok = integrity::march_c_minus(&mut integrity::RawRam::new(RAM_START as *mut u32, stack_words), &integrity::BACKGROUNDS).is_ok();
+        let sidata = core::ptr::addr_of!(__sidata);
+        for i in 0..data_words {
+            write_volatile(sdata.wrapping_add(i), read_volatile(sidata.wrapping_add(i)));
+        }
+        statics_ok && stack_ok
+    }
+
+    /// BOR_LEV = 00: BOR level 3, the highest threshold (about 2.7 V, DS8626 "BOR thresholds");
+    /// FLASH_OPTCR, RM0090 sec. 3.9.6.
+    const BOR_LEV_3: u8 = 0b00;
+
+    /// The brown-out reset at level 3 (the factory default is off, BOR_LEV = 11): read the option
+    /// byte; if it differs, program BOR_LEV alone (read-modify-write: read protection, write
+    /// protection and the user bits are kept), wait for the flash interface, relock, read again.
+    /// False if it still differs. Programming happens once in the life of a part, not at every start.
+    fn brown_out_level_set() -> bool {
+        let f = flash();
+        if f.optcr().read().bor_lev().bits() == BOR_LEV_3 {
+            return true;
+        }
+        // SAFETY (both): the unlock keys of RM0090 sec. 3.6.2 and a valid BOR_LEV value.
+        f.optkeyr().write(|w| unsafe { w.optkeyr().bits(0x0819_2A3B) });
+        f.optkeyr().write(|w| unsafe { w.optkeyr().bits(0x4C5D_6E7F) });
+        f.optcr().modify(|_, w| unsafe { w.bor_lev().bits(BOR_LEV_3) });
+        f.optcr().modify(|_, w| w.optstrt().set_bit());
+        // Bounded wait; the IWDG (started, 8 ms) is fed meanwhile so that it cannot reset the part
+        // in the middle of an option byte write.
+        let mut spins: u32 = 0;
+        while f.sr().read().bsy().bit_is_set() && spins < 10_000_000 {
+            iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
+            spins = spins.wrapping_add(1);
+        }
+        f.optcr().modify(|_, w| w.optlock().set_bit());
+        f.optcr().read().bor_lev().bits() == BOR_LEV_3
     }
 
     /// The latch that survives a reset: not zeroed by the start-up code (cortex-m-rt `.uninit`).
@@ -231,32 +400,62 @@ mod board {
 
     #[entry]
     fn main() -> ! {
+        // First, before anything uses RAM: the start-up integrity checks (`flinch_firmware::integrity`).
+        // SAFETY: nothing has used .data/.bss yet (no reference to a static is live); `ram_test`
+        // restores .data and leaves .bss zeroed, as the start-up code left them.
+        let ram_ok = unsafe { ram_test() };
+        let flash_ok = flash_crc_ok();
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
             emergency_stop();
         });
         // Clocks for GPIOA, GPIOD, TIM2, SYSCFG.
-        modify(RCC_AHB1ENR, 0, (1 << 0) | (1 << 3));
-        modify(RCC_APB1ENR, 0, 1 << 0);
-        modify(RCC_APB2ENR, 0, 1 << 14);
+        rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioden().set_bit());
+        rcc().apb1enr().modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
+        rcc().apb2enr().modify(|_, w| w.syscfgen().set_bit());
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
-        modify(GPIOD + MODER, 0b11_11_11 << 24, 0b01_01_01 << 24); // PD12..14 output
-        modify(GPIOA + MODER, 0x3FF, 0); // PA0..PA4 input
-        modify(GPIOA + PUPDR, 0x3FF, 0b01_10_10_10_10); // PA0..PA3 pull-down, PA4 pull-up
+        // SAFETY (the three): two-bit mode fields, 0b01 = output, 0b00 = input; pull 0b10 = down, 0b01 = up.
+        gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) }); // PD12..14 output
+        gpio(GPIOA).moder().modify(|r, w| unsafe { w.bits(r.bits() & !0x3FF) }); // PA0..PA4 input
+        gpio(GPIOA).pupdr().modify(|r, w| unsafe { w.bits((r.bits() & !0x3FF) | 0b01_10_10_10_10) }); // PA0..PA3 pull-down, PA4 pull-up
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
-        wr(TIM2_PSC, HSI_HZ / 1_000_000 - 1);
-        wr(TIM2_ARR, u32::MAX);
-        wr(TIM2_EGR, 1); // load the prescaler
-        wr(TIM2_CR1, 1);
+        // SAFETY: PSC is 16 bits (15 here, 999 in the qemu-io build); ARR takes any 32-bit value.
+        tim2().psc().write(|w| unsafe { w.psc().bits((TIM2_HZ / 1_000_000 - 1) as u16) });
+        tim2().arr().write(|w| unsafe { w.arr().bits(u32::MAX) });
+        tim2().egr().write(|w| w.ug().set_bit()); // load the prescaler
+        tim2().cr1().write(|w| w.cen().set_bit());
+        // TIM5 channel 4 captures every 8th rising edge of the LSI (remap TI4 <- LSI); the LSI itself
+        // runs once the IWDG is started below, LSION makes it explicit.
+        rcc().csr().modify(|_, w| w.lsion().set_bit());
+        // SAFETY (all): field values of RM0090 sec. 18.4: TI4_RMP 01 = LSI, CC4S 01 = input TI4,
+        // IC4PSC 11 = every 8th edge.
+        tim5().or().write(|w| unsafe { w.it4_rmp().bits(0b01) });
+        tim5().ccmr2_input().write(|w| unsafe { w.cc4s().bits(0b01).ic4psc().bits(0b11) });
+        tim5().ccer().write(|w| w.cc4e().set_bit());
+        tim5().dier().write(|w| w.cc4ie().set_bit());
+        tim5().cr1().write(|w| w.cen().set_bit());
         // Independent watchdog: LSI ~32 kHz / 4 = 8 kHz, reload 64 -> about 8 ms.
-        wr(IWDG_KR, 0x5555);
-        wr(IWDG_PR, 0);
-        wr(IWDG_RLR, 64);
-        wr(IWDG_KR, 0xCCCC);
+        // SAFETY: the key values of RM0090 sec. 21.4.1, prescaler /4 (0), a 12-bit reload.
+        iwdg().kr().write(|w| unsafe { w.key().bits(0x5555) });
+        iwdg().pr().write(|w| unsafe { w.pr().bits(0) });
+        iwdg().rlr().write(|w| unsafe { w.rl().bits(64) });
+        iwdg().kr().write(|w| unsafe { w.key().bits(0xCCCC) });
 
         // Why did the part reset? Read the flags, then clear them so the next reset reads its own.
-        let cause = ResetCause::from_rcc_csr(rd(RCC_CSR));
-        modify(RCC_CSR, 0, RCC_CSR_RMVF);
+        let cause = ResetCause::from_rcc_csr(rcc().csr().read().bits());
+        rcc().csr().modify(|_, w| w.rmvf().set_bit());
+        let bor_ok = brown_out_level_set();
+        if !(ram_ok && flash_ok && bor_ok) {
+            // Never build the firmware on bad memory: outputs low (they already are, and are
+            // outputs now), latch SelfCheck for the next start, and wait for the IWDG, which is
+            // running and never fed here: the part resets and checks again.
+            emergency_stop();
+            let boots = retained_load().words[2];
+            retained_store(Retained::new(Some(Cause::SelfCheck), boots));
+            loop {
+                cortex_m::asm::wfi();
+            }
+        }
         let boot = Boot { cause, retained: retained_load() };
 
         let sensor = DualSwitch::new(In::<GPIOA, 0>, SWITCH_KIND, In::<GPIOA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
@@ -278,34 +477,99 @@ mod board {
         }
 
         // EXTI0 <- PA0, EXTI4 <- PA4 (EXTICRx field 0 is port A), both edges.
-        modify(SYSCFG_EXTICR1, 0xF, 0);
-        modify(SYSCFG_EXTICR2, 0xF, 0);
-        modify(EXTI_RTSR, 0, 0b1_0001);
-        modify(EXTI_FTSR, 0, 0b1_0001);
-        modify(EXTI_IMR, 0, 0b1_0001);
+        // SAFETY (both): field value 0 selects port A.
+        syscfg().exticr1().modify(|_, w| unsafe { w.exti0().bits(0) });
+        syscfg().exticr2().modify(|_, w| unsafe { w.exti4().bits(0) });
+        exti().rtsr().modify(|_, w| w.tr0().set_bit().tr4().set_bit());
+        exti().ftsr().modify(|_, w| w.tr0().set_bit().tr4().set_bit());
+        exti().imr().modify(|_, w| w.mr0().set_bit().mr4().set_bit());
         // The edge above the tick and the bookkeeping, set before any of them can run.
         // SAFETY: priorities only; the sharing they allow is the one described at the top.
         unsafe {
             cp.NVIC.set_priority(Exti0, PRIO_EDGE);
             cp.NVIC.set_priority(Exti4, PRIO_EDGE);
             cp.NVIC.set_priority(Book, PRIO_TICK);
+            cp.NVIC.set_priority(Tim5, PRIO_TICK);
             cp.SCB.set_priority(SystemHandler::SysTick, PRIO_TICK);
         }
         // SAFETY: the bookkeeping's data (FW) is initialised; EXTI0 uses atomics only.
         unsafe {
             NVIC::unmask(Book);
+            NVIC::unmask(Tim5);
             NVIC::unmask(Exti0);
             NVIC::unmask(Exti4);
         }
 
         cp.SYST.set_clock_source(SystClkSource::Core);
-        cp.SYST.set_reload(HSI_HZ / 1_000_000 * TICK_US - 1);
+        cp.SYST.set_reload(CORE_HZ / 1_000_000 * TICK_US - 1);
         cp.SYST.clear_current();
         cp.SYST.enable_interrupt();
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
-        loop {
-            cortex_m::asm::wfi();
+        #[cfg(feature = "qemu-io")]
+        super::bench::run_scenario(|| tim2().cnt().read().bits());
+        #[cfg(not(feature = "qemu-io"))]
+        {
+            let mut drain = LogDrain { next_seq: 0, state: None };
+            loop {
+                drain.run();
+                cortex_m::asm::wfi();
+            }
+        }
+    }
+
+    /// Logging from thread mode only. The library's own messages are compiled out on the board
+    /// (`DEFMT_LOG` in firmware/.cargo/config.toml: `flinch_firmware=off`), because they would run in
+    /// the tick and the bookkeeping interrupts; instead the tick and the bookkeeping fill the
+    /// firmware's event log (a fixed 16-entry ring, `EventLog`) and this drain, in thread mode between
+    /// ticks, copies the new entries and the state out under a priority ceiling (BASEPRI = the tick's
+    /// priority: the tick and the bookkeeping cannot run meanwhile, the edge interrupt still can) and
+    /// logs them afterwards, with every interrupt enabled. defmt-rtt runs with `drop-on-contention`
+    /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
+    /// truncates the message; only an attached probe-rs switches it to blocking).
+    #[cfg(not(feature = "qemu-io"))]
+    struct LogDrain {
+        next_seq: u16,
+        state: Option<flinch_firmware::State>,
+    }
+
+    #[cfg(not(feature = "qemu-io"))]
+    impl LogDrain {
+        fn run(&mut self) {
+            let mut batch: heapless::Vec<flinch_firmware::TripEvent, 16> = heapless::Vec::new();
+            // SAFETY: BASEPRI = PRIO_TICK masks SysTick and the bookkeeping, FW's only other users
+            // (the edge, at priority 0, never touches FW), so this is the one reference meanwhile.
+            let state = unsafe {
+                cortex_m::register::basepri::write(PRIO_TICK);
+                let fw = FW.get();
+                for e in fw.log().iter().filter(|e| e.seq.wrapping_sub(self.next_seq) < 0x8000) {
+                    let _ = batch.push(*e);
+                }
+                let state = fw.state();
+                cortex_m::register::basepri::write(0);
+                state
+            };
+            for e in &batch {
+                defmt::warn!(
+                    "event {=u16}: {=str} flags {=u8:#x} at {=u32} us (first seen {=u32} us), travel {=i32} um",
+                    e.seq,
+                    e.cause.name(),
+                    e.flags,
+                    e.at.0,
+                    e.first_seen.0,
+                    e.travel_um
+                );
+                self.next_seq = e.seq.wrapping_add(1);
+            }
+            if self.state != Some(state) {
+                self.state = Some(state);
+                match state {
+                    flinch_firmware::State::SelfTest(_) => defmt::info!("state: self-test"),
+                    flinch_firmware::State::Armed => defmt::info!("state: armed"),
+                    flinch_firmware::State::Tripped => defmt::warn!("state: tripped (stopped)"),
+                    flinch_firmware::State::Fault(c) => defmt::warn!("state: fault {=str} (stopped)", c.name()),
+                }
+            }
         }
     }
 
@@ -328,6 +592,15 @@ mod board {
     }
 
     #[derive(Copy, Clone)]
+    struct Tim5;
+    // SAFETY: 50 is TIM5's position in the STM32F407 vector table (RM0090 Table 61).
+    unsafe impl cortex_m::interrupt::InterruptNumber for Tim5 {
+        fn number(self) -> u16 {
+            TIM5_IRQ
+        }
+    }
+
+    #[derive(Copy, Clone)]
     struct Book;
     // SAFETY: 53 is UART5's position in the STM32F407 vector table; UART5 is not enabled.
     unsafe impl cortex_m::interrupt::InterruptNumber for Book {
@@ -342,17 +615,18 @@ mod board {
     /// hand-over. Everything else is the bookkeeping's, at the tick's priority.
     #[inline(always)]
     fn edge(line: u32) {
-        let idr = rd(GPIOA + IDR);
+        let idr = idr(GPIOA);
         if EDGE_FAST.load(Relaxed)
-            && rd(GPIOD + ODR) & (1 << 12) != 0
+            && odr(GPIOD) & (1 << 12) != 0
             && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B)
         {
-            wr(GPIOD + BSRR, 1 << (12 + 16)); // the stop
-            wr(EXTI_PR, line); // right after the stop write: a new edge from here on pends again
-            EDGE_AT.store(rd(TIM2_CNT), Relaxed);
+            bsrr(GPIOD, 1 << (12 + 16)); // the stop
+            // SAFETY (both PR writes): one pending bit, write 1 to clear.
+            exti().pr().write(|w| unsafe { w.bits(line) }); // right after the stop write: a new edge from here on pends again
+            EDGE_AT.store(tim2().cnt().read().bits(), Relaxed);
             EDGE_STOPPED.store(true, Relaxed);
         } else {
-            wr(EXTI_PR, line);
+            exti().pr().write(|w| unsafe { w.bits(line) });
         }
         NVIC::pend(Book);
     }
@@ -376,7 +650,7 @@ mod board {
         let fw = unsafe { FW.get() };
         fw.tick();
         retained_store(fw.retained());
-        wr(IWDG_KR, 0xAAAA); // the tick ran: feed the watchdog
+        iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) }); // the tick ran: feed the watchdog (SAFETY: the reload key)
     }
 
     #[exception]
@@ -421,6 +695,7 @@ mod board {
         v[EXTI0_IRQ as usize] = Vector { handler: exti0_entry };
         v[EXTI4_IRQ as usize] = Vector { handler: exti4_entry };
         v[BOOK_IRQ as usize] = Vector { handler: book_entry };
+        v[TIM5_IRQ as usize] = Vector { handler: tim5_entry };
         v
     }
     unsafe extern "C" fn exti0_entry() {
@@ -428,6 +703,9 @@ mod board {
     }
     unsafe extern "C" fn exti4_entry() {
         edge(1 << 4)
+    }
+    unsafe extern "C" fn tim5_entry() {
+        lsi_capture()
     }
     unsafe extern "C" fn book_entry() {
         book()

@@ -1,0 +1,239 @@
+//! The bench around the board ELF in QEMU (feature `qemu-io` only; never in the production build).
+//!
+//! QEMU 7.2's `netduinoplus2` (STM32F405) does not model GPIO: every GPIO read returns 0, and its
+//! EXTI ignores writes to `EXTI_SWIER` (it keeps the value, raises nothing). So with the production
+//! build the board never arms in QEMU and its edge handler can never run. This feature changes exactly
+//! three things in `board.rs`, all in the pin accessors:
+//!
+//! * a GPIO input read (`IDR`) returns `PINS`, a RAM word this bench sets, instead of GPIOA's IDR;
+//! * the stop-energised read-back (`ODR`) returns `ODR_D`, a RAM image of GPIOD's output register;
+//! * every BSRR write still goes to GPIOD's real BSRR address (QEMU logs it with `-d unimp`: that log
+//!   is what `cargo xtask board-qemu` checks) and is also applied to `ODR_D`.
+//!
+//! Everything else (main, the register set-up, NVIC priorities, the vector table, SysTick, TIM2 as the
+//! clock, the edge and bookkeeping handlers, the library, the retained latch) is the board binary's
+//! own code. The bench runs in thread mode instead of `wfi` and plays the world outside the MCU:
+//!
+//! * wiring: with the sensor supply (PD14) off both channels read "tripped" (A low, B high); the two
+//!   EDM relays follow the stop output (PD12) at once (released = high while the stop is low);
+//! * the operator: a reset press of 100 ms (firmware time, TIM2);
+//! * the obstacle: both channels of the switch go to "tripped", A first, and the edge is pended
+//!   through `NVIC_ISPR`: on the F407 the GPIO edge detector sets `EXTI_PR` and pends the line, which
+//!   QEMU 7.2 does not model. `EXTI_PR` is therefore 0 when the handler clears it (harmless).
+//!
+//! Each step writes a marker to GPIOI's BSRR (GPIOI is unused on the board; QEMU logs the write), so
+//! the register trace shows where the bench acted. Scenario: reset, arm, an edge on channel A (EXTI0)
+//! stops, obstacle gone, reset, re-arm, an edge on channel B (EXTI4) stops, end. The bench reports
+//! over semihosting and exits QEMU; xtask compares the trace with `firmware/qemu/board-edge.txt`.
+
+use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+use cortex_m_semihosting::{debug, hprintln};
+
+/// GPIOA's input register as the bench drives it.
+pub static PINS: AtomicU32 = AtomicU32::new(0);
+/// GPIOD's output register as the BSRR writes leave it.
+pub static ODR_D: AtomicU32 = AtomicU32::new(0);
+
+/// Apply a BSRR write to the RAM image (set wins over reset, as on the part).
+#[inline(always)]
+pub fn bsrr(v: u32) {
+    ODR_D.fetch_and(!(v >> 16), Relaxed);
+    ODR_D.fetch_or(v & 0xFFFF, Relaxed);
+}
+
+const A: u32 = 1 << 0; // PA0: channel A, high at rest
+const RESET: u32 = 1 << 1; // PA1
+const EDM: u32 = (1 << 2) | (1 << 3); // PA2, PA3: high = released
+const B: u32 = 1 << 4; // PA4: channel B, high when tripped
+const STOP: u32 = 1 << 12;
+const SUPPLY: u32 = 1 << 14;
+
+/// GPIOI BSRR: the marker port.
+const MARK: u32 = 0x4002_2000 + 0x18;
+/// NVIC_ISPR0: set-pending for IRQs 0..31 (EXTI0 = 6, EXTI4 = 10).
+const NVIC_ISPR0: u32 = 0xE000_E200;
+
+fn write(addr: u32, v: u32) {
+    // SAFETY: GPIOI BSRR (unused by the board) and NVIC_ISPR0, valid aligned registers.
+    unsafe { core::ptr::write_volatile(addr as *mut u32, v) }
+}
+
+/// NVIC_ISPR1: set-pending for IRQs 32..63 (TIM5 = 50).
+const NVIC_ISPR1: u32 = 0xE000_E204;
+/// One TIM5 capture per 8 LSI periods at a nominal 32 kHz: every 250 us.
+const LSI_CAPTURE_US: u32 = 250;
+
+/// The switch as the obstacle leaves it, before the wiring model; and the LSI.
+struct World {
+    a_tripped: bool,
+    b_tripped: bool,
+    reset: bool,
+    /// The LSI runs: TIM5's capture interrupt is pended every `LSI_CAPTURE_US` (QEMU's TIM5 has no
+    /// input capture; on the part the capture unit pends it).
+    lsi_on: bool,
+    lsi_next: Option<u32>,
+}
+
+impl World {
+    /// The input register the MCU sees now.
+    fn pins(&self) -> u32 {
+        let odr = ODR_D.load(Relaxed);
+        let powered = odr & SUPPLY != 0;
+        let mut p = 0;
+        if powered && !self.a_tripped {
+            p |= A;
+        }
+        if !powered || self.b_tripped {
+            p |= B;
+        }
+        if self.reset {
+            p |= RESET;
+        }
+        if odr & STOP == 0 {
+            p |= EDM;
+        }
+        p
+    }
+
+    /// One pass of the world: the pins, and the LSI's capture when it is due.
+    fn step(&mut self, now: u32) {
+        PINS.store(self.pins(), Relaxed);
+        if !self.lsi_on {
+            return;
+        }
+        let next = *self.lsi_next.get_or_insert(now);
+        if now.wrapping_sub(next) < 0x8000_0000 {
+            write(NVIC_ISPR1, 1 << (50 - 32));
+            self.lsi_next = Some(next.wrapping_add(LSI_CAPTURE_US));
+        }
+    }
+}
+
+/// Run the world for `us` microseconds of TIM2 time (the bench's pins follow the outputs meanwhile).
+fn run(w: &mut World, now: &impl Fn() -> u32, us: u32) {
+    let start = now();
+    while now().wrapping_sub(start) < us {
+        w.step(now());
+    }
+    w.step(now());
+}
+
+/// Run until the stop output reads `want`, at most `us`; false on time-out.
+fn until_stop(w: &mut World, now: &impl Fn() -> u32, want: bool, us: u32) -> bool {
+    let start = now();
+    while now().wrapping_sub(start) < us {
+        w.step(now());
+        if (ODR_D.load(Relaxed) & STOP != 0) == want {
+            return true;
+        }
+    }
+    false
+}
+
+fn fail(what: &str) -> ! {
+    hprintln!("bench: FAIL {}", what);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+/// Press and release the reset input for `press_us`.
+fn reset_press(w: &mut World, now: &impl Fn() -> u32, press_us: u32) {
+    write(MARK, 1); // marker 1: reset pressed
+    w.reset = true;
+    run(w, now, press_us);
+    write(MARK, 2); // marker 2: reset released
+    w.reset = false;
+    run(w, now, 1_000);
+}
+
+/// The scenario; `now` reads TIM2 (microseconds of firmware time).
+pub fn run_scenario(now: impl Fn() -> u32) -> ! {
+    let mut w = World { a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
+    run(&mut w, &now, 200_000); // latched after the reset: nothing happens untouched
+    if ODR_D.load(Relaxed) & STOP != 0 {
+        fail("'go' before any reset press");
+    }
+    reset_press(&mut w, &now, 100_000);
+    if !until_stop(&mut w, &now, true, 2_000_000) {
+        fail("not armed within 2 s of the reset press");
+    }
+    hprintln!("bench: armed after the reset press");
+    run(&mut w, &now, 50_000);
+
+    // The obstacle: channel A first, then B 1 ms later, as a real actuator moves both contacts.
+    write(MARK, 3); // marker 3: edge on channel A pended
+    w.a_tripped = true;
+    PINS.store(w.pins(), Relaxed);
+    write(NVIC_ISPR0, 1 << 6);
+    // EXTI0 has priority 0 and thread mode none: it ran before this line.
+    let stopped_a = ODR_D.load(Relaxed) & STOP == 0;
+    run(&mut w, &now, 1_000);
+    write(MARK, 4); // marker 4: edge on channel B pended
+    w.b_tripped = true;
+    PINS.store(w.pins(), Relaxed);
+    write(NVIC_ISPR0, 1 << 10);
+    run(&mut w, &now, 100_000);
+    if !stopped_a {
+        fail("the stop was not written when the EXTI0 pend returned");
+    }
+    hprintln!("bench: channel A edge: stop written before the pend returned");
+
+    // Obstacle gone, then a reset: re-arm. This time channel B moves first.
+    write(MARK, 5); // marker 5: obstacle gone
+    w.a_tripped = false;
+    w.b_tripped = false;
+    run(&mut w, &now, 100_000);
+    if ODR_D.load(Relaxed) & STOP != 0 {
+        fail("re-armed without a reset press");
+    }
+    reset_press(&mut w, &now, 100_000);
+    if !until_stop(&mut w, &now, true, 2_000_000) {
+        fail("not re-armed within 2 s of the second reset press");
+    }
+    hprintln!("bench: re-armed after the second reset press");
+    run(&mut w, &now, 50_000);
+    write(MARK, 6); // marker 6: edge on channel B pended
+    w.b_tripped = true;
+    PINS.store(w.pins(), Relaxed);
+    write(NVIC_ISPR0, 1 << 10);
+    let stopped_b = ODR_D.load(Relaxed) & STOP == 0;
+    run(&mut w, &now, 1_000);
+    write(MARK, 7); // marker 7: edge on channel A pended
+    w.a_tripped = true;
+    PINS.store(w.pins(), Relaxed);
+    write(NVIC_ISPR0, 1 << 6);
+    run(&mut w, &now, 100_000);
+    if !stopped_b {
+        fail("the stop was not written when the EXTI4 pend returned");
+    }
+    hprintln!("bench: channel B edge: stop written before the pend returned");
+
+    // The clock check: obstacle gone, reset, re-arm; then the LSI stops (the reference dies) while
+    // armed. The firmware must drop both outputs (ClockDrift) within a window (100 ms) and a tick.
+    write(MARK, 5); // marker 5: obstacle gone
+    w.a_tripped = false;
+    w.b_tripped = false;
+    run(&mut w, &now, 100_000);
+    reset_press(&mut w, &now, 100_000);
+    if !until_stop(&mut w, &now, true, 2_000_000) {
+        fail("not re-armed within 2 s of the third reset press");
+    }
+    run(&mut w, &now, 50_000);
+    write(MARK, 9); // marker 9: the LSI stops
+    w.lsi_on = false;
+    let t0 = now();
+    if !until_stop(&mut w, &now, false, 250_000) {
+        fail("still 'go' 250 ms after the clock check's reference stopped");
+    }
+    let took_ms = now().wrapping_sub(t0) / 1_000;
+    hprintln!("bench: LSI stopped while armed: stopped (clock check) after {} ms", took_ms);
+    run(&mut w, &now, 10_000);
+    write(MARK, 8); // marker 8: end
+    hprintln!("bench: PASS");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
