@@ -13,7 +13,7 @@
 //!   bookkeeping (timestamp, stroke budget, escalation write, latch, log) and a tick that confirms a
 //!   filtered trip run at the tick's priority; a whole trip tick bounds how long either takes to
 //!   reach its output write.
-//! * [`BOARD_CLOCK_HZ`]: the board runs on the 16 MHz HSI (firmware/src/bin/board.rs, `HSI_HZ`).
+//! * [`BOARD_CLOCK_HZ`]: the board runs on the 16 MHz HSI (firmware/src/bin/board.rs, `CORE_HZ` without the `qemu-io` feature).
 //!
 //! # Conversion
 //!

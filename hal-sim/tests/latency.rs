@@ -31,7 +31,7 @@ fn worst_edge_to_stop_is_the_readme_figure_and_within_what_xtask_asserts() {
     let limit = const_u32(&xtask, "ICOUNT_WORST_LIMIT");
     assert!(WORST_EDGE_TO_STOP_INSTRUCTIONS <= limit, "{WORST_EDGE_TO_STOP_INSTRUCTIONS} > xtask's {limit}");
     let board = read("firmware/src/bin/board.rs");
-    assert_eq!(BOARD_CLOCK_HZ, const_u32(&board, "HSI_HZ"), "the board's clock changed");
+    assert_eq!(BOARD_CLOCK_HZ, const_u32(&board, "CORE_HZ"), "the board's clock changed");
 }
 
 #[test]
