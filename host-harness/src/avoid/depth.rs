@@ -194,15 +194,20 @@ pub struct OperatorShape {
     pub obstacles: Vec<Obstacle>,
 }
 
-/// A static obstacle on the plane: a disc (`radius_m`) or an axis-aligned box (`size_m`), `height_m`
-/// high, centred at `center_m`.
+/// An obstacle on the plane: a disc (`radius_m`) or an axis-aligned box (`size_m`), `height_m`
+/// high, centred at `center_m` (standing) or moving on `keyframes` (then `center_m` is left out).
 #[derive(Clone, Debug, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Obstacle {
     /// `"disc"` or `"box"`.
     pub kind: String,
-    /// Centre on the plane, m.
+    /// Centre on the plane, m (NaN when not written: a moving obstacle; see [`Obstacle::at`]).
+    #[serde(default = "unset_centre")]
     pub center_m: [f64; 2],
+    /// Centre over time, `{ t_s, x_m, y_m }`: linear between key frames, held before the first and
+    /// after the last (as the hand's). Empty: the obstacle stands at `center_m`.
+    #[serde(default)]
+    pub keyframes: Vec<ObstacleKeyframe>,
     /// Disc radius, m.
     #[serde(default)]
     pub radius_m: f64,
@@ -213,7 +218,57 @@ pub struct Obstacle {
     pub height_m: f64,
 }
 
+fn unset_centre() -> [f64; 2] {
+    [f64::NAN; 2]
+}
+
+/// One key frame of a moving obstacle.
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleKeyframe {
+    /// Time, s.
+    pub t_s: f64,
+    /// Centre along x, m.
+    pub x_m: f64,
+    /// Centre along y, m.
+    pub y_m: f64,
+}
+
+/// Linear interpolation over key frames `(t_s, [x, y])`, held before the first and after the last.
+pub fn interpolate(k: &[(f64, [f64; 2])], t: f64) -> [f64; 2] {
+    let Some(first) = k.first() else { return [f64::NAN; 2] };
+    if t <= first.0 {
+        return first.1;
+    }
+    for w in k.windows(2) {
+        if t <= w[1].0 {
+            let a = (t - w[0].0) / (w[1].0 - w[0].0);
+            return [w[0].1[0] + a * (w[1].1[0] - w[0].1[0]), w[0].1[1] + a * (w[1].1[1] - w[0].1[1])];
+        }
+    }
+    k[k.len() - 1].1
+}
+
 impl Obstacle {
+    /// Does it move (more than one distinct key frame position)?
+    pub fn moves(&self) -> bool {
+        self.keyframes.windows(2).any(|k| (k[0].x_m, k[0].y_m) != (k[1].x_m, k[1].y_m))
+    }
+
+    /// Centre at time `t`, m: `center_m` when standing, else its key frames interpolated.
+    pub fn center_at(&self, t: f64) -> [f64; 2] {
+        if self.keyframes.is_empty() {
+            return self.center_m;
+        }
+        let k: Vec<(f64, [f64; 2])> = self.keyframes.iter().map(|k| (k.t_s, [k.x_m, k.y_m])).collect();
+        interpolate(&k, t)
+    }
+
+    /// The obstacle as it stands at time `t` (centre moved there).
+    pub fn at(&self, t: f64) -> Obstacle {
+        Obstacle { center_m: self.center_at(t), ..self.clone() }
+    }
+
     /// Signed distance from `p` to the footprint, m (negative inside).
     pub fn signed_distance(&self, p: [f64; 2]) -> f64 {
         let (dx, dy) = (p[0] - self.center_m[0], p[1] - self.center_m[1]);

@@ -456,10 +456,18 @@ pub fn fit_and_sense(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2
 /// [`fit_and_sense`], and the nearest sensed obstacle point (m; [`NOTHING_SENSED_M`] along x from
 /// the tool when there is none).
 pub fn fit_and_sense_at(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2]) {
+    fit_and_sense_with(scene, setup, tool, &scene.operator_shape(), hand, rng)
+}
+
+/// [`fit_and_sense_at`] at time `t_s`: the hand and every moving obstacle where they are then.
+pub fn fit_and_sense_at_time(scene: &Avoid, setup: &Setup, tool: [f64; 2], t_s: f64, rng: &mut Rng) -> (Field, f64, [f64; 2]) {
+    fit_and_sense_with(scene, setup, tool, &scene.operator_shape_at(t_s), scene.hand_at(t_s), rng)
+}
+
+fn fit_and_sense_with(scene: &Avoid, setup: &Setup, tool: [f64; 2], op: &super::depth::OperatorShape, hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2]) {
     let cam = scene.camera();
     let robot = scene.robot_shape();
-    let op = scene.operator_shape();
-    let img = render(&cam, Some((&robot, tool)), Some((&op, hand)), rng);
+    let img = render(&cam, Some((&robot, tool)), Some((op, hand)), rng);
     let mut map = if scene.robot.removal == "model" {
         let mut m = preprocess(&img, &cam, 0.0, None);
         remove_robot_by_model(&mut m, cam.m_per_px, &robot, tool, scene.robot.removal_margin_m);
@@ -628,7 +636,7 @@ pub struct Synthetic(pub Rng);
 
 impl FrameSource for Synthetic {
     fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<Frame>, String> {
-        let (field, separation_m, nearest_m) = fit_and_sense_at(scene, setup, tool, scene.hand_at(t_s), &mut self.0);
+        let (field, separation_m, nearest_m) = fit_and_sense_at_time(scene, setup, tool, t_s, &mut self.0);
         Ok(Some(Frame { field, separation_m, nearest_m, capture_s: t_s }))
     }
 }

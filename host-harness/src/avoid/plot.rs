@@ -96,9 +96,29 @@ where
         .collect();
     chart.draw_series(std::iter::once(PathElement::new(circle, red.stroke_width(2)))).map_err(e)?.label("operator at min clearance").legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2)));
 
-    // Static obstacles (boxes and discs), as they stand.
+    // Obstacles (boxes and discs), where they stand at the snapshot; a moving one also with its
+    // path and where it was at every whole second (labelled with the time), as the hand's below.
     let grey = RGBColor(235, 235, 235);
+    let t_end = res.rows.last().map_or(0.0, |r| r.t_s);
     for o in &scene.operator.obstacles {
+        if o.moves() {
+            let cyan = RGBColor(80, 220, 255);
+            let steps = (t_end / 0.05).ceil().max(1.0) as usize;
+            let trail: Vec<(f64, f64)> = (0..=steps).map(|k| o.center_at(k as f64 * 0.05)).map(|c| (c[0], c[1])).collect();
+            chart
+                .draw_series(std::iter::once(PathElement::new(trail, cyan.stroke_width(2))))
+                .map_err(e)?
+                .label("obstacle path (dots every 1 s, tool's in white)")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], cyan.stroke_width(2)));
+            // Held after its last key frame: one label there, not a pile.
+            let last = o.keyframes.last().map_or(0.0, |k| k.t_s);
+            for sec in (0..=(t_end.floor() as usize)).filter(|&s| s as f64 <= last.ceil()) {
+                let c = o.center_at(sec as f64);
+                chart.draw_series(std::iter::once(Circle::new((c[0], c[1]), 4, cyan.filled()))).map_err(e)?;
+                chart.draw_series(std::iter::once(Text::new(format!("{sec}"), (c[0] + 0.012 * w, c[1]), ("sans-serif", 13).into_font().color(&cyan)))).map_err(e)?;
+            }
+        }
+        let o = &o.at(snap.t_s);
         let [cx, cy] = o.center_m;
         if o.kind == "box" {
             let [sx, sy] = o.size_m;
@@ -112,8 +132,19 @@ where
 
     // A moving hand: its path over the run, and where the hand and the tool were at every whole
     // second (labelled with the time), so that one can see which was where when.
-    let t_end = res.rows.last().map_or(0.0, |r| r.t_s);
     let moves = scene.operator.keyframes.windows(2).any(|k| k[0].hand_m != k[1].hand_m);
+    let tool_dots = |chart: &mut ChartContext<DB, _>, sec: usize| -> Result<(), String> {
+        let t = sec as f64;
+        let tool = res.points.get(((t / res.dt_s).round() as usize).min(res.points.len().saturating_sub(1))).copied().unwrap_or(scene.start_m);
+        chart.draw_series(std::iter::once(Circle::new((tool[0], tool[1]), 3, WHITE.filled()))).map_err(e)?;
+        chart.draw_series(std::iter::once(Text::new(format!("{sec}"), (tool[0] + 0.012 * w, tool[1]), ("sans-serif", 13).into_font().color(&WHITE)))).map_err(e)?;
+        Ok(())
+    };
+    if !moves && scene.operator.obstacles.iter().any(|o| o.moves()) {
+        for sec in 0..=(t_end.floor() as usize) {
+            tool_dots(&mut chart, sec)?;
+        }
+    }
     if moves {
         let orange = RGBColor(255, 150, 40);
         let steps = (t_end / 0.05).ceil().max(1.0) as usize;
@@ -126,12 +157,10 @@ where
         for sec in 0..=(t_end.floor() as usize) {
             let t = sec as f64;
             let h = scene.hand_at(t);
-            let tool = res.points.get(((t / res.dt_s).round() as usize).min(res.points.len().saturating_sub(1))).copied().unwrap_or(scene.start_m);
             let label = format!("{sec}");
             chart.draw_series(std::iter::once(Circle::new((h[0], h[1]), 4, orange.filled()))).map_err(e)?;
-            chart.draw_series(std::iter::once(Text::new(label.clone(), (h[0] + 0.012 * w, h[1]), ("sans-serif", 13).into_font().color(&orange)))).map_err(e)?;
-            chart.draw_series(std::iter::once(Circle::new((tool[0], tool[1]), 3, WHITE.filled()))).map_err(e)?;
-            chart.draw_series(std::iter::once(Text::new(label, (tool[0] + 0.012 * w, tool[1]), ("sans-serif", 13).into_font().color(&WHITE)))).map_err(e)?;
+            chart.draw_series(std::iter::once(Text::new(label, (h[0] + 0.012 * w, h[1]), ("sans-serif", 13).into_font().color(&orange)))).map_err(e)?;
+            tool_dots(&mut chart, sec)?;
         }
     }
 

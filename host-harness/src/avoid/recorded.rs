@@ -343,12 +343,12 @@ pub fn render_recording(scene: &Avoid, outs: &[(&Path, f64)], width: usize, heig
     for (dir, _) in outs {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    let (robot, op) = (scene.robot_shape(), scene.operator_shape());
+    let robot = scene.robot_shape();
     let mut rng = super::depth::Rng::new(scene.camera.seed ^ 0x5EC0);
     let mut index = String::from("t_s,file\n");
     let mut poses = String::from("t_s,x_m,y_m\n");
     for (k, &(t, tool)) in track.iter().enumerate() {
-        let z = super::camera::render_depth(&cam, width, height, Some((&robot, tool)), Some((&op, scene.hand_at(t))));
+        let z = super::camera::render_depth(&cam, width, height, Some((&robot, tool)), Some((&scene.operator_shape_at(t), scene.hand_at(t))));
         let noisy: Vec<Option<f64>> = z
             .iter()
             .map(|d| {

@@ -283,8 +283,9 @@ pub struct OperatorCfg {
     pub forearm_height_m: f64,
     /// Hand position over time: linear between key frames, held after the last.
     pub keyframes: Vec<Keyframe>,
-    /// Further static obstacles, `[[avoid.operator.obstacles]]`: `kind = "disc"` (`radius_m`) or
-    /// `"box"` (`size_m`), `center_m`, `height_m`.
+    /// Further obstacles, `[[avoid.operator.obstacles]]`: `kind = "disc"` (`radius_m`) or
+    /// `"box"` (`size_m`), `height_m`, and `center_m` (standing) or `keyframes = [{ t_s, x_m, y_m
+    /// }, ...]` (moving).
     #[serde(default)]
     pub obstacles: Vec<super::depth::Obstacle>,
 }
@@ -302,6 +303,9 @@ pub struct Keyframe {
 /// Prefix `err` (which starts with `avoid.[table.]key`) with `line N: ` where that key is written.
 fn locate(text: &str, err: String) -> String {
     let Some(path) = err.strip_prefix("avoid.").and_then(|r| r.split([' ', ':', '/']).next()) else { return err };
+    if let Some(n) = obstacle_line(text, path) {
+        return format!("line {}: {err}", n + 1);
+    }
     let key = path.rsplit('.').next().unwrap_or(path);
     let found = text.lines().position(|l| {
         let t = l.trim_start();
@@ -311,6 +315,23 @@ fn locate(text: &str, err: String) -> String {
         Some(n) => format!("line {}: {err}", n + 1),
         None => err,
     }
+}
+
+/// The line (from 0) of `operator.obstacles[k].key` or `operator.obstacles[k].keyframes[j].key`:
+/// in the k-th `[[avoid.operator.obstacles]]` table, the key's line or the j-th key frame's.
+fn obstacle_line(text: &str, path: &str) -> Option<usize> {
+    let rest = path.strip_prefix("operator.obstacles[")?;
+    let (k, rest) = rest.split_once(']')?;
+    let k: usize = k.parse().ok()?;
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines.iter().enumerate().filter(|(_, l)| l.trim_start().starts_with("[[avoid.operator.obstacles]]")).nth(k)?.0;
+    let end = (start + 1..lines.len()).find(|&n| lines[n].trim_start().starts_with('[')).unwrap_or(lines.len());
+    if let Some(kf) = rest.strip_prefix(".keyframes[") {
+        let j: usize = kf.split_once(']')?.0.parse().ok()?;
+        return (start + 1..end).filter(|&n| lines[n].contains("t_s")).nth(j);
+    }
+    let key = rest.trim_start_matches('.').split(['.', '[']).next()?;
+    (start + 1..end).find(|&n| lines[n].trim_start().strip_prefix(key).is_some_and(|r| r.trim_start().starts_with('=')))
 }
 
 #[derive(Deserialize)]
@@ -431,8 +452,25 @@ impl Avoid {
                 other => return Err(format!("avoid.{key}.kind = {other:?}: expected \"disc\" or \"box\"")),
             }
             range(&format!("{key}.height_m"), o.height_m, 0.001, 2.0)?;
-            if !o.center_m.iter().all(|v| v.is_finite()) {
-                return Err(format!("avoid.{key}.center_m = {:?}: must be finite", o.center_m));
+            let written = !o.center_m.iter().all(|v| v.is_nan());
+            if o.keyframes.is_empty() {
+                if !o.center_m.iter().all(|v| v.is_finite()) {
+                    return Err(format!("avoid.{key}.center_m = {:?}: must be finite (a standing obstacle needs center_m, a moving one keyframes)", o.center_m));
+                }
+                if !(0.0..=w).contains(&o.center_m[0]) || !(0.0..=h).contains(&o.center_m[1]) {
+                    return Err(format!("avoid.{key}.center_m = {:?}: outside the image (0..{w} x 0..{h} m)", o.center_m));
+                }
+            } else if written {
+                return Err(format!("avoid.{key}.center_m = {:?}: give center_m (standing) or keyframes (moving), not both", o.center_m));
+            }
+            for (j, f) in o.keyframes.iter().enumerate() {
+                let fk = format!("{key}.keyframes[{j}]");
+                range(&format!("{fk}.t_s"), f.t_s, 0.0, 600.0)?;
+                range(&format!("{fk}.x_m"), f.x_m, 0.0, w)?;
+                range(&format!("{fk}.y_m"), f.y_m, 0.0, h)?;
+            }
+            if let Some(j) = o.keyframes.windows(2).position(|k| k[1].t_s <= k[0].t_s) {
+                return Err(format!("avoid.{key}.keyframes[{}].t_s = {}: t_s must increase (the key frame before is at {} s)", j + 1, o.keyframes[j + 1].t_s, o.keyframes[j].t_s));
             }
         }
         if self.operator.keyframes.windows(2).any(|k| k[1].t_s <= k[0].t_s) {
@@ -495,8 +533,14 @@ impl Avoid {
         }
     }
 
-    /// The operator's shape.
+    /// The operator's shape with every obstacle where it stands at t = 0 (see
+    /// [`Avoid::operator_shape_at`] for a moving one).
     pub fn operator_shape(&self) -> OperatorShape {
+        self.operator_shape_at(0.0)
+    }
+
+    /// The operator's shape with every obstacle where it stands at time `t`, s.
+    pub fn operator_shape_at(&self, t: f64) -> OperatorShape {
         let o = &self.operator;
         OperatorShape {
             entry_m: o.entry_m,
@@ -504,7 +548,7 @@ impl Avoid {
             hand_height_m: o.hand_height_m,
             forearm_width_m: o.forearm_width_m,
             forearm_height_m: o.forearm_height_m,
-            obstacles: o.obstacles.clone(),
+            obstacles: o.obstacles.iter().map(|ob| ob.at(t)).collect(),
         }
     }
 
@@ -512,7 +556,7 @@ impl Avoid {
     /// tool point `p`) to the operator's true footprint at time `t`, m: negative is the depth of the
     /// overlap.
     pub fn signed_distance_m(&self, t: f64, p: [f64; 2]) -> f64 {
-        self.operator_shape().signed_distance(self.hand_at(t), p) - self.robot.wrist_radius_m
+        self.operator_shape_at(t).signed_distance(self.hand_at(t), p) - self.robot.wrist_radius_m
     }
 
     /// Hand position at time `t`.
@@ -568,4 +612,44 @@ mod tests {
         let unknown = bad("dt_s = 0.01", "dt_s = 0.01\nspeeed = 1");
         assert!(unknown.contains("speeed") && unknown.contains("line"), "{unknown}");
     }
+
+    /// A moving obstacle's true signed distance follows its key frames (linear between them, held
+    /// before the first and after the last), and bad key frames are refused naming the key.
+    #[test]
+    fn moving_obstacle_signed_distance_follows_its_keyframes() {
+        let s = Avoid::parse(MOVING).unwrap();
+        let o = &s.operator.obstacles[0];
+        assert!(o.moves());
+        assert_eq!(o.center_at(-1.0), [1.05, 1.90]);
+        assert_eq!(o.center_at(99.0), [1.40, 0.20]);
+        let r = s.robot.wrist_radius_m;
+        // A point on the disc's path: at t the disc's centre is at (1.05, 1.90 - 1.7 t / 6).
+        let p = [1.05, 1.05];
+        for t in [0.0, 1.0, 3.0, 4.5, 6.0, 7.5, 9.0, 20.0] {
+            let c = o.center_at(t);
+            let want = if t <= 6.0 { [1.05, 1.90 - 1.7 * t / 6.0] } else { [1.05 + 0.35 * ((t - 6.0) / 3.0).min(1.0), 0.20] };
+            assert!((c[0] - want[0]).abs() < 1e-12 && (c[1] - want[1]).abs() < 1e-12, "t {t}: {c:?} vs {want:?}");
+            let sd = s.signed_distance_m(t, p);
+            let disc = ((p[0] - want[0]).powi(2) + (p[1] - want[1]).powi(2)).sqrt() - 0.10 - r;
+            assert!((sd - disc).abs() < 1e-12, "t {t}: {sd} vs {disc}");
+        }
+        // At t = 3 s the disc sits on the point: inside (negative), 0.10 m deep less the wrist.
+        assert!((s.signed_distance_m(3.0, p) + 0.10 + r).abs() < 1e-12);
+        // The depth render sees it where it is: its top over the point at 3 s, not at 0 s.
+        assert_eq!(s.operator_shape_at(3.0).height_at(s.hand_at(3.0), p), 0.25);
+        assert_eq!(s.operator_shape_at(0.0).height_at(s.hand_at(0.0), p), 0.0);
+        let bad = |from: &str, to: &str| Avoid::parse(&MOVING.replacen(from, to, 1)).unwrap_err();
+        let e = bad("{ t_s = 6.0, x_m = 1.05", "{ t_s = 0.0, x_m = 1.05");
+        assert!(e.contains("avoid.operator.obstacles[0].keyframes[1].t_s = 0: t_s must increase"), "{e}");
+        assert!(e.starts_with("line 63: "), "the key frame's line: {e}");
+        let e = bad("x_m = 1.40", "x_m = 3.0");
+        assert!(e.starts_with("line 64: "), "{e}");
+        assert!(e.contains("avoid.operator.obstacles[0].keyframes[2].x_m = 3: must be a number in [0, 2.1"), "{e}");
+        let e = bad("y_m = 1.90", "y_m = nan");
+        assert!(e.contains("avoid.operator.obstacles[0].keyframes[0].y_m = NaN"), "{e}");
+        let e = bad("radius_m = 0.10", "radius_m = 0.10\ncenter_m = [1.0, 1.0]");
+        assert!(e.contains("avoid.operator.obstacles[0].center_m = [1.0, 1.0]: give center_m (standing) or keyframes (moving), not both"), "{e}");
+    }
+
+    const MOVING: &str = include_str!("../../../scenes/avoid_moving_disc_wide.toml");
 }
