@@ -84,6 +84,10 @@ pub struct Receiver<R> {
     pub stats: RxStats,
 }
 
+/// Weights this old (ms) are forgotten by [`Receiver::tick`]: far beyond any weights watchdog's
+/// stop time, far below the 2^32 ms at which the age would wrap.
+pub const EXPIRE_MS: u32 = 60_000;
+
 impl<R: Real> Receiver<R> {
     /// A receiver with no grid yet; the budget is one ring per call (set `budget_bytes` for a
     /// bounded step).
@@ -142,6 +146,11 @@ impl<R: Real> Receiver<R> {
     /// Refuse, as short, a frame that stopped arriving (the parser waits for bytes and none came
     /// for `byte_timeout_ms`); the bytes after its first are parsed again. Call every control step.
     pub fn tick(&mut self, now_ms: u32) {
+        // Weights older than EXPIRE_MS are forgotten (age `None`: the watchdog stops), so the age
+        // can never wrap round to "fresh" after 2^32 ms (49.7 days) without a good frame.
+        if self.have_grid && now_ms.wrapping_sub(self.applied_at_ms) > EXPIRE_MS {
+            self.have_grid = false;
+        }
         if self.count > 0 && self.blocked && now_ms.wrapping_sub(self.last_byte_ms) > self.byte_timeout_ms {
             self.stats.short = self.stats.short.saturating_add(1);
             // Its bytes may hold the start of a whole frame (the cut one's length swallowed it):
@@ -468,6 +477,23 @@ mod tests {
             assert_eq!(r.grid().weights[k].to_bits(), *w);
         }
         assert_eq!(r.weights_age_ms(25), Some(20));
+    }
+
+    /// Review finding: the age wrapped after 2^32 ms without a good frame and read as fresh.
+    #[test]
+    fn weights_expire_before_their_age_can_wrap() {
+        let mut r = rx();
+        r.feed(&frame(&header(3, 3, 1), &weights(9, 1)), 5);
+        r.tick(5 + EXPIRE_MS);
+        assert_eq!(r.weights_age_ms(5 + EXPIRE_MS), Some(EXPIRE_MS));
+        r.tick(5 + EXPIRE_MS + 1);
+        assert_eq!(r.weights_age_ms(5 + EXPIRE_MS + 1), None);
+        // Still None where the age would have wrapped to a few ms.
+        r.tick(5u32.wrapping_add(u32::MAX).wrapping_add(3));
+        assert_eq!(r.weights_age_ms(5u32.wrapping_add(u32::MAX).wrapping_add(3)), None);
+        // A good frame brings it back.
+        r.feed(&frame(&header(3, 3, 2), &weights(9, 2)), 10);
+        assert_eq!(r.weights_age_ms(30), Some(20));
     }
 
     #[test]

@@ -696,9 +696,11 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
             if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc }) = source.frame(scene, setup, t_prev, p)? {
-                // The tool where it was at capture (a recorded frame may be older than this step).
-                let at = points[((tc / dt).round().max(0.0) as usize).min(points.len() - 1)];
-                in_flight.push_back((tc + delay, tc, f, sep, at, near));
+                // The separation was measured from the tool where it is now (`p`), so the monitor's
+                // correction for the tool's motion since counts from `p` too; counting from the tool
+                // at a recorded frame's (earlier) capture would be optimistic by up to v (t - tc)
+                // when the tool turned back in between (review finding).
+                in_flight.push_back((tc + delay, tc, f, sep, p, near));
                 frames += 1;
             }
             next_frame += scene.frame_period_s;
