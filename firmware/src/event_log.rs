@@ -178,6 +178,29 @@ impl<const N: usize> EventLog<N> {
         EventLog { ring: Deque::new(), next_seq: 0, overwritten: 0 }
     }
 
+    /// A log continuing one saved before a reset (`backup.rs`): `events` keep their sequence
+    /// numbers, the next event gets the newest one's plus one, and `overwritten` carries on (plus any
+    /// event beyond the capacity, the oldest dropped).
+    pub fn restored(overwritten: u32, events: impl Iterator<Item = TripEvent>) -> Self {
+        let mut log = EventLog { ring: Deque::new(), next_seq: 0, overwritten };
+        for e in events {
+            if log.ring.is_full() {
+                let _ = log.ring.pop_front();
+                log.overwritten = log.overwritten.saturating_add(1);
+            }
+            log.next_seq = e.seq.wrapping_add(1);
+            if log.ring.push_back(e).is_err() {
+                log.overwritten = log.overwritten.saturating_add(1);
+            }
+        }
+        log
+    }
+
+    /// The sequence number the next event will get.
+    pub const fn next_seq(&self) -> u16 {
+        self.next_seq
+    }
+
     /// Append an event, assigning its sequence number; overwrites the oldest when full.
     pub fn push(&mut self, cause: Cause, flags: u8, at: Micros, first_seen: Micros, travel_um: i32) {
         let ev = TripEvent { seq: self.next_seq, cause, flags, at, first_seen, travel_um };

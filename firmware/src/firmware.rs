@@ -317,6 +317,20 @@ where
     RST: InputPin,
     FB: Feedback,
 {
+    /// Continue the event log saved before the reset (`backup::load_log`): the saved events first,
+    /// with their sequence numbers, then this start's (the reset cause, a retained latch) numbered
+    /// after them. Timestamps of saved events are in the previous run's clock; the [`Cause::Reset`]
+    /// event separates the runs. Call it right after construction, before the first tick.
+    pub fn with_saved_log(mut self, saved: Option<EventLog<LOG>>) -> Self {
+        if let Some(mut log) = saved {
+            for e in self.log.iter() {
+                log.push(e.cause, e.flags, e.at, e.first_seen, e.travel_um);
+            }
+            self.log = log;
+        }
+        self
+    }
+
     /// The edge interrupt's entry point (call it on both edges of the switch input).
     ///
     /// Armed and unfiltered: read the pin; on a trip write the stop pin at once, then do the

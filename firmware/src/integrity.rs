@@ -30,6 +30,11 @@ impl Crc32 {
         Crc32(0xFFFF_FFFF)
     }
 
+    /// A computation whose register starts at `seed` instead of 0xFFFFFFFF (see [`Seed`]).
+    pub const fn with_seed(seed: u32) -> Self {
+        Crc32(seed)
+    }
+
     /// Feed `bytes`.
     #[inline(never)]
     pub fn update(&mut self, bytes: &[u8]) {
@@ -82,11 +87,34 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     c.finish()
 }
 
+/// Which build an image's stored CRC belongs to: the CRC register's initial value.
+///
+/// The `qemu-io` build of the board binary (its pins are RAM words a bench drives, so it must never
+/// run a machine) is patched with [`Seed::QemuBench`]; the production board build checks with
+/// [`Seed::Production`]. For any image the two seeds give different CRCs (the CRC is affine in its
+/// initial value: the results differ by a fixed non-zero term for a given length), so a bench
+/// image's stored word fails the production check, and `cargo xtask` (`patch_flash_crc`) and the
+/// host test `a_bench_image_fails_the_production_check` hold each build to its own seed.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Seed {
+    /// The production board build: the standard CRC-32 initial value.
+    Production = 0xFFFF_FFFF,
+    /// The `qemu-io` bench build ("QEMU" in ASCII, inverted).
+    QemuBench = !0x5145_4D55,
+}
+
 /// The CRC of a flash image whose word at byte offset `crc_at` holds the stored CRC: that word is
 /// counted as four zero bytes. `crc_at` outside the image (or not 4 bytes inside it) counts nothing
 /// as the stored word, so the result will not match a stored value and the check fails safe.
+/// The production build's seed ([`Seed::Production`]).
 pub fn image_crc(image: &[u8], crc_at: usize) -> u32 {
-    let mut c = Crc32::new();
+    image_crc_seeded(image, crc_at, Seed::Production)
+}
+
+/// [`image_crc`] for the build `seed` names.
+pub fn image_crc_seeded(image: &[u8], crc_at: usize, seed: Seed) -> u32 {
+    let mut c = Crc32::with_seed(seed as u32);
     match (image.get(..crc_at), crc_at.checked_add(4).and_then(|end| image.get(end..))) {
         (Some(head), Some(tail)) => {
             c.update(head);
@@ -245,6 +273,24 @@ mod tests {
         // A stored word outside the image never matches.
         assert_ne!(image_crc(&img, 62), good);
         assert_ne!(image_crc(&img, 62), image_crc(&img, 16));
+    }
+
+    #[test]
+    fn a_bench_image_fails_the_production_check() {
+        // Images of several lengths and contents, each patched as xtask patches a qemu-io build.
+        for len in [8usize, 64, 257, 4096] {
+            let mut img: Vec<u8> = (0..len).map(|i| (i * 37 + len) as u8).collect();
+            let at = (len / 2) & !3;
+            let bench = image_crc_seeded(&img, at, Seed::QemuBench);
+            img[at..at + 4].copy_from_slice(&bench.to_le_bytes());
+            assert_eq!(image_crc_seeded(&img, at, Seed::QemuBench), bench, "the bench build passes its own check");
+            assert_ne!(image_crc(&img, at), bench, "len {len}: a qemu-io image passed the production check");
+            // And the other way round: a production image fails the bench build's check.
+            let prod = image_crc(&img, at);
+            img[at..at + 4].copy_from_slice(&prod.to_le_bytes());
+            assert_ne!(image_crc_seeded(&img, at, Seed::QemuBench), prod);
+        }
+        assert_eq!(image_crc_seeded(b"123456789", 100, Seed::Production), image_crc(b"123456789", 100));
     }
 
     /// A memory with injected faults.

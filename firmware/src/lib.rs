@@ -113,6 +113,7 @@ macro_rules! panic_free_modules {
 }
 
 panic_free_modules! {
+    backup;
     clock;
     clock_check;
     debounce;
@@ -131,6 +132,7 @@ panic_free_modules! {
     watchdog;
 }
 
+pub use backup::{BackupRam, RamBackup};
 pub use clock::{Clock, Micros};
 pub use clock_check::ClockCheck;
 pub use debounce::{ChatterGuard, Filter};

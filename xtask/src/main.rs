@@ -33,6 +33,7 @@
 //!
 //! Every build of the firmware patches the board ELF's flash CRC (`patch_flash_crc`).
 
+use flinch_firmware::integrity::Seed;
 use std::env;
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -468,7 +469,7 @@ fn build_board_qemu_io() -> Result<(), String> {
         .status()
         .map_err(|e| format!("could not run cargo: {e}"))?;
     if status.success() {
-        patch_flash_crc(&qemu_io_dir().join(TARGET).join("release").join("board")).map(|_| ())
+        patch_flash_crc(&qemu_io_dir().join(TARGET).join("release").join("board"), Seed::QemuBench).map(|_| ())
     } else {
         Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-io exited with {status}"))
     }
@@ -645,10 +646,12 @@ fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
 
 /// Write the flash image's CRC-32 (`flinch_firmware::integrity::image_crc`, the routine the board
 /// runs at start-up) into the ELF's `FLINCH_FLASH_CRC`. Idempotent: the word itself counts as zeros.
-fn patch_flash_crc(path: &Path) -> Result<u32, String> {
+/// `seed`: the production build's, or the `qemu-io` bench build's own (whose image must fail the
+/// production check, `flinch_firmware::integrity::Seed`).
+fn patch_flash_crc(path: &Path, seed: Seed) -> Result<u32, String> {
     let mut b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let (image, file_off, crc_at) = flash_image(&b).map_err(|e| format!("{}: {e}", path.display()))?;
-    let crc = flinch_firmware::integrity::image_crc(&image, crc_at);
+    let crc = flinch_firmware::integrity::image_crc_seeded(&image, crc_at, seed);
     b[file_off..file_off + 4].copy_from_slice(&crc.to_le_bytes());
     fs::write(path, &b).map_err(|e| format!("writing {}: {e}", path.display()))?;
     Ok(crc)
@@ -677,7 +680,7 @@ fn build_firmware() -> Result<(), String> {
         .status()
         .map_err(|e| format!("could not run cargo: {e}"))?;
     if status.success() {
-        patch_flash_crc(&elf_path("board")).map(|_| ())
+        patch_flash_crc(&elf_path("board"), Seed::Production).map(|_| ())
     } else {
         Err(format!("cargo build --release --target {TARGET} (in firmware/) exited with {status}"))
     }
