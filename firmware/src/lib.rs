@@ -123,6 +123,7 @@ panic_free_modules! {
     event_log;
     firmware;
     integrity;
+    option_bytes;
     pins;
     reset;
     selftest;
