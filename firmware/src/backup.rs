@@ -49,7 +49,7 @@ pub const LOG_MAGIC: u32 = 0x464C_4C47;
 
 /// Words the store needs for a log of `n` events (latch included).
 pub const fn words_needed(n: usize) -> usize {
-    LOG_AT + 4 + 4 * n
+    n.saturating_mul(4).saturating_add(LOG_AT + 4)
 }
 
 /// The latch record as stored (garbage after a power cycle: [`Retained::decode`] checks it).

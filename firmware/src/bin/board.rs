@@ -72,9 +72,10 @@ mod board {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
-    use flinch_firmware::integrity;
+    use flinch_firmware::option_bytes::{self, BorOutcome, OptionBytes};
+    use flinch_firmware::{backup, integrity};
     use flinch_firmware::{
-        Boot, BudgetConfig, Cause, Clock, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
+        BackupRam, Boot, EventLog, BudgetConfig, Cause, Clock, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
         SwitchKind,
     };
 
@@ -114,6 +115,10 @@ mod board {
     #[inline(always)]
     fn flash() -> &'static pac::flash::RegisterBlock {
         unsafe { &*pac::FLASH::ptr() }
+    }
+    #[inline(always)]
+    fn pwr() -> &'static pac::pwr::RegisterBlock {
+        unsafe { &*pac::PWR::ptr() }
     }
     /// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4; `PORT` is GPIOA or
     /// GPIOD above). Only MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so
@@ -353,66 +358,174 @@ mod board {
         statics_ok && stack_ok
     }
 
-    /// BOR_LEV = 00: BOR level 3, the highest threshold (about 2.7 V, DS8626 "BOR thresholds");
-    /// FLASH_OPTCR, RM0090 sec. 3.9.6.
-    const BOR_LEV_3: u8 = 0b00;
+    /// What failed at start-up: the [`Cause::SelfCheck`] event's flags.
+    const SELF_RAM: u8 = 1;
+    const SELF_FLASH: u8 = 2;
+    const SELF_BOR: u8 = 3;
+    /// A `qemu-io` bench image found real GPIO (it runs on silicon, not in QEMU).
+    #[cfg(feature = "qemu-io")]
+    const SELF_NOT_QEMU: u8 = 4;
 
-    /// The brown-out reset at level 3 (the factory default is off, BOR_LEV = 11): read the option
-    /// byte; if it differs, program BOR_LEV alone (read-modify-write: read protection, write
-    /// protection and the user bits are kept), wait for the flash interface, relock, read again.
-    /// False if it still differs. Programming happens once in the life of a part, not at every start.
-    fn brown_out_level_set() -> bool {
-        let f = flash();
-        if f.optcr().read().bor_lev().bits() == BOR_LEV_3 {
-            return true;
+    /// The option bytes through the flash interface's registers (`flinch_firmware::option_bytes`:
+    /// BOR level 3 programmed once, error flags checked, verified at the next boot).
+    struct OptionRegs;
+    impl OptionBytes for OptionRegs {
+        fn bor_level(&mut self) -> u8 {
+            flash().optcr().read().bor_lev().bits()
         }
-        // SAFETY (both): the unlock keys of RM0090 sec. 3.6.2 and a valid BOR_LEV value.
-        f.optkeyr().write(|w| unsafe { w.optkeyr().bits(0x0819_2A3B) });
-        f.optkeyr().write(|w| unsafe { w.optkeyr().bits(0x4C5D_6E7F) });
-        f.optcr().modify(|_, w| unsafe { w.bor_lev().bits(BOR_LEV_3) });
-        f.optcr().modify(|_, w| w.optstrt().set_bit());
-        // Bounded wait; the IWDG (started, 8 ms) is fed meanwhile so that it cannot reset the part
-        // in the middle of an option byte write.
-        let mut spins: u32 = 0;
-        while f.sr().read().bsy().bit_is_set() && spins < 10_000_000 {
-            iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
-            spins = spins.wrapping_add(1);
+        fn status(&mut self) -> u32 {
+            flash().sr().read().bits()
         }
-        f.optcr().modify(|_, w| w.optlock().set_bit());
-        f.optcr().read().bor_lev().bits() == BOR_LEV_3
+        fn clear_status(&mut self, flags: u32) {
+            // SAFETY: FLASH_SR's flags are write-1-to-clear; only error flags are passed.
+            flash().sr().write(|w| unsafe { w.bits(flags & option_bytes::SR_ERRORS) });
+        }
+        fn unlock(&mut self) {
+            // SAFETY (both): the option-byte unlock keys of RM0090 sec. 3.6.2.
+            flash().optkeyr().write(|w| unsafe { w.optkeyr().bits(0x0819_2A3B) });
+            flash().optkeyr().write(|w| unsafe { w.optkeyr().bits(0x4C5D_6E7F) });
+        }
+        fn program_bor(&mut self, level: u8) {
+            // SAFETY: a 2-bit BOR_LEV value; read-modify-write keeps RDP, WRP and the user bits.
+            flash().optcr().modify(|_, w| unsafe { w.bor_lev().bits(level) });
+            flash().optcr().modify(|_, w| w.optstrt().set_bit());
+        }
+        fn lock(&mut self) {
+            flash().optcr().modify(|_, w| w.optlock().set_bit());
+        }
+    }
+    /// The bound on the wait for FLASH_SR.BSY after OPTSTRT: status reads, about 10 cycles each at
+    /// 16 MHz, so about 10 s (an option-byte write takes milliseconds).
+    const BOR_BUSY_SPINS: u32 = 16_000_000;
+
+    // ---- Backup SRAM: the latch and the event log across resets (`flinch_firmware::backup`) -----
+    /// The backup SRAM (RM0090 sec. 2.3 and 5.1.2): 4 KB at 0x4002_4000 in the backup domain, which
+    /// no system reset clears (watchdog, software, pin, a brown-out with VDD back). Only its first
+    /// 1 KB is used (the records need 72 words): QEMU 7.2's netduinoplus2 maps 1 KB there, as an
+    /// unimplemented device (reads 0, writes ignored).
+    const BKPSRAM: u32 = 0x4002_4000;
+    const BKPSRAM_WORDS: usize = 256;
+
+    /// The backup SRAM as the library's `BackupRam`.
+    struct Bkp;
+    impl BackupRam for Bkp {
+        fn len(&self) -> usize {
+            BKPSRAM_WORDS
+        }
+        fn read(&mut self, i: usize) -> u32 {
+            if i >= BKPSRAM_WORDS {
+                return 0;
+            }
+            // SAFETY: a word in the backup SRAM's first KB, clocked by `backup_on`.
+            unsafe { read_volatile((BKPSRAM as *const u32).wrapping_add(i)) }
+        }
+        fn write(&mut self, i: usize, v: u32) {
+            if i < BKPSRAM_WORDS {
+                // SAFETY: as for `read`; DBP set by `backup_on`.
+                unsafe { write_volatile((BKPSRAM as *mut u32).wrapping_add(i), v) }
+            }
+        }
     }
 
-    /// The latch that survives a reset: not zeroed by the start-up code (cortex-m-rt `.uninit`).
-    #[link_section = ".uninit.flinch_retained"]
-    static mut RETAINED: core::mem::MaybeUninit<[u32; 4]> = core::mem::MaybeUninit::uninit();
-
-    fn retained_load() -> Retained {
-        // SAFETY: four aligned words of RAM; any bit pattern is a valid [u32; 4] (garbage after a
-        // power cycle is rejected by the record's CRC). Read once in `main` before interrupts run.
-        Retained { words: unsafe { read_volatile(core::ptr::addr_of!(RETAINED).cast::<[u32; 4]>()) } }
+    /// Clock the backup SRAM and open the backup domain to writes: PWREN, BKPSRAMEN, PWR_CR.DBP
+    /// (RM0090 sec. 5.1.2). Register writes only, no RAM: usable before the RAM test has passed and
+    /// from the fault handlers. The backup regulator (BRE) is left off: without a VBAT cell the
+    /// content does not survive a power cycle, and what a power-on leaves fails the records' CRCs,
+    /// i.e. reads as a clean power-on (`backup.rs`).
+    fn backup_on() {
+        rcc().apb1enr().modify(|_, w| w.pwren().set_bit());
+        rcc().ahb1enr().modify(|_, w| w.bkpsramen().set_bit());
+        pwr().cr().modify(|_, w| w.dbp().set_bit());
     }
+
+    /// The log's `next_seq` as `main` stored it (before any interrupt runs), for the drain.
+    static SAVED_SEQ: AtomicU32 = AtomicU32::new(u32::MAX);
+
+    /// The last latch written to the backup SRAM (cause, boot count): a store only when it changes,
+    /// so the tick writes 4 words of backup SRAM only on a change of the latch.
+    static STORED_CAUSE: AtomicU32 = AtomicU32::new(u32::MAX);
+    static STORED_BOOTS: AtomicU32 = AtomicU32::new(u32::MAX);
 
     fn retained_store(r: Retained) {
-        // SAFETY: as above; written from SysTick and the bookkeeping, which share one priority (EXTI0
-        // never writes it), and from the fault handlers, which never return.
-        unsafe { write_volatile(core::ptr::addr_of_mut!(RETAINED).cast::<[u32; 4]>(), r.words) }
+        // Called from SysTick and the bookkeeping, which share one priority (EXTI0 never calls it).
+        if STORED_CAUSE.load(Relaxed) == r.words[1] && STORED_BOOTS.load(Relaxed) == r.words[2] {
+            return;
+        }
+        backup::store_latch(&mut Bkp, r);
+        STORED_CAUSE.store(r.words[1], Relaxed);
+        STORED_BOOTS.store(r.words[2], Relaxed);
+    }
+
+    /// The boot count of the record in the backup SRAM (0 if there is none).
+    fn stored_boots() -> u32 {
+        backup::load_latch(&mut Bkp).decode().map_or(0, |(_, n)| n)
     }
 
     /// A fault handler ran: outputs low first, then latch `FaultHandler` for the next start.
     #[inline(always)]
     fn fault_handler_stop() {
         emergency_stop();
-        let boots = retained_load().words[2];
-        retained_store(Retained::new(Some(Cause::FaultHandler), boots));
+        backup_on();
+        backup::store_latch(&mut Bkp, Retained::new(Some(Cause::FaultHandler), stored_boots()));
+    }
+
+    /// A start-up integrity check failed: outputs low, the `SelfCheck` latch and an event (`what`,
+    /// `detail`) in the backup SRAM, then stopped for good. Nothing can re-arm: the IWDG is started
+    /// only after these checks (so no watchdog reset re-runs them), no interrupt is enabled, and no
+    /// `Firmware` exists; only a power cycle or the NRST pin starts the part again, and that start
+    /// is latched by the record until a reset press. Uses no static: after a failed RAM test
+    /// .data and .bss hold test patterns.
+    fn integrity_failed(what: u8, detail: i32) -> ! {
+        emergency_stop();
+        backup_on();
+        let mut b = Bkp;
+        backup::store_latch(&mut b, Retained::new(Some(Cause::SelfCheck), stored_boots()));
+        let mut log: EventLog<16> = backup::load_log(&mut b).unwrap_or_default();
+        log.push(Cause::SelfCheck, what, Micros(0), Micros(0), detail);
+        backup::store_log(&mut b, &log);
+        loop {
+            emergency_stop();
+            cortex_m::asm::wfi(); // no interrupt is enabled: sleeps for good
+        }
+    }
+
+    /// Before anything else, by register writes that need no RAM: GPIOD clocked, the stop,
+    /// escalation and sensor-supply pins written low (BSRR) and made outputs. A RAM test that fails
+    /// or hangs from here on leaves the outputs driven low, not floating.
+    #[inline(always)]
+    fn early_outputs_low() {
+        rcc().ahb1enr().modify(|_, w| w.gpioden().set_bit());
+        // SAFETY: BSRR takes any pattern (reset PD12..14); MODER: two-bit fields, 0b01 = output.
+        gpio(GPIOD).bsrr().write(|w| unsafe { w.bits(0b111 << (12 + 16)) });
+        gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) });
     }
 
     #[entry]
     fn main() -> ! {
-        // First, before anything uses RAM: the start-up integrity checks (`flinch_firmware::integrity`).
+        early_outputs_low();
+        // Then, before anything uses RAM: the start-up integrity checks (`flinch_firmware::integrity`).
         // SAFETY: nothing has used .data/.bss yet (no reference to a static is live); `ram_test`
         // restores .data and leaves .bss zeroed, as the start-up code left them.
-        let ram_ok = unsafe { ram_test() };
-        let flash_ok = flash_crc_ok();
+        if !unsafe { ram_test() } {
+            integrity_failed(SELF_RAM, 0);
+        }
+        if !flash_crc_ok() {
+            integrity_failed(SELF_FLASH, 0);
+        }
+        backup_on();
+        // The qemu-io bench build must never drive a machine: on silicon GPIOD's MODER reads back
+        // what `early_outputs_low` wrote; QEMU 7.2 does not model GPIO and reads 0.
+        #[cfg(feature = "qemu-io")]
+        if gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0 {
+            integrity_failed(SELF_NOT_QEMU, 0);
+        }
+        // The brown-out level, only with a good flash image, before the IWDG runs.
+        match option_bytes::ensure_bor_level(&mut OptionRegs, &mut Bkp, BOR_BUSY_SPINS) {
+            (BorOutcome::InEffect, _) => {}
+            // Programmed: reset, so that the next boot reads the option bytes actually in effect.
+            (BorOutcome::ResetToVerify, _) => cortex_m::peripheral::SCB::sys_reset(),
+            (BorOutcome::Failed(why), sr) => integrity_failed(SELF_BOR, i32::from(why as u8) | ((sr as i32) << 8)),
+        }
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
             emergency_stop();
         });
@@ -452,26 +565,17 @@ mod board {
         // Why did the part reset? Read the flags, then clear them so the next reset reads its own.
         let cause = ResetCause::from_rcc_csr(rcc().csr().read().bits());
         rcc().csr().modify(|_, w| w.rmvf().set_bit());
-        let bor_ok = brown_out_level_set();
-        if !(ram_ok && flash_ok && bor_ok) {
-            // Never build the firmware on bad memory: outputs low (they already are, and are
-            // outputs now), latch SelfCheck for the next start, and wait for the IWDG, which is
-            // running and never fed here: the part resets and checks again.
-            emergency_stop();
-            let boots = retained_load().words[2];
-            retained_store(Retained::new(Some(Cause::SelfCheck), boots));
-            loop {
-                cortex_m::asm::wfi();
-            }
-        }
-        let boot = Boot { cause, retained: retained_load() };
+        let boot = Boot { cause, retained: backup::load_latch(&mut Bkp) };
 
         let sensor = DualSwitch::new(In::<GPIOA, 0>, SWITCH_KIND, In::<GPIOA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
             .with_supply(Out::<GPIOD, 14>);
         match Firmware::after_reset(config(), boot, Tim2, sensor, Out, Out, In) {
             Ok(fw) => {
-                let fw = fw.with_feedback(Edm::new(In::<GPIOA, 2>, In::<GPIOA, 3>));
+                // The log saved before the reset first, then this start's reset-cause event.
+                let fw = fw.with_feedback(Edm::new(In::<GPIOA, 2>, In::<GPIOA, 3>)).with_saved_log(backup::load_log(&mut Bkp));
                 retained_store(fw.retained());
+                backup::store_log(&mut Bkp, fw.log());
+                SAVED_SEQ.store(u32::from(fw.log().next_seq()), Relaxed);
                 EDGE_FAST.store(fw.edge_stops_directly(), Relaxed);
                 // SAFETY: once, before SysTick and the bookkeeping interrupt are enabled below.
                 unsafe { FW.init(fw) }
@@ -518,7 +622,7 @@ mod board {
         super::bench::run_scenario(|| tim2().cnt().read().bits());
         #[cfg(not(feature = "qemu-io"))]
         {
-            let mut drain = LogDrain { next_seq: 0, state: None };
+            let mut drain = LogDrain { next_seq: 0, state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
             loop {
                 drain.run();
                 cortex_m::asm::wfi();
@@ -539,12 +643,15 @@ mod board {
     struct LogDrain {
         next_seq: u16,
         state: Option<flinch_firmware::State>,
+        /// The log's `next_seq` when it was last written to the backup SRAM.
+        saved_seq: Option<u16>,
     }
 
     #[cfg(not(feature = "qemu-io"))]
     impl LogDrain {
         fn run(&mut self) {
             let mut batch: heapless::Vec<flinch_firmware::TripEvent, 16> = heapless::Vec::new();
+            let mut to_save: Option<EventLog<16>> = None;
             // SAFETY: BASEPRI = PRIO_TICK masks SysTick and the bookkeeping, FW's only other users
             // (the edge, at priority 0, never touches FW), so this is the one reference meanwhile.
             let state = unsafe {
@@ -553,10 +660,21 @@ mod board {
                 for e in fw.log().iter().filter(|e| e.seq.wrapping_sub(self.next_seq) < 0x8000) {
                     let _ = batch.push(*e);
                 }
+                if self.saved_seq != Some(fw.log().next_seq()) {
+                    to_save = Some(fw.log().clone());
+                }
                 let state = fw.state();
                 cortex_m::register::basepri::write(0);
                 state
             };
+            // The log into the backup SRAM, with every interrupt enabled (the latch is stored by the
+            // tick and the bookkeeping themselves, 4 words, at once). The drain runs after every
+            // interrupt (`wfi`), so an event reaches the backup SRAM within a tick; a reset in the
+            // middle of the store loses the log (its CRC), never the latch (`backup.rs`).
+            if let Some(log) = to_save {
+                backup::store_log(&mut Bkp, &log);
+                self.saved_seq = Some(log.next_seq());
+            }
             for e in &batch {
                 defmt::warn!(
                     "event {=u16}: {=str} flags {=u8:#x} at {=u32} us (first seen {=u32} us), travel {=i32} um",
