@@ -53,11 +53,12 @@ mod qemu {
     use cortex_m_semihosting::{debug, hprintln};
     use defmt_rtt as _;
     use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
+    use flinch_firmware::backup;
     use flinch_firmware::event_log::{self, FLAG_EDGE, FLAG_ESCALATED};
     use flinch_firmware::{
         stopping_distance_um, AnalogConfig, AnalogTravel, BudgetConfig, Cause, ChatterGuard, Clock, Config,
         Boot, DigitalSwitch, Filter, Firmware, Micros, Mm, ResetCause, ResetPolicy, ResetPress, Retained, StartPolicy,
-        State, SwitchKind, Unconnected,
+        RamBackup, State, SwitchKind, Unconnected,
     };
 
     const SYST_CVR: u32 = 0xE000_E018;
@@ -237,6 +238,54 @@ mod qemu {
         b.ticks(&mut fw, 2);
         b.reset.store(false, Relaxed);
         ensure(b.boot(&mut fw), "a reset press and release starts the self-test and arms")
+    }
+
+    /// The backup store on this machine: mps2-an386 has no backup SRAM, so a RAM word array
+    /// (`flinch_firmware::RamBackup`) runs the same load/store code as the board's backup SRAM.
+    /// Filled with garbage, as a power-on leaves an SRAM.
+    static mut BACKUP: RamBackup<80> = RamBackup::filled(0x6B6B_A5A5);
+
+    fn latch_and_log_survive_a_reset() -> Check {
+        // SAFETY: thread mode only, one scenario at a time; no interrupt touches BACKUP.
+        let bkp = unsafe { &mut *core::ptr::addr_of_mut!(BACKUP) };
+        run_until_trip(bkp)?;
+        run_after_watchdog_reset(bkp)?;
+        // One flipped bit in the stored log: no log, the latch still holds.
+        bkp.words[backup::LOG_AT + 5] ^= 1 << 3;
+        ensure(backup::load_log::<_, 16>(bkp).is_none(), "a corrupt log is refused")?;
+        ensure(backup::load_latch(bkp).decode() == Some((Some(Cause::Trip), 0)), "the latch is kept apart")
+    }
+
+    /// A power-on with garbage in the store: a clean power-on, arms by itself; then a trip.
+    /// (Each run in its own frame: two firmware objects in one frame would double the stack.)
+    #[inline(never)]
+    fn run_until_trip(bkp: &mut RamBackup<80>) -> Check {
+        let boot = Boot { cause: ResetCause::from_rcc_csr(1 << 27 | 1 << 26 | 1 << 25), retained: backup::load_latch(bkp) };
+        let b = Bench::new(0);
+        let mut fw = b.firmware_after(bench_config(BUDGET), boot).ok_or("config")?;
+        fw = fw.with_saved_log(backup::load_log(bkp));
+        ensure(b.boot(&mut fw), "garbage in the store reads as a clean power-on")?;
+        b.level.store(false, Relaxed);
+        fw.on_edge();
+        backup::store_latch(bkp, fw.retained());
+        ensure(backup::store_log(bkp, fw.log()), "log stored")?;
+        ensure(b.stop_requested(), "tripped")
+    }
+
+    /// The part resets (IWDG); the obstacle is gone, the outputs float back high.
+    #[inline(never)]
+    fn run_after_watchdog_reset(bkp: &mut RamBackup<80>) -> Check {
+        let b = Bench::new(0);
+        let boot = Boot { cause: ResetCause::from_rcc_csr(1 << 29 | 1 << 26), retained: backup::load_latch(bkp) };
+        let mut fw = b.firmware_after(bench_config(BUDGET), boot).ok_or("config")?;
+        fw = fw.with_saved_log(backup::load_log(bkp));
+        b.ticks(&mut fw, 100);
+        ensure(b.stop_requested() && fw.state() == State::Fault(Cause::Reset), "stopped after the reset")?;
+        let mut it = fw.log().iter().map(|e| (e.seq, e.cause));
+        ensure(it.next() == Some((0, Cause::Reset)), "first run's power-on event kept")?;
+        ensure(it.next() == Some((1, Cause::Trip)), "first run's trip kept")?;
+        ensure(it.next() == Some((2, Cause::Reset)), "the watchdog reset logged after it")?;
+        ensure(it.next() == Some((3, Cause::Trip)), "the retained latch logged")
     }
 
     fn auto_reset_across_the_wrap() -> Check {
@@ -714,10 +763,11 @@ mod qemu {
         cp.SYST.enable_counter();
 
         hprintln!("flinch firmware self-test on mps2-an386");
-        let scenarios: [Scenario; 11] = [
+        let scenarios: [Scenario; 12] = [
             ("trip on the edge, latch, reset by input", trip_latch_reset),
             ("automatic reset across the u32 wrap", auto_reset_across_the_wrap),
             ("a watchdog reset stays stopped until a reset press", reset_latch),
+            ("latch and event log survive a reset in the backup store", latch_and_log_survive_a_reset),
             ("stuck input fails the start-up test", stuck_input_at_start_up),
             ("cut wire reads as a trip", cut_wire),
             ("clock stall is a fault", clock_stall),
