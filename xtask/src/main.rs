@@ -883,6 +883,9 @@ fn check_stack(stdout: &str) -> Result<u32, String> {
 /// preempts, and at the tick's priority it would wait for the whole tick (`trip_tick=`, ~700).
 const ICOUNT_BEST_LIMIT: u32 = 40;
 const ICOUNT_WORST_LIMIT: u32 = 60;
+/// Worst tick to output write (trip tick + a trip's edge and bookkeeping + the other edge),
+/// instructions: hal-sim/src/latency.rs gives `flinch hil` this figure.
+const ICOUNT_TICK_OUTPUT_LIMIT: u32 = 1_500;
 
 /// Both edge-to-stop figures of the `icount:` line, each within its limit: `(best, worst)`.
 fn check_icount(stdout: &str) -> Result<(u32, u32), String> {
@@ -906,6 +909,20 @@ fn check_icount(stdout: &str) -> Result<(u32, u32), String> {
     }
     if worst > ICOUNT_WORST_LIMIT {
         return Err(format!("worst-case edge-to-stop {worst} > {ICOUNT_WORST_LIMIT} instructions (the edge does not preempt the tick?)"));
+    }
+    // Tick to output: the work at the tick's priority or above that can run before a tick's output
+    // write (a trip's edge and bookkeeping already running, the other channel's edge), then the
+    // trip tick itself. Each part must have been measured, and the sum is what the self-test says.
+    let (trip, edge, book) = (field("trip_tick=")?, field("edge_handler=")?, field("edge_and_book=")?);
+    let tick_worst = field("tick_to_output_worst=")?;
+    if trip == 0 || edge < best || book <= edge {
+        return Err(format!("trip tick {trip}, edge handler {edge}, edge and bookkeeping {book}: a part was not measured: {line}"));
+    }
+    if tick_worst != trip + edge + book {
+        return Err(format!("tick_to_output_worst {tick_worst} != trip_tick + edge_handler + edge_and_book = {}", trip + edge + book));
+    }
+    if tick_worst > ICOUNT_TICK_OUTPUT_LIMIT {
+        return Err(format!("worst tick-to-output {tick_worst} > {ICOUNT_TICK_OUTPUT_LIMIT} instructions"));
     }
     Ok((best, worst))
 }
@@ -1124,8 +1141,19 @@ mod tests {
 
     #[test]
     fn icount_asserts_best_and_worst() {
-        let line = |b: u32, w: u32| format!("icount: best_pend_to_stop={b} worst_pend_to_stop={w} entry_overhead=5\n");
+        let line = |b: u32, w: u32| {
+            format!("icount: best_pend_to_stop={b} worst_pend_to_stop={w} entry_overhead=5 trip_tick=698 edge_handler=40 edge_and_book=400 tick_to_output_worst=1138\n")
+        };
         assert_eq!(check_icount(&line(25, 26)), Ok((25, 26)));
+        // Tick to output: every part measured, the sum as stated, within the limit.
+        let tick = |t: u32, e: u32, b: u32, sum: u32| {
+            format!("icount: best_pend_to_stop=25 worst_pend_to_stop=26 trip_tick={t} edge_handler={e} edge_and_book={b} tick_to_output_worst={sum}\n")
+        };
+        assert!(check_icount(&tick(698, 40, 400, 1138)).is_ok());
+        assert!(check_icount(&tick(698, 40, 400, 698)).unwrap_err().contains("!="), "the same-priority work left out");
+        assert!(check_icount(&tick(698, 40, 0, 738)).is_err(), "bookkeeping not measured");
+        assert!(check_icount(&tick(1400, 40, 400, 1840)).unwrap_err().contains("tick-to-output"));
+        assert!(check_icount("icount: best_pend_to_stop=25 worst_pend_to_stop=26 trip_tick=698\n").is_err(), "the old line");
         // Today's main before the priorities: the edge waited behind the trip tick.
         assert!(check_icount(&line(36, 700)).unwrap_err().contains("worst-case"));
         assert!(check_icount(&line(41, 41)).unwrap_err().contains("best-case"));
