@@ -391,6 +391,25 @@ fn check_board_log(log: &str) -> Result<String, String> {
     Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
 }
 
+/// The board ELF's stack bound, bytes: asserted on the `qemu-io` build's painted stack (main, the
+/// log drain, the bench in thread mode, every interrupt), firmware/README.md "board stack": measured
+/// 3280 B, the bound leaves a quarter for what the run does not reach (a fault handler on top).
+const BOARD_STACK_LIMIT: u32 = 4096;
+
+/// The board ELF's painted stack use from the bench's `bench: stack used=N B` line.
+fn check_board_stack(out: &str) -> Result<u32, String> {
+    let line = out.lines().find(|l| l.starts_with("bench: stack used=")).ok_or("no 'bench: stack used=' line from the board bench")?;
+    let n: u32 = line
+        .strip_prefix("bench: stack used=")
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| format!("unreadable: {line}"))?;
+    if n == 0 || n > BOARD_STACK_LIMIT {
+        return Err(format!("board stack used {n} B: want 0 < used <= {BOARD_STACK_LIMIT} B ({line})"));
+    }
+    Ok(n)
+}
+
 /// A register trace against its expected lines; an expected line ending in `value *)` matches any
 /// value (a timestamp, or a CRC over one, that the free-running QEMU clock makes vary).
 fn trace_matches<A: AsRef<str>, B: AsRef<str>>(got: &[A], want: &[B]) -> bool {
@@ -608,8 +627,9 @@ fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
         }
     }
     let ticks = rest.iter().filter(|l| l.starts_with("I2S2ext:") && (l.ends_with("value 0xaaaa)") || l.ends_with("value 0x0000aaaa)"))).count();
+    let stack = check_board_stack(out)?;
     Ok(format!(
-        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks",
+        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks; board stack {stack} B <= {BOARD_STACK_LIMIT} B (painted)",
         got.len()
     ))
 }

@@ -509,6 +509,9 @@ mod board {
         if !unsafe { ram_test() } {
             integrity_failed(SELF_RAM, 0);
         }
+        // The bench build measures the board's stack use: paint the region the RAM test zeroed.
+        #[cfg(feature = "qemu-io")]
+        super::bench::paint_stack();
         if !flash_crc_ok() {
             integrity_failed(SELF_FLASH, 0);
         }
@@ -618,15 +621,14 @@ mod board {
         cp.SYST.enable_interrupt();
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
+        let mut drain = LogDrain { next_seq: 0, state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
+        // The bench plays the world in thread mode and runs the drain on every pass.
         #[cfg(feature = "qemu-io")]
-        super::bench::run_scenario(|| tim2().cnt().read().bits());
+        super::bench::run_scenario(|| tim2().cnt().read().bits(), || drain.run());
         #[cfg(not(feature = "qemu-io"))]
-        {
-            let mut drain = LogDrain { next_seq: 0, state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
-            loop {
-                drain.run();
-                cortex_m::asm::wfi();
-            }
+        loop {
+            drain.run();
+            cortex_m::asm::wfi();
         }
     }
 
@@ -639,7 +641,6 @@ mod board {
     /// logs them afterwards, with every interrupt enabled. defmt-rtt runs with `drop-on-contention`
     /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
     /// truncates the message; only an attached probe-rs switches it to blocking).
-    #[cfg(not(feature = "qemu-io"))]
     struct LogDrain {
         next_seq: u16,
         state: Option<flinch_firmware::State>,
@@ -647,7 +648,6 @@ mod board {
         saved_seq: Option<u16>,
     }
 
-    #[cfg(not(feature = "qemu-io"))]
     impl LogDrain {
         fn run(&mut self) {
             let mut batch: heapless::Vec<flinch_firmware::TripEvent, 16> = heapless::Vec::new();

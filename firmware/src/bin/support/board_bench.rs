@@ -64,7 +64,10 @@ const NVIC_ISPR1: u32 = 0xE000_E204;
 const LSI_CAPTURE_US: u32 = 250;
 
 /// The switch as the obstacle leaves it, before the wiring model; and the LSI.
-struct World {
+struct World<F: FnMut()> {
+    /// The board's thread-mode work between interrupts (its log drain: `board.rs`, `LogDrain`),
+    /// run on every pass so that its stack use and its backup-SRAM stores are part of the run.
+    idle: F,
     a_tripped: bool,
     b_tripped: bool,
     reset: bool,
@@ -74,7 +77,7 @@ struct World {
     lsi_next: Option<u32>,
 }
 
-impl World {
+impl<F: FnMut()> World<F> {
     /// The input register the MCU sees now.
     fn pins(&self) -> u32 {
         let odr = ODR_D.load(Relaxed);
@@ -97,6 +100,7 @@ impl World {
 
     /// One pass of the world: the pins, and the LSI's capture when it is due.
     fn step(&mut self, now: u32) {
+        (self.idle)();
         PINS.store(self.pins(), Relaxed);
         if !self.lsi_on {
             return;
@@ -110,7 +114,7 @@ impl World {
 }
 
 /// Run the world for `us` microseconds of TIM2 time (the bench's pins follow the outputs meanwhile).
-fn run(w: &mut World, now: &impl Fn() -> u32, us: u32) {
+fn run<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, us: u32) {
     let start = now();
     while now().wrapping_sub(start) < us {
         w.step(now());
@@ -119,7 +123,7 @@ fn run(w: &mut World, now: &impl Fn() -> u32, us: u32) {
 }
 
 /// Run until the stop output reads `want`, at most `us`; false on time-out.
-fn until_stop(w: &mut World, now: &impl Fn() -> u32, want: bool, us: u32) -> bool {
+fn until_stop<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, want: bool, us: u32) -> bool {
     let start = now();
     while now().wrapping_sub(start) < us {
         w.step(now());
@@ -139,7 +143,7 @@ fn fail(what: &str) -> ! {
 }
 
 /// Press and release the reset input for `press_us`.
-fn reset_press(w: &mut World, now: &impl Fn() -> u32, press_us: u32) {
+fn reset_press<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, press_us: u32) {
     write(MARK, 1); // marker 1: reset pressed
     w.reset = true;
     run(w, now, press_us);
@@ -149,8 +153,8 @@ fn reset_press(w: &mut World, now: &impl Fn() -> u32, press_us: u32) {
 }
 
 /// The scenario; `now` reads TIM2 (microseconds of firmware time).
-pub fn run_scenario(now: impl Fn() -> u32) -> ! {
-    let mut w = World { a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
+pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
+    let mut w = World { idle, a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
     run(&mut w, &now, 200_000); // latched after the reset: nothing happens untouched
     if ODR_D.load(Relaxed) & STOP != 0 {
         fail("'go' before any reset press");
@@ -231,9 +235,48 @@ pub fn run_scenario(now: impl Fn() -> u32) -> ! {
     hprintln!("bench: LSI stopped while armed: stopped (clock check) after {} ms", took_ms);
     run(&mut w, &now, 10_000);
     write(MARK, 8); // marker 8: end
+    let (used, painted) = stack_used();
+    hprintln!("bench: stack used={} B of the board ELF (painted {} B; main, the drain, the bench and every interrupt)", used, painted);
     hprintln!("bench: PASS");
     debug::exit(debug::EXIT_SUCCESS);
     loop {
         cortex_m::asm::nop();
     }
+}
+
+// ---- Stack painting: the board ELF's own stack use, measured in this run ---------------------------
+/// flip-link puts the stack at the bottom of RAM: it grows down from `_stack_start` towards
+/// 0x2000_0000. `paint_stack` (called by `main` right after the RAM test, which left the region
+/// zeroed) fills it with `PAINT` up to just below main's frame; `stack_used` finds the lowest word no
+/// longer holding it. Everything that ran afterwards is included: main, the drain (thread mode),
+/// this bench, the tick, the bookkeeping, the LSI capture and both edges.
+const PAINT: u32 = 0xA5A5_5A5A;
+const RAM_START: u32 = 0x2000_0000;
+const PAINT_GAP: u32 = 64;
+extern "C" {
+    static _stack_start: u32;
+}
+
+/// Paint the unused stack below the current stack pointer (less `PAINT_GAP`).
+#[inline(always)]
+pub fn paint_stack() {
+    let sp = cortex_m::register::msp::read();
+    let mut a = RAM_START;
+    while a < sp.saturating_sub(PAINT_GAP) {
+        // SAFETY: RAM below the live frames; nothing lives there (flip-link: only the stack).
+        unsafe { core::ptr::write_volatile(a as *mut u32, PAINT) };
+        a += 4;
+    }
+}
+
+/// (bytes used below the stack's top, bytes painted).
+fn stack_used() -> (u32, u32) {
+    // The linker's symbol; only its address is used.
+    let top = core::ptr::addr_of!(_stack_start) as u32;
+    let mut a = RAM_START;
+    // SAFETY: reads of the stack region, word-aligned.
+    while a < top && unsafe { core::ptr::read_volatile(a as *const u32) } == PAINT {
+        a += 4;
+    }
+    (top - a, top - RAM_START)
 }
