@@ -9,7 +9,9 @@
 //! One concern per module: [`clock`] (wrap-safe microseconds), [`sensor`] (travel switch, analog
 //! travel with velocity estimate), [`debounce`] (glitch filter with its latency, chatter guard),
 //! [`detector`] (states and reset policy), [`selftest`] (stuck input at start-up), [`watchdog`] (clock
-//! stall, missed tick deadline), [`stop_output`] (fail-safe outputs), [`event_log`] (ring of trips,
+//! stall, missed tick deadline), [`stop_output`] (fail-safe outputs), [`backup`] (the latch and the
+//! event log across resets, in backup SRAM), [`option_bytes`] (the brown-out level, verified at the
+//! next boot), [`event_log`] (ring of trips,
 //! serialisable), [`stroke_budget`] (stopping distance vs. remaining stroke), [`firmware`] (all of it
 //! tied together).
 //!

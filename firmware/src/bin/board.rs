@@ -30,17 +30,21 @@
 //! HardFault and default (NMI, any unexpected interrupt) handlers write the stop and escalation pins
 //! low before anything else and record `Cause::FaultHandler` in the retained latch.
 //!
-//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, a March C- RAM test over
-//! .data/.bss and the stack region, then a CRC-32 of the flash image against `FLINCH_FLASH_CRC`
-//! (patched into the ELF by `cargo xtask`), and after the register set-up the brown-out level
-//! (BOR level 3, programmed once if the option byte differs). A failure never builds the firmware.
+//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, the stop, escalation and
+//! sensor-supply pins driven low by register writes (no RAM used), then a March C- RAM test over
+//! .data/.bss and the stack region, a CRC-32 of the flash image against `FLINCH_FLASH_CRC` (patched
+//! into the ELF by `cargo xtask`, with the `qemu-io` build's own seed), and the brown-out level (BOR
+//! level 3, `flinch_firmware::option_bytes`: programmed once, verified from the option bytes at the
+//! next boot). Any failure is a permanent stop with `SelfCheck` latched and logged in backup SRAM,
+//! before the IWDG is started.
 //!
-//! Resets (`flinch_firmware::reset`): `main` reads why the part reset from `RCC_CSR` (then clears the
-//! flags with RMVF) and the retained latch from `RETAINED`, four words in cortex-m-rt's `.uninit`
-//! section, which the start-up code does not zero: it survives watchdog, software, pin and fault
-//! resets, and a power cycle turns it into garbage that its CRC rejects. Every start waits for a
-//! reset press and release (`StartPolicy::ManualReset`). (Backup SRAM with a VBAT cell would keep the
-//! latch across a power cycle too; it is not used because QEMU's STM32F405 does not model it.)
+//! Resets (`flinch_firmware::reset`, `flinch_firmware::backup`): `main` reads why the part reset from
+//! `RCC_CSR` (then clears the flags with RMVF), and the latch and the event log from the backup SRAM
+//! (`Bkp`, 0x4002_4000; PWREN, BKPSRAMEN, DBP), which no system reset clears; a power cycle without
+//! VBAT leaves garbage that the records' CRCs reject (a clean power-on). The latch is stored by the
+//! tick and the bookkeeping when it changes, the log by the thread-mode drain. Every start waits for a
+//! reset press and release (`StartPolicy::ManualReset`). QEMU's netduinoplus2 maps the backup SRAM and
+//! PWR as unimplemented devices (reads 0): there every start reads "no record".
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
@@ -338,7 +342,7 @@ mod board {
 
     /// March C- with four data backgrounds over the RAM the firmware will use: .data and .bss, and
     /// the stack region below the frames in use now (flip-link puts the stack at the bottom of RAM);
-    /// not the retained latch (.uninit, after .bss) and not the top `STACK_KEEP` bytes of the stack.
+    /// not the top `STACK_KEEP` bytes of the stack (the latch and the log are in backup SRAM, not RAM).
     /// Restores .data from its load image afterwards (the test leaves zeros, which is .bss's value).
     ///
     /// # Safety
