@@ -76,7 +76,7 @@ impl SimRig<DigitalSwitch<SimPin, SimPin>> {
     }
 
     /// The MCU resets (`cause`, e.g. the watchdog) at the current instant: the firmware starts again
-    /// from the retained record it left, with the same pins and clock (the board's `.uninit` latch).
+    /// from the retained record it left, with the same pins and clock (the board's backup-SRAM latch).
     pub fn mcu_reset(&mut self, cause: ResetCause) {
         if let PlantInput::Switch { pin, kind, switch_travel_um } = &self.input {
             let supply = self.supply.clone().unwrap_or_else(|| SimPin::new(true));
