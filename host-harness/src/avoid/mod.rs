@@ -346,8 +346,8 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
         }
         if let Some(s) = res.rx {
             println!(
-                "  frames received   {} good, {} bad CRC, {} bad header, {} short, {} stale",
-                s.good, s.bad_crc, s.bad_header, s.short, s.stale
+                "  frames received   {} good, {} bad CRC, {} bad header, {} short, {} stale, {} of another session; {} bytes overrun, {} backlogs, {} new sessions",
+                s.good, s.bad_crc, s.bad_header, s.short, s.stale, s.old_session, s.overrun, s.backlog, s.new_sessions
             );
         }
         if let Some(p) = &args.plot {
