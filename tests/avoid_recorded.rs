@@ -254,3 +254,85 @@ fn write_fixtures() {
     std::fs::write(root.join("scene_tum.toml"), text.replace("depth_scale_m = 0.001", "depth_scale_m = 0.0002")).unwrap();
     render_recording(&scene, &[(&root.join("realsense"), 0.001), (&root.join("tum"), 0.0002)], 240, 240, &track(&scene, &synthetic)).unwrap();
 }
+
+/// The demo's first frame rendered through the pinhole camera (no noise, no nulls), the separation
+/// from the tool and the nearest obstacle cell.
+fn first_frame(scene: &Avoid) -> (flinch_harness::avoid::depth::DepthImage, flinch_harness::avoid::camera::Pinhole) {
+    use flinch_harness::avoid::camera::{render_depth, to_counts, Pinhole};
+    let cam = Pinhole::new(scene.depth_camera.as_ref().unwrap());
+    let z = render_depth(&cam, 240, 240, Some((&scene.robot_shape(), scene.start_m)), Some((&scene.operator_shape_at(0.0), scene.hand_at(0.0))));
+    (to_counts(&z, 240, 240, scene.depth_camera.as_ref().unwrap().depth_scale_m), cam)
+}
+
+/// Review finding (issue 11 follow-up, 6a): the fill took the highest seen neighbour, so a null
+/// strip two cells wide over the hand's edge nearest the tool (a black glove's rim) had its outer
+/// cells painted as table and the separation came out one cell too large. Wanted: the strip stays an
+/// obstacle and the separation is never larger than with the hand fully seen. Open: ignored until the fill tells null pixels from sampling gaps (refusing to fill
+/// any 2 x 2 block of unknown cells fixes this case but blocks the demo's recorded run).
+#[test]
+#[ignore = "issue 11 follow-up 6a open: the one-pass fill paints a 2-cell null strip as floor"]
+fn a_null_strip_over_the_hands_edge_is_not_painted_as_table() {
+    use flinch_harness::avoid::recorded::process_frame;
+    let (_, scene) = scene();
+    let setup = Setup::new(&scene, None).unwrap();
+    let (clean, cam) = first_frame(&scene);
+    let tool = scene.start_m;
+    let cell = scene.camera.m_per_px;
+    let (_, sep0, near0, _) = process_frame(&scene, &setup, &cam, &clean, Some(tool), tool);
+    let r0 = ((near0[0] - tool[0]).powi(2) + (near0[1] - tool[1]).powi(2)).sqrt();
+    for cells in [1.0, 2.0] {
+        // Null every pixel whose point lies in a band `cells` wide along the hand's edge nearest the
+        // tool (the edge and the floor just before it), within 0.1 m of the nearest point.
+        let mut img = clean.clone();
+        let mut nulled = 0;
+        for v in 0..img.height {
+            for u in 0..img.width {
+                let c = &mut img.mm[v * img.width + u];
+                let q = cam.unproject(u as f64, v as f64, cam.depth_m(*c));
+                let r = ((q[0] - tool[0]).powi(2) + (q[1] - tool[1]).powi(2)).sqrt();
+                let near = ((q[0] - near0[0]).powi(2) + (q[1] - near0[1]).powi(2)).sqrt() < 0.1;
+                if near && r > r0 - (cells - 0.5) * cell && r < r0 + 1.5 * cell {
+                    *c = 0;
+                    nulled += 1;
+                }
+            }
+        }
+        assert!(nulled > 20, "{nulled}");
+        let (_, sep, _, info) = process_frame(&scene, &setup, &cam, &img, Some(tool), tool);
+        assert!(sep <= sep0 + 1e-9, "{cells}-cell strip: separation {sep} m, seen whole {sep0} m ({info:?})");
+    }
+}
+
+/// Review finding (6b): a point under the work plane (multipath, a reflection) read as floor seen,
+/// painting over the hand. Now it is dropped like a null pixel (counted) and the hand's cells are
+/// unknown: an obstacle.
+#[test]
+fn points_under_the_plane_are_unknown_not_floor() {
+    use flinch_harness::avoid::recorded::process_frame;
+    let (_, scene) = scene();
+    let setup = Setup::new(&scene, None).unwrap();
+    let (clean, cam) = first_frame(&scene);
+    let tool = scene.start_m;
+    let (_, sep0, _, _) = process_frame(&scene, &setup, &cam, &clean, Some(tool), tool);
+    let hand = scene.hand_at(0.0);
+    let scale = scene.depth_camera.as_ref().unwrap().depth_scale_m;
+    let mut img = clean.clone();
+    for v in 0..img.height {
+        for u in 0..img.width {
+            let c = &mut img.mm[v * img.width + u];
+            let q = cam.unproject(u as f64, v as f64, cam.depth_m(*c));
+            if (q[0] - hand[0]).abs() < 0.15 && (q[1] - hand[1]).abs() < 0.15 {
+                // 0.1 m beyond the plane along this ray.
+                let plane = cam.origin[2] / -cam.ray(u as f64, v as f64)[2];
+                *c = ((plane + 0.1) / scale).round() as u16;
+            }
+        }
+    }
+    let (_, sep, _, info) = process_frame(&scene, &setup, &cam, &img, Some(tool), tool);
+    assert!(info.below_plane_points > 100, "{info:?}");
+    assert!(info.unknown_cells > 100, "{info:?}");
+    assert!(sep <= sep0 + 1e-9, "separation {sep} m, hand seen {sep0} m");
+    // A point within the sense height under the plane is the floor through the noise: not counted.
+    let (_, _, _, info0) = process_frame(&scene, &setup, &cam, &clean, Some(tool), tool);
+    assert_eq!(info0.below_plane_points, 0);
+}

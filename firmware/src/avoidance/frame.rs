@@ -9,9 +9,9 @@
 //! | 2 | 1 | version ([`VERSION`], 2) |
 //! | 3 | 1 | `nx`, centres along x, 1..=30 |
 //! | 4 | 1 | `ny`, centres along y, 1..=30 |
-//! | 5 | 1 | `session`: the host picks a new one each time it starts (a boot counter or a random byte); a new session is accepted with any `seq` |
+//! | 5 | 1 | `session`: the host picks a new one each time it starts (ours: Unix seconds mod 256); another session is applied, with any `seq`, only once the weights in use are stale, and never one applied before since boot (see `receiver`) |
 //! | 6 | 4 | `seq`, u32, increases by at least one per frame (wrapping) |
-//! | 10 | 2 | `age_ms`, u16: age of the depth image when the frame was sent |
+//! | 10 | 2 | `age_ms`, u16: age of the depth image when the frame was sent (the receiver counts the weights' age from the first byte's arrival less this) |
 //! | 12 | 4 | `x0`, Q16.16 m: position of centre (0, 0) |
 //! | 16 | 4 | `y0`, Q16.16 m |
 //! | 20 | 4 | `spacing`, Q16.16 m, > 0 |

@@ -10,14 +10,37 @@
 //! controller never sees a half-written grid, and no step pays for a whole frame.
 //!
 //! A frame is applied only when it is whole, its CRC is right, its header is valid, it is newer than
-//! the last applied one and its image is younger than `max_age_ms`. "Newer": a sequence number after
-//! the last applied one (wrapping), or a different session (byte 5): a host that restarts picks a new
-//! session and is accepted at once, with any sequence number; meanwhile (no good frame) the weights
-//! watchdog stops the tool as before. Everything else is counted in [`RxStats`] and dropped; after a
-//! refusal the parser restarts one byte after the refused frame's first byte, so a frame that began
-//! inside it is still found. A frame whose bytes stop arriving for `byte_timeout_ms` (everything held
-//! already parsed) is dropped as short. Bytes that find the ring full are dropped and counted
-//! (`overrun`): the budget must exceed what the line brings in a step.
+//! the last applied one and its image is younger than `max_age_ms`. Everything else is counted in
+//! [`RxStats`] and dropped; after a refusal the parser restarts one byte after the refused frame's
+//! first byte, so a frame that began inside it is still found. A frame whose bytes stop arriving for
+//! `byte_timeout_ms` (everything held already parsed) is dropped as short.
+//!
+//! **Age.** The weights' age ([`Receiver::weights_age_ms`]) counts from the image's capture as the
+//! MCU can bound it: the arrival of the frame's first byte less the header's `age_ms` (the image's
+//! age when the host sent it; sending precedes arrival, so this is never later than the capture).
+//! It does not count from the frame's application: a frame parsed `budget_bytes` at a time, or
+//! behind a backlog, is applied late, and counting from then would hide that delay (review finding:
+//! about 160 ms for a 30 x 30 frame at a 256 B budget). The arrival time of each byte comes from the
+//! `now_ms` of the [`Receiver::push`] that brought it (up to [`MARKS`] distinct push times are
+//! kept; beyond that the newest bytes are stamped with an older time: conservative).
+//!
+//! **Overrun and backlog stop the tool.** Bytes that find the ring full are dropped and counted
+//! (`overrun`), and the weights in use are forgotten ([`Receiver::weights_age_ms`] is `None`: the
+//! watchdog stops): the line brings more than the parser takes, so every later frame would be late.
+//! Likewise when the oldest byte still held waited longer than `max_age_ms` (`backlog`): whatever
+//! frame it belongs to would be refused as too old anyway. Either way the next whole, fresh frame
+//! brings the tool back, which a link that stays overloaded never delivers.
+//!
+//! **Sessions** (byte 5). "Newer" within a session: a sequence number after the last applied one
+//! (wrapping). A frame from another session is applied only when the weights in use are stale (none,
+//! forgotten, or at least `new_session_after_ms` old: set it to the watchdog's `stop_after_ms`, so
+//! the tool is already stopped), and never from a session applied before since boot (a 256-bit
+//! set): a host that restarts with a fresh session is accepted once the old weights have stopped the
+//! tool, and two writers on one port cannot take turns (the second is refused while the first keeps
+//! the weights fresh, and once it has taken over the first is refused for good). "Before since boot"
+//! rather than a wrapping order: a byte has no order that survives 256 restarts, and a set needs no
+//! argument about wrap; the cost is that a host that picks a byte used earlier in this run is refused
+//! (the tool stays stopped, counted as `old_session`) until it restarts with another.
 
 use super::field::Grid;
 use super::frame::{self, FrameHeader, HEADER_LEN, MAX_FRAME, SYNC0, SYNC1};
@@ -50,7 +73,15 @@ pub struct RxStats {
     pub overrun: u32,
     /// Frames accepted from a new session (a restarted host).
     pub new_sessions: u32,
+    /// Whole, correct frames of another session refused: the weights in use were not stale yet, or
+    /// the session was applied before since boot.
+    pub old_session: u32,
+    /// Times the weights were forgotten because a byte waited longer than `max_age_ms` unparsed.
+    pub backlog: u32,
 }
+
+/// Distinct push times kept for the bytes held (each `(first byte's index, ms)`).
+pub const MARKS: usize = 16;
 
 /// The receiving side of the weights link, holding two grids.
 pub struct Receiver<R> {
@@ -73,13 +104,30 @@ pub struct Receiver<R> {
     active: usize,
     have_grid: bool,
     last: Option<(u8, u32)>,
-    applied_at_ms: u32,
+    /// Sessions applied since boot, one bit each.
+    seen: [u32; 8],
+    /// Capture bound of the grid in use: its first byte's arrival less its `age_ms`, ms.
+    origin_ms: u32,
+    /// Index (counting every byte ever pushed, wrapping) of the byte at `start`.
+    start_abs: u32,
+    /// Arrival marks, a ring: `(index of the first byte pushed at that time, ms)`.
+    marks: [(u32, u32); MARKS],
+    mark_head: usize,
+    mark_len: usize,
+    /// Bytes still in the serial port were waiting since at least this time ([`Receiver::poll`]).
+    polled_since_ms: Option<u32>,
+    /// A backlog is being reported (counted once per episode).
+    in_backlog: bool,
     /// Longest image age accepted, ms.
     pub max_age_ms: u16,
     /// Longest gap between two bytes of one frame, ms.
     pub byte_timeout_ms: u32,
     /// Most bytes parsed per [`Receiver::service`] call (and read per [`Receiver::poll`]).
     pub budget_bytes: usize,
+    /// A frame of another session is applied only when the weights in use are at least this old
+    /// (ms), or none: set it to the weights watchdog's `stop_after_ms`. [`Receiver::new`] sets
+    /// [`EXPIRE_MS`] (conservative: a restarted host waits until the old weights are forgotten).
+    pub new_session_after_ms: u32,
     /// Counters.
     pub stats: RxStats,
 }
@@ -106,10 +154,18 @@ impl<R: Real> Receiver<R> {
             active: 0,
             have_grid: false,
             last: None,
-            applied_at_ms: 0,
+            seen: [0; 8],
+            origin_ms: 0,
+            start_abs: 0,
+            marks: [(0, 0); MARKS],
+            mark_head: 0,
+            mark_len: 0,
+            polled_since_ms: None,
+            in_backlog: false,
             max_age_ms,
             byte_timeout_ms,
             budget_bytes: RING,
+            new_session_after_ms: EXPIRE_MS,
             stats: RxStats::default(),
         }
     }
@@ -124,13 +180,57 @@ impl<R: Real> Receiver<R> {
         }
     }
 
-    /// Milliseconds since the grid in use was applied, `None` if none was.
+    /// Age of the grid in use, ms: from its capture bound (its first byte's arrival less its
+    /// `age_ms`), not from its application. `None` if there is none (none yet, forgotten after
+    /// [`EXPIRE_MS`], or dropped on an overrun or backlog).
     pub fn weights_age_ms(&self, now_ms: u32) -> Option<u32> {
         if self.have_grid {
-            Some(now_ms.wrapping_sub(self.applied_at_ms))
+            Some(now_ms.wrapping_sub(self.origin_ms))
         } else {
             None
         }
+    }
+
+    /// Arrival time (ms) of the byte `k` places after the candidate's first (the newest mark at or
+    /// before it; bounded by [`MARKS`]).
+    fn arrival_ms(&self, k: usize) -> u32 {
+        let at = self.start_abs.wrapping_add(k as u32);
+        let mut t = self.marks.get(self.mark_head).map_or(0, |m| m.1);
+        for i in 1..self.mark_len.min(MARKS) {
+            let Some(&(pos, ms)) = self.marks.get(self.mark_head.wrapping_add(i) % MARKS) else { break };
+            if (at.wrapping_sub(pos) as i32) < 0 {
+                break;
+            }
+            t = ms;
+        }
+        t
+    }
+
+    /// Drop `n` bytes from the ring's front (consumed or refused), and the marks they no longer
+    /// need (the first mark kept is the one of the new first byte).
+    fn advance(&mut self, n: usize) {
+        let n = n.min(self.count);
+        self.start = self.start.wrapping_add(n) & (RING - 1);
+        self.count = self.count.saturating_sub(n);
+        self.start_abs = self.start_abs.wrapping_add(n as u32);
+        for _ in 0..MARKS {
+            if self.count == 0 {
+                self.mark_len = 0;
+                return;
+            }
+            let next = self.marks.get(self.mark_head.wrapping_add(1) % MARKS).map_or(0, |m| m.0);
+            if self.mark_len >= 2 && (self.start_abs.wrapping_sub(next) as i32) >= 0 {
+                self.mark_head = self.mark_head.wrapping_add(1) % MARKS;
+                self.mark_len = self.mark_len.saturating_sub(1);
+            } else {
+                return;
+            }
+        }
+    }
+
+    /// Forget the weights in use (the watchdog then stops).
+    fn forget(&mut self) {
+        self.have_grid = false;
     }
 
     /// Bytes held (a frame in progress and bytes not yet parsed).
@@ -148,8 +248,20 @@ impl<R: Real> Receiver<R> {
     pub fn tick(&mut self, now_ms: u32) {
         // Weights older than EXPIRE_MS are forgotten (age `None`: the watchdog stops), so the age
         // can never wrap round to "fresh" after 2^32 ms (49.7 days) without a good frame.
-        if self.have_grid && now_ms.wrapping_sub(self.applied_at_ms) > EXPIRE_MS {
+        if self.have_grid && now_ms.wrapping_sub(self.origin_ms) > EXPIRE_MS {
             self.have_grid = false;
+        }
+        // Backlog: the oldest byte held waited longer than any frame may be old; whatever frame it
+        // starts would be refused, and the weights in use are being replaced that late.
+        let waited = if self.count > 0 { now_ms.wrapping_sub(self.arrival_ms(0)) } else { 0 };
+        if waited > u32::from(self.max_age_ms) {
+            if !self.in_backlog {
+                self.stats.backlog = self.stats.backlog.saturating_add(1);
+            }
+            self.in_backlog = true;
+            self.forget();
+        } else {
+            self.in_backlog = false;
         }
         if self.count > 0 && self.blocked && now_ms.wrapping_sub(self.last_byte_ms) > self.byte_timeout_ms {
             self.stats.short = self.stats.short.saturating_add(1);
@@ -168,6 +280,7 @@ impl<R: Real> Receiver<R> {
         if n > 0 {
             self.last_byte_ms = now_ms;
             self.blocked = false;
+            self.mark(now_ms);
         }
         let w = self.start.wrapping_add(self.count) & (RING - 1);
         // At most two runs: to the ring's end, then from its start.
@@ -180,8 +293,31 @@ impl<R: Real> Receiver<R> {
         }
         self.count = self.count.saturating_add(n);
         let lost = bytes.len().saturating_sub(n);
-        self.stats.overrun = self.stats.overrun.saturating_add(u32::try_from(lost).unwrap_or(u32::MAX));
+        if lost > 0 {
+            // The line brings more than the parser takes: every later frame would be late.
+            self.stats.overrun = self.stats.overrun.saturating_add(u32::try_from(lost).unwrap_or(u32::MAX));
+            self.forget();
+        }
         n
+    }
+
+    /// Stamp the bytes about to be pushed (at ring index `count`) with `now_ms`: a new mark, unless
+    /// the newest has the same time or all [`MARKS`] are in use (then they keep the newest mark's
+    /// older time: conservative).
+    fn mark(&mut self, now_ms: u32) {
+        let pos = self.start_abs.wrapping_add(self.count as u32);
+        if self.count == 0 {
+            self.mark_head = 0;
+            self.mark_len = 0;
+        }
+        let last = self.marks.get(self.mark_head.wrapping_add(self.mark_len).wrapping_add(MARKS - 1) % MARKS).map(|m| m.1);
+        if self.mark_len > 0 && (last == Some(now_ms) || self.mark_len >= MARKS) {
+            return;
+        }
+        if let Some(m) = self.marks.get_mut(self.mark_head.wrapping_add(self.mark_len) % MARKS) {
+            *m = (pos, now_ms);
+            self.mark_len = self.mark_len.saturating_add(1);
+        }
     }
 
     /// Feed received bytes and parse them all (a test and host convenience: unbounded by the
@@ -212,10 +348,13 @@ impl<R: Real> Receiver<R> {
 
     /// Read what `serial` has ready, at most `budget_bytes` and what the ring holds, and parse at
     /// most `budget_bytes`: one control step's share of frame handling.
+    ///
+    /// The bytes read are stamped with the time of the last poll that left the port empty (they
+    /// arrived after it; conservative by up to one poll period), or `now_ms` on the first poll.
     pub fn poll<S: embedded_io::Read + embedded_io::ReadReady>(&mut self, serial: &mut S, now_ms: u32) -> Result<usize, S::Error> {
         let mut chunk = [0u8; 64];
         let mut total: usize = 0;
-        self.tick(now_ms);
+        let stamp = self.polled_since_ms.unwrap_or(now_ms);
         for _ in 0..(RING / 64 + 1) {
             let want = self.budget_bytes.saturating_sub(total).min(RING.saturating_sub(self.count)).min(chunk.len());
             if want == 0 || !serial.read_ready()? {
@@ -225,9 +364,17 @@ impl<R: Real> Receiver<R> {
             if n == 0 {
                 break;
             }
-            self.push(chunk.get(..n).unwrap_or(&[]), now_ms);
+            self.push(chunk.get(..n).unwrap_or(&[]), stamp);
+            // The byte-gap timeout counts from now: these bytes were read now.
+            self.last_byte_ms = now_ms;
             total = total.saturating_add(n);
         }
+        if !serial.read_ready()? {
+            self.polled_since_ms = Some(now_ms);
+        } else if self.polled_since_ms.is_none() {
+            self.polled_since_ms = Some(stamp);
+        }
+        self.tick(now_ms);
         self.service(now_ms);
         Ok(total)
     }
@@ -241,8 +388,7 @@ impl<R: Real> Receiver<R> {
 
     /// Give up the candidate: drop its first byte and parse again from the next one.
     fn refuse(&mut self) {
-        self.start = self.start.wrapping_add(1) & (RING - 1);
-        self.count = self.count.saturating_sub(1);
+        self.advance(1);
         self.restart();
     }
 
@@ -305,8 +451,7 @@ impl<R: Real> Receiver<R> {
                         let crc = core::mem::replace(&mut self.digest, CRC16.digest()).finalize();
                         if crc == got {
                             self.apply(&hdr, now_ms);
-                            self.start = self.start.wrapping_add(flen) & (RING - 1);
-                            self.count = self.count.saturating_sub(flen);
+                            self.advance(flen);
                             self.restart();
                         } else {
                             self.stats.bad_crc = self.stats.bad_crc.saturating_add(1);
@@ -400,17 +545,31 @@ impl<R: Real> Receiver<R> {
     /// A whole frame with a good CRC, its weights already in the inactive grid: check freshness,
     /// swap.
     fn apply(&mut self, hdr: &FrameHeader, now_ms: u32) {
+        // Capture bound: the first byte's arrival less the image's age when sent.
+        let origin = self.arrival_ms(0).wrapping_sub(u32::from(hdr.age_ms));
+        let age = now_ms.wrapping_sub(origin);
+        let seen = |s: &[u32; 8], k: u8| s.get(usize::from(k >> 5)).is_some_and(|w| w & (1 << (k & 31)) != 0);
         let (newer, new_session) = match self.last {
             None => (true, false),
-            Some((session, _)) if session != hdr.session => (true, true),
-            Some((_, seq)) => ((hdr.seq.wrapping_sub(seq) as i32) > 0, false),
+            Some((session, seq)) if session == hdr.session => ((hdr.seq.wrapping_sub(seq) as i32) > 0, false),
+            Some(_) => {
+                let stale = self.weights_age_ms(now_ms).is_none_or(|a| a >= self.new_session_after_ms);
+                if !stale || seen(&self.seen, hdr.session) {
+                    self.stats.old_session = self.stats.old_session.saturating_add(1);
+                    return;
+                }
+                (true, true)
+            }
         };
-        if !newer || hdr.age_ms > self.max_age_ms {
+        if !newer || age > u32::from(self.max_age_ms) {
             self.stats.stale = self.stats.stale.saturating_add(1);
             return;
         }
         if new_session {
             self.stats.new_sessions = self.stats.new_sessions.saturating_add(1);
+        }
+        if let Some(w) = self.seen.get_mut(usize::from(hdr.session >> 5)) {
+            *w |= 1 << (hdr.session & 31);
         }
         let inactive = if self.active == 0 { 1 } else { 0 };
         if let Some(g) = self.grids.get_mut(inactive) {
@@ -419,7 +578,7 @@ impl<R: Real> Receiver<R> {
         self.active = inactive;
         self.have_grid = true;
         self.last = Some((hdr.session, hdr.seq));
-        self.applied_at_ms = now_ms;
+        self.origin_ms = origin;
         self.stats.good = self.stats.good.saturating_add(1);
     }
 }
@@ -476,14 +635,17 @@ mod tests {
         for (k, w) in w.iter().enumerate() {
             assert_eq!(r.grid().weights[k].to_bits(), *w);
         }
-        assert_eq!(r.weights_age_ms(25), Some(20));
+        // From the first byte's arrival (5 ms) less the image's age when sent (10 ms).
+        assert_eq!(r.weights_age_ms(25), Some(30));
     }
 
     /// Review finding: the age wrapped after 2^32 ms without a good frame and read as fresh.
     #[test]
     fn weights_expire_before_their_age_can_wrap() {
         let mut r = rx();
-        r.feed(&frame(&header(3, 3, 1), &weights(9, 1)), 5);
+        let mut h = header(3, 3, 1);
+        h.age_ms = 0;
+        r.feed(&frame(&h, &weights(9, 1)), 5);
         r.tick(5 + EXPIRE_MS);
         assert_eq!(r.weights_age_ms(5 + EXPIRE_MS), Some(EXPIRE_MS));
         r.tick(5 + EXPIRE_MS + 1);
@@ -493,7 +655,7 @@ mod tests {
         assert_eq!(r.weights_age_ms(5u32.wrapping_add(u32::MAX).wrapping_add(3)), None);
         // A good frame brings it back.
         r.feed(&frame(&header(3, 3, 2), &weights(9, 2)), 10);
-        assert_eq!(r.weights_age_ms(30), Some(20));
+        assert_eq!(r.weights_age_ms(30), Some(30));
     }
 
     #[test]
@@ -556,26 +718,154 @@ mod tests {
         assert_eq!(r.stats.good, 1);
     }
 
+    fn in_session(mut h: FrameHeader, session: u8) -> FrameHeader {
+        h.session = session;
+        h
+    }
+
+    /// Review finding (issue 11 follow-up): a new session was accepted at once, so two writers on one
+    /// port took turns. Now the second is refused while the first keeps the weights fresh; once the
+    /// first has gone quiet long enough for the watchdog to stop the tool, the second takes over, and
+    /// the first is never accepted again.
     #[test]
-    fn a_restarted_host_is_accepted_at_once() {
+    fn two_interleaved_writers_do_not_take_turns() {
         let w = weights(4, 0);
         let mut r = rx();
-        let mut h = header(2, 2, 1000);
-        h.session = 7;
-        r.feed(&frame(&h, &w), 0);
-        // The host restarts: a new session, its sequence numbers from 1.
-        let mut h2 = header(2, 2, 1);
-        h2.session = 8;
-        r.feed(&frame(&h2, &w), 1);
+        r.max_age_ms = 1000;
+        r.new_session_after_ms = 300;
+        let mut t = 0u32;
+        // A (session 1) and B (session 2) interleaved, each counting from 1.
+        for k in 1..=20u32 {
+            r.feed(&frame(&in_session(header(2, 2, k), 1), &w), t);
+            r.feed(&frame(&in_session(header(2, 2, k + 100), 2), &w), t + 5);
+            assert_eq!(r.last.map(|l| l.0), Some(1), "frame {k}: B's frame was applied");
+            t += 10;
+        }
+        assert_eq!((r.stats.good, r.stats.old_session, r.stats.new_sessions), (20, 20, 0));
+        // A goes quiet: B is still refused until A's weights are 300 ms old (the watchdog's stop) ...
+        let last_a = t - 10;
+        for k in 21..=60u32 {
+            r.feed(&frame(&in_session(header(2, 2, k + 100), 2), &w), t);
+            let age = r.weights_age_ms(t).unwrap_or(u32::MAX);
+            if r.last.map(|l| l.0) == Some(2) {
+                break;
+            }
+            assert!(t < last_a + 300, "B still refused at {t} ms");
+            let _ = (k, age);
+            t += 10;
+        }
+        // ... then it is accepted (A's weights counted from A's last frame's arrival less its age).
+        assert_eq!(r.last.map(|l| l.0), Some(2));
+        assert!(t >= last_a + 300 - 10 && t <= last_a + 300 + 10, "B taken over at {t} ms, A's last frame at {last_a}");
+        assert_eq!(r.stats.new_sessions, 1);
+        // A comes back: refused for good, even once B's weights are stale.
+        let refused = r.stats.old_session;
+        for k in 0..5u32 {
+            r.feed(&frame(&in_session(header(2, 2, 1000 + k), 1), &w), t + 1000 + k);
+        }
+        assert_eq!(r.last.map(|l| l.0), Some(2));
+        assert_eq!(r.stats.old_session, refused + 5);
+    }
+
+    /// A host that restarts (new session, sequence numbers from 1) is accepted once the old weights
+    /// are stale (the watchdog has stopped the tool), with any sequence number.
+    #[test]
+    fn a_restarted_host_is_accepted_after_the_stop() {
+        let w = weights(4, 0);
+        let mut r = rx();
+        r.new_session_after_ms = 300;
+        r.feed(&frame(&in_session(header(2, 2, 1000), 7), &w), 0);
+        // Still fresh (age 10 + 100 ms): refused.
+        r.feed(&frame(&in_session(header(2, 2, 1), 8), &w), 100);
+        assert_eq!((r.stats.good, r.stats.old_session, r.grid().seq), (1, 1, 1000));
+        // Stale (290 + 10 ms): accepted.
+        r.feed(&frame(&in_session(header(2, 2, 1), 8), &w), 290);
         assert_eq!((r.stats.good, r.stats.new_sessions, r.grid().seq), (2, 1, 1));
         // Within the session the order still holds: an older number is refused.
-        h2.seq = 0;
-        r.feed(&frame(&h2, &w), 2);
+        r.feed(&frame(&in_session(header(2, 2, 0), 8), &w), 300);
         assert_eq!((r.stats.good, r.stats.stale), (2, 1));
+        // With no weights at all (forgotten), a new session is taken at once.
+        r.tick(300 + EXPIRE_MS);
+        r.feed(&frame(&in_session(header(2, 2, 5), 9), &w), 300 + EXPIRE_MS + 1);
+        assert_eq!((r.stats.good, r.stats.new_sessions), (3, 2));
         // The first frame of all is not a new session.
         let mut fresh = rx();
-        fresh.feed(&frame(&h, &w), 0);
-        assert_eq!(fresh.stats.new_sessions, 0);
+        fresh.feed(&frame(&in_session(header(2, 2, 3), 7), &w), 0);
+        assert_eq!((fresh.stats.good, fresh.stats.new_sessions), (1, 0));
+    }
+
+    /// Review finding: the age counted from the frame's application. A 30 x 30 frame whose bytes all
+    /// arrive at once (a line faster than the budget) is parsed 256 bytes a step and applied about
+    /// 140 ms later; its age must count from its first byte (less the header's `age_ms`).
+    #[test]
+    fn age_counts_from_the_first_byte_not_from_application() {
+        let f = frame(&header(30, 30, 1), &weights(900, 4));
+        let mut r = rx();
+        r.max_age_ms = 250;
+        r.budget_bytes = 256;
+        assert_eq!(r.push(&f, 1000), f.len());
+        let mut t = 1000;
+        while r.stats.good == 0 && t < 2000 {
+            r.tick(t);
+            r.service(t);
+            t += 10;
+        }
+        let applied = t - 10;
+        assert_eq!(r.stats.good, 1);
+        assert!(applied >= 1000 + 140, "applied at {applied}");
+        // Age from the first byte (1000 ms) less age_ms (10): not 0.
+        assert_eq!(r.weights_age_ms(applied), Some(applied - 1000 + 10));
+        // The same with a 100 ms bound: too old when whole, refused, and the backlog is reported.
+        let mut r = rx();
+        r.budget_bytes = 256;
+        r.push(&f, 1000);
+        for t in (1000..1300).step_by(10) {
+            r.tick(t);
+            r.service(t);
+        }
+        assert_eq!((r.stats.good, r.stats.stale, r.stats.backlog), (0, 1, 1));
+    }
+
+    /// A byte that waited longer than `max_age_ms` unparsed forgets the weights in use at once (the
+    /// watchdog stops), instead of letting them run until their own age stops the tool.
+    #[test]
+    fn a_backlog_beyond_the_stale_bound_stops() {
+        let mut r = rx();
+        r.feed(&frame(&header(3, 3, 1), &weights(9, 1)), 0);
+        assert_eq!(r.weights_age_ms(0), Some(10));
+        r.budget_bytes = 16;
+        r.push(&frame(&header(30, 30, 2), &weights(900, 2)), 5);
+        let mut t = 5;
+        while r.weights_age_ms(t).is_some() && t < 1000 {
+            t += 10;
+            r.tick(t);
+            r.service(t);
+        }
+        // Forgotten as soon as a byte has waited 100 ms (the old weights were then only 115 ms old).
+        assert!(t > 105 && t <= 115, "forgotten at {t}");
+        assert_eq!(r.stats.backlog, 1);
+        // Only a whole fresh frame brings it back.
+        r.budget_bytes = RING;
+        for _ in 0..8 {
+            t += 1000;
+            r.tick(t);
+            r.service(t);
+        }
+        r.feed(&frame(&header(3, 3, 3), &weights(9, 3)), t);
+        assert_eq!(r.weights_age_ms(t), Some(10));
+    }
+
+    /// Bytes lost to a full ring forget the weights (counted, and the tool stops), not only counted.
+    #[test]
+    fn an_overrun_stops() {
+        let mut r = rx();
+        r.feed(&frame(&header(3, 3, 1), &weights(9, 1)), 0);
+        r.budget_bytes = 16;
+        let f = frame(&header(30, 30, 2), &weights(900, 2));
+        r.push(&f, 1);
+        r.push(&f, 2);
+        assert!(r.stats.overrun > 0);
+        assert_eq!(r.weights_age_ms(3), None);
     }
 
     #[test]
@@ -681,6 +971,8 @@ mod tests {
                 }
             }
             let mut r = rx();
+            // Parsing, not freshness, is under test: a budget of 1 byte takes seconds a frame.
+            r.max_age_ms = u16::MAX;
             r.budget_bytes = budget;
             let mut now = 0u32;
             let mut applied = 0u32;

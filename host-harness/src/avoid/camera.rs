@@ -157,18 +157,26 @@ pub struct Reprojected {
     pub cells: Vec<Cell>,
     /// Points that the robot's model explained (dropped as robot), count.
     pub robot_points: usize,
+    /// Points more than the tolerance below the plane, count: measurement errors (multipath, a
+    /// reflection, a wrong depth scale), dropped as if null, so their cells stay unknown unless
+    /// another point sees them.
+    pub below_plane_points: usize,
 }
 
 /// Reproject a depth image onto the plane raster: every valid pixel's point goes into the cell that
-/// holds it, a cell keeps its highest point (the conservative reading: an obstacle never shrinks),
-/// heights below the plane read as 0. With `robot = Some((shape, pose, margin))`, a point that the
+/// holds it, a cell keeps its highest point (the conservative reading: an obstacle never shrinks).
+/// A point at most `below_m` under the plane is the plane seen through the depth noise and reads 0;
+/// one lower is no floor but a wrong measurement of whatever the ray met, and is dropped like a null
+/// pixel (counted in `below_plane_points`; earlier it read as floor seen, painting over what stood
+/// there). With `robot = Some((shape, pose, margin))`, a point that the
 /// robot's height model explains (on the robot at its recorded pose and no higher than the robot
 /// there plus `margin`) is the robot's and is dropped: its cell reads 0 unless another point in it
 /// stands higher. Each point is judged at its own position, not its cell's centre, so the robot's
 /// edge is not left behind as an obstacle one cell wide.
-pub fn reproject(cam: &Pinhole, img: &DepthImage, plane: &PlaneRaster, robot: Option<(&RobotShape, [f64; 2], f64)>) -> Reprojected {
+pub fn reproject(cam: &Pinhole, img: &DepthImage, plane: &PlaneRaster, robot: Option<(&RobotShape, [f64; 2], f64)>, below_m: f64) -> Reprojected {
     let mut cells = vec![Cell::Unknown; plane.width * plane.height];
     let mut robot_points = 0;
+    let mut below_plane_points = 0;
     for v in 0..img.height {
         for u in 0..img.width {
             let count = img.mm[v * img.width + u];
@@ -177,6 +185,10 @@ pub fn reproject(cam: &Pinhole, img: &DepthImage, plane: &PlaneRaster, robot: Op
             }
             let p = cam.unproject(u as f64, v as f64, cam.depth_m(count));
             let Some(k) = plane.cell(p[0], p[1]) else { continue };
+            if p[2] < -below_m {
+                below_plane_points += 1;
+                continue;
+            }
             let mut h = p[2].max(0.0);
             if let Some((shape, pose, margin)) = robot {
                 let hr = grown_height(shape, pose, [p[0], p[1]], margin);
@@ -191,7 +203,7 @@ pub fn reproject(cam: &Pinhole, img: &DepthImage, plane: &PlaneRaster, robot: Op
             };
         }
     }
-    Reprojected { cells, robot_points }
+    Reprojected { cells, robot_points, below_plane_points }
 }
 
 /// The robot's height over `p` grown sideways by `margin` (the highest of `p` and 8 points
@@ -383,7 +395,7 @@ mod tests {
             let cam = Pinhole::new(&c);
             let z = render_depth(&cam, 320, 240, None, Some((&op, [0.55, 0.45])));
             let img = to_counts(&z, 320, 240, 0.001);
-            let rep = reproject(&cam, &img, &plane, None);
+            let rep = reproject(&cam, &img, &plane, None, 0.014);
             let h = |x: f64, y: f64| rep.cells[plane.cell(x, y).unwrap()];
             // Top of the hand dome (0.1 m at the centre, at least 0.03 m on its rim).
             match h(0.555, 0.455) {

@@ -81,6 +81,15 @@ pub struct RxCounts {
     pub stale: u32,
     /// Bytes skipped while looking for a frame start.
     pub skipped_bytes: u32,
+    /// Bytes lost because the receiver's ring was full (each one forgets the weights: stop).
+    pub overrun_bytes: u32,
+    /// Frames accepted from a new session (a restarted host, after the weights went stale).
+    pub new_sessions: u32,
+    /// Whole, correct frames of another session refused (weights not yet stale, or a session
+    /// applied before).
+    pub old_session: u32,
+    /// Times the weights were forgotten because a byte waited longer than the age bound unparsed.
+    pub backlog: u32,
 }
 
 /// `flinch avoid --json`: the metrics of one run (docs/schema/avoid.json). Names carry their unit
@@ -169,7 +178,18 @@ impl AvoidMetrics {
             steps: res.points.len().saturating_sub(1),
             frames: res.frames,
             final_m: res.points.last().copied(),
-            rx: res.rx.map(|s| RxCounts { good: s.good, bad_crc: s.bad_crc, bad_header: s.bad_header, short: s.short, stale: s.stale, skipped_bytes: s.skipped_bytes }),
+            rx: res.rx.map(|s| RxCounts {
+                good: s.good,
+                bad_crc: s.bad_crc,
+                bad_header: s.bad_header,
+                short: s.short,
+                stale: s.stale,
+                skipped_bytes: s.skipped_bytes,
+                overrun_bytes: s.overrun,
+                new_sessions: s.new_sessions,
+                old_session: s.old_session,
+                backlog: s.backlog,
+            }),
         }
     }
 }
@@ -326,8 +346,8 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
         }
         if let Some(s) = res.rx {
             println!(
-                "  frames received   {} good, {} bad CRC, {} bad header, {} short, {} stale",
-                s.good, s.bad_crc, s.bad_header, s.short, s.stale
+                "  frames received   {} good, {} bad CRC, {} bad header, {} short, {} stale, {} of another session; {} bytes overrun, {} backlogs, {} new sessions",
+                s.good, s.bad_crc, s.bad_header, s.short, s.stale, s.old_session, s.overrun, s.backlog, s.new_sessions
             );
         }
         if let Some(p) = &args.plot {

@@ -142,6 +142,19 @@ pub fn filter_weights(w: &mut [f64]) -> usize {
     zeroed
 }
 
+/// The session byte of this host start (frame byte 5): the Unix time in whole seconds, modulo 256,
+/// taken once per process. The receiver applies a new session only once the weights in use are
+/// stale (the watchdog has stopped the tool) and never one it applied before since the MCU booted.
+/// Restarts at least 1 s and less than 256 s apart therefore always get a byte the MCU has not seen
+/// from the previous start; a byte that happens to match an earlier start of the same MCU run is
+/// refused (the tool stays stopped, `old_session` counts it) until the host starts again: a loss of
+/// availability, never an accepted stale writer. A random byte would collide with the previous start
+/// once in 256; a counter would need storage the host does not have. Nothing is persisted.
+pub fn host_session() -> u8 {
+    static SESSION: std::sync::OnceLock<u8> = std::sync::OnceLock::new();
+    *SESSION.get_or_init(|| std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| (d.as_secs() % 256) as u8))
+}
+
 /// The interpolated field `f*` in metres on the plane, evaluated with its own sigma.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Field {
@@ -230,10 +243,11 @@ impl Field {
         (v * 65536.0).round().clamp(i32::MIN as f64, i32::MAX as f64) as i32
     }
 
-    /// The frame that carries this field to the MCU (`flinch_firmware::avoidance::frame`).
+    /// The frame that carries this field to the MCU (`flinch_firmware::avoidance::frame`), in this
+    /// host start's session ([`host_session`]).
     pub fn to_frame(&self, seq: u32, age_ms: u16) -> Result<Vec<u8>, String> {
         let h = fw::FrameHeader {
-            session: 0,
+            session: host_session(),
             nx: self.nx as u8,
             ny: self.ny as u8,
             seq,
