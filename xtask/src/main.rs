@@ -27,6 +27,9 @@
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
+//! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-clock` board ELF
+//!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
+//!   against `firmware/qemu/board-serial.txt`.
 //! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stages
 //!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop; and
 //!   "board ELF edge in QEMU": the `qemu-io` build's edges against `firmware/qemu/board-edge.txt`).
@@ -54,6 +57,10 @@ fn main() -> ExitCode {
             let out = run_qemu()?;
             print!("{}", out.stdout);
             check_qemu_output(&out).and_then(|_| check_icount(&out.stdout)).and_then(|_| check_stack(&out.stdout).map(|_| ()))
+        }),
+        Some("board-serial") => single(|| {
+            build_board_qemu_clock()?;
+            board_serial().map(|m| println!("{m}"))
         }),
         Some("board-qemu") => single(|| {
             build_firmware()?;
@@ -196,6 +203,17 @@ fn test() -> ExitCode {
                     print!("{out}");
                     check_board_edge(&out, &log)
                 }) {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
+        results.push((
+            "board serial in QEMU",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match build_board_qemu_clock().and_then(|()| board_serial()) {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }
@@ -472,6 +490,167 @@ fn build_board_qemu_io() -> Result<(), String> {
     } else {
         Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-io exited with {status}"))
     }
+}
+
+/// The `qemu-clock` build of the board binary: the production board with only its clock constants
+/// as QEMU's netduinoplus2 runs them (core 168 MHz, timers 1 GHz), so that its milliseconds are
+/// QEMU's. Its own target directory.
+fn build_board_qemu_clock() -> Result<(), String> {
+    let status = cargo()
+        .args(["build", "--release", "--target", TARGET, "--bin", "board", "--features", "qemu-clock", "--target-dir"])
+        .arg(qemu_clock_dir())
+        .current_dir(repo_root().join("firmware"))
+        .status()
+        .map_err(|e| format!("could not run cargo: {e}"))?;
+    if status.success() {
+        patch_flash_crc(&qemu_clock_dir().join(TARGET).join("release").join("board")).map(|_| ())
+    } else {
+        Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-clock exited with {status}"))
+    }
+}
+
+fn qemu_clock_dir() -> PathBuf {
+    target_dir().join("board-qemu-clock")
+}
+
+/// How long the whole serial conversation may take (QEMU's virtual clock follows the host's).
+const SERIAL_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// A 5 x 5 weights frame over the 1.05 m work plane (centres 0.21 m apart from 0.105 m, sigma
+/// 0.105 m), every weight `w_m`: the shipped demo's grid size; 0.5 m puts the field at the tool far
+/// above the board's stop height (the hand over the tool), 0 is an empty field.
+fn weights_frame(seq: u32, w_m: f64) -> Vec<u8> {
+    use flinch_firmware::avoidance::frame::{encode_frame, FrameHeader, MAX_FRAME};
+    let q = |v: f64| (v * 65536.0).round() as i32;
+    let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: q(0.105), y0_q16: q(0.105), spacing_q16: q(0.21), sigma_q16: q(0.105) };
+    let mut out = vec![0u8; MAX_FRAME];
+    let n = encode_frame(&h, &[q(w_m); 25], &mut out).unwrap_or(0);
+    out.truncate(n);
+    out
+}
+
+/// One velocity frame as the expected file writes it; `full` adds the numbers that depend only on
+/// the frames sent (not on when QEMU delivered them).
+fn velocity_line(what: &str, f: &flinch_firmware::avoidance::link::VelocityFrame, full: bool) -> String {
+    if full {
+        format!(
+            "{what}: status={} seq={} vx_umps={} vy_umps={} x_um={} y_um={} good={} refused={}",
+            f.status.name(), f.seq, f.vx_umps, f.vy_umps, f.x_um, f.y_um, f.good, f.refused
+        )
+    } else {
+        format!("{what}: status={} seq={}", f.status.name(), f.seq)
+    }
+}
+
+/// The board's avoidance over its serial port: the `qemu-clock` board ELF on netduinoplus2, USART1
+/// connected to a Unix socket this function listens on. Weights frames go in, the board's velocity
+/// frames come back and are decoded; the conversation waits for the board's answer before each
+/// next frame, so the lines compared do not depend on the host's timing. Compared with
+/// `firmware/qemu/board-serial.txt`; a mismatch, a missing frame or a timeout fails.
+fn board_serial() -> Result<String, String> {
+    use flinch_firmware::avoidance::link::{decode_velocity, Status, VelocityFrame, VEL_LEN, VEL_SYNC0, VEL_SYNC1};
+    use std::io::{Read, Write};
+    use std::os::unix::net::UnixListener;
+    let sock = target_dir().join("board-serial.sock");
+    let _ = fs::remove_file(&sock);
+    let listener = UnixListener::bind(&sock).map_err(|e| format!("binding {}: {e}", sock.display()))?;
+    let log = target_dir().join("board-serial.log");
+    let elf = qemu_clock_dir().join(TARGET).join("release").join("board");
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-chardev"])
+        .arg(format!("socket,id=s0,path={}", sock.display()))
+        .args(["-serial", "chardev:s0", "-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
+    let start = Instant::now();
+    let result = (|| -> Result<Vec<String>, String> {
+        listener.set_nonblocking(true).map_err(|e| e.to_string())?;
+        let mut stream = loop {
+            match listener.accept() {
+                Ok((s, _)) => break s,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    if start.elapsed() > SERIAL_TIMEOUT {
+                        return Err("QEMU never connected to the serial socket".into());
+                    }
+                    sleep(Duration::from_millis(20));
+                }
+                Err(e) => return Err(format!("accepting QEMU's serial connection: {e}")),
+            }
+        };
+        stream.set_nonblocking(false).map_err(|e| e.to_string())?;
+        stream.set_read_timeout(Some(Duration::from_millis(100))).map_err(|e| e.to_string())?;
+        let mut buf: Vec<u8> = Vec::new();
+        let mut frames = 0usize;
+        // The next velocity frame that satisfies `want` (frames before it are read and dropped).
+        let mut wait = |stream: &mut std::os::unix::net::UnixStream, what: &str, want: &dyn Fn(&VelocityFrame) -> bool| -> Result<VelocityFrame, String> {
+            loop {
+                while buf.len() >= VEL_LEN {
+                    if buf[0] == VEL_SYNC0 && buf[1] == VEL_SYNC1 {
+                        if let Some(f) = decode_velocity(&buf[..VEL_LEN]) {
+                            buf.drain(..VEL_LEN);
+                            frames += 1;
+                            if want(&f) {
+                                return Ok(f);
+                            }
+                            continue;
+                        }
+                    }
+                    buf.remove(0);
+                }
+                if start.elapsed() > SERIAL_TIMEOUT {
+                    return Err(format!("timed out after {} s waiting for {what} ({frames} velocity frames read)", SERIAL_TIMEOUT.as_secs()));
+                }
+                let mut chunk = [0u8; 512];
+                match stream.read(&mut chunk) {
+                    Ok(0) => return Err(format!("QEMU closed the serial port waiting for {what}")),
+                    Ok(n) => buf.extend_from_slice(&chunk[..n]),
+                    Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                    Err(e) => return Err(format!("reading the serial port: {e}")),
+                }
+            }
+        };
+        let mut lines = Vec::new();
+        let f = wait(&mut stream, "the first velocity frame", &|_| true)?;
+        lines.push(velocity_line("before any weights frame", &f, true));
+        stream.write_all(&weights_frame(1, 0.5)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 1 in use", &|f| f.seq == 1)?;
+        lines.push(velocity_line("frame 1 (field 0.5 m weights: the hand over the tool)", &f, true));
+        let mut bad = weights_frame(2, 0.0);
+        bad[40] ^= 0x01;
+        stream.write_all(&bad).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 2 refused", &|f| f.refused >= 1)?;
+        lines.push(velocity_line("frame 2 (one bit flipped)", &f, true));
+        stream.write_all(&weights_frame(3, 0.0)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 3 in use", &|f| f.seq == 3)?;
+        lines.push(velocity_line("frame 3 (empty field)", &f, true));
+        let f = wait(&mut stream, "the weights slowing with age", &|f| f.status != Status::Ok)?;
+        lines.push(velocity_line("the line silent, the weights ageing", &f, false));
+        let f = wait(&mut stream, "the weights stale", &|f| f.status == Status::StoppedStale)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("the line still silent", &f, false), f.vx_umps, f.vy_umps));
+        Ok(lines)
+    })();
+    let _ = child.kill();
+    let _ = child.wait();
+    let _ = fs::remove_file(&sock);
+    let got = result?;
+    for l in &got {
+        println!("board serial: {l}");
+    }
+    let want = read_expected("firmware/qemu/board-serial.txt")?;
+    if got != want {
+        return Err(format!(
+            "the board's velocity frames differ from firmware/qemu/board-serial.txt:\n--- got\n{}\n--- expected\n{}",
+            got.join("\n"),
+            want.join("\n")
+        ));
+    }
+    Ok(format!("board ELF (qemu-clock) on netduinoplus2: weights frames over USART1, {} velocity frames as in firmware/qemu/board-serial.txt", got.len()))
 }
 
 fn qemu_io_dir() -> PathBuf {

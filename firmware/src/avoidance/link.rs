@@ -2,7 +2,7 @@
 //! control period, a velocity frame with a status word out.
 //!
 //! Kept in the library (not in the board binary) so that the host tests the whole step, the status
-//! and the velocity frame; the board binary (`src/bin/board_avoid.rs`) only moves bytes between the
+//! and the velocity frame; the board binary (`src/bin/support/board_avoid.rs`) only moves bytes between the
 //! USART and this type and runs [`Link::step`] on a timer.
 //!
 //! Each step: the receiver is ticked and serviced (at most `budget_bytes` parsed), the field and its
@@ -211,6 +211,44 @@ impl<R: Real> Link<R> {
     }
 }
 
+/// The step's deadline, watched from the detection tick: the tick counts the ticks since the last
+/// step ended and the step resets the count. Once the count reaches `limit` the deadline is missed
+/// for good (latched: only a reset of the MCU clears it), and [`StepDeadline::tick`] says so, so
+/// that the tick stops feeding the watchdog. Atomics only: the tick and the step run at different
+/// priorities.
+pub struct StepDeadline {
+    since: core::sync::atomic::AtomicU32,
+    missed: core::sync::atomic::AtomicBool,
+    limit: u32,
+}
+
+impl StepDeadline {
+    /// A deadline of `limit` ticks (the count starts at zero: the first step is due within it).
+    pub const fn new(limit: u32) -> Self {
+        StepDeadline { since: core::sync::atomic::AtomicU32::new(0), missed: core::sync::atomic::AtomicBool::new(false), limit }
+    }
+
+    /// One tick: `true` while every step has ended within `limit` ticks of the one before.
+    pub fn tick(&self) -> bool {
+        use core::sync::atomic::Ordering::Relaxed;
+        let n = self.since.fetch_add(1, Relaxed).saturating_add(1);
+        if n >= self.limit || n == 0 {
+            self.missed.store(true, Relaxed);
+        }
+        !self.missed.load(Relaxed)
+    }
+
+    /// A step ended.
+    pub fn step_done(&self) {
+        self.since.store(0, core::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// The deadline was missed (latched).
+    pub fn missed(&self) -> bool {
+        self.missed.load(core::sync::atomic::Ordering::Relaxed)
+    }
+}
+
 /// `max(|a|, |b|) + min(|a|, |b|) / 2`: at least the length, at most 11.8 % above.
 fn norm_bound<R: Real>(a: R, b: R) -> R {
     let (a, b) = (a.abs(), b.abs());
@@ -397,6 +435,25 @@ mod tests {
         let mut l = Link::new(c);
         feed(&mut l, &frame(1, 0.0), 0);
         assert_eq!(l.step(10).status, Status::Ok);
+    }
+
+    #[test]
+    fn a_missed_step_deadline_stays_missed() {
+        let d = StepDeadline::new(15);
+        // Steps every 10 ticks: always fed.
+        for _ in 0..100 {
+            for _ in 0..10 {
+                assert!(d.tick());
+            }
+            d.step_done();
+        }
+        // 14 ticks without a step still fed, the 15th not, and never again, even after steps.
+        for _ in 0..14 {
+            assert!(d.tick());
+        }
+        assert!(!d.tick());
+        d.step_done();
+        assert!(!d.tick() && d.missed());
     }
 
     #[test]
