@@ -9,7 +9,7 @@
 //!      its output compared with `firmware/qemu/expected.txt` (skipped without `qemu-system-arm`);
 //!   4. instruction count: the self-test's `icount:` line, edge-to-stop best (idle) <= 40 and worst
 //!      (the edge during the trip tick) <= 60 instructions under `-icount` (issue 10 item 3);
-//!   5. size: flash and static RAM of the release `board` ELF, under 32 KiB / 8 KiB;
+//!   5. size: flash and static RAM of the release `board` ELF, under 64 KiB / 16 KiB (`FLASH_LIMIT`);
 //!   6. avoidance step cost: `firmware/avoid-cost` in QEMU, at most 5,000 instructions per step on
 //!      a 15 x 15 grid for every number type (issue 4); and the step plus its share of frame handling
 //!      (receiver fed one 10 ms step's bytes) at most 5,000 for the shipped grids and frame rates (issue 11).
@@ -44,8 +44,12 @@ use std::thread::sleep;
 use std::time::{Duration, Instant};
 
 const TARGET: &str = "thumbv7em-none-eabihf";
-const FLASH_LIMIT: u64 = 32 * 1024;
-const RAM_LIMIT: u64 = 8 * 1024;
+/// Raised from 32 KiB / 8 KiB for the avoidance step on the board (issue 11): measured 42,932 B of
+/// flash (20,216 B without it) and 14,224 B of static RAM (1,708 B without it; `Link`'s 12,144 B are
+/// the receiver's 4 KiB ring and its two 30 x 30 `f32` grids, double-buffered so a bad frame is never
+/// half-applied). The STM32F407VG has 1 MiB of flash and 128 KiB of RAM.
+const FLASH_LIMIT: u64 = 64 * 1024;
+const RAM_LIMIT: u64 = 16 * 1024;
 const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
 
 fn main() -> ExitCode {
@@ -416,7 +420,7 @@ fn check_board_corrupt() -> Result<String, String> {
     use object::{Object, ObjectSection};
     let good = elf_path("board");
     let mut b = fs::read(&good).map_err(|e| format!("{}: {e}", good.display()))?;
-    let (_, crc_file, _) = flash_image(&b)?;
+    let (_, crc_file, _) = flash_image(&b, true)?;
     let off = {
         let elf = object::File::parse(&*b).map_err(|e| format!("not an ELF object: {e}"))?;
         let ro = elf.section_by_name(".rodata").ok_or("no .rodata in the board ELF")?;
@@ -464,14 +468,14 @@ fn check_board_vectors(path: &Path) -> Result<String, String> {
         let w = data.get(off..off + 4).ok_or("vector table truncated")?;
         Ok(u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) & !1)
     };
-    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)"), (50, "tim5_entry", "TIM5 (the LSI capture, clock check)")] {
+    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)"), (50, "tim5_entry", "TIM5 (the LSI capture, clock check)"), (37, "usart1_entry", "USART1 (the avoidance's weights in, velocity out)"), (29, "tim3_entry", "TIM3's line (the avoidance step, pended by the tick)")] {
         let want = sym(handler).ok_or_else(|| format!("no {handler} in the board ELF"))? & !1;
         let got = entry(irq)?;
         if got != want {
             return Err(format!("vector {irq}, {what}: {got:#x}, want {handler} at {want:#x}"));
         }
     }
-    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping, TIM5 -> LSI capture".into())
+    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping, TIM5 -> LSI capture, USART1 and TIM3 -> avoidance".into())
 }
 
 /// The `qemu-io` build of the board binary (`firmware/src/bin/support/board_bench.rs`): the same
@@ -783,7 +787,7 @@ const FLASH_END: u64 = 0x0810_0000;
 /// and .data at its load address `__sidata`; from the start of flash to the end of .data's load
 /// image, which must be covered without gaps (the board's `flash_crc_ok` reads exactly that range).
 /// Returns the image, the file offset of `FLINCH_FLASH_CRC`, and its offset in the image.
-fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
+fn flash_image(b: &[u8], zero_gaps: bool) -> Result<(Vec<u8>, usize, usize), String> {
     use object::{Object, ObjectSection, ObjectSymbol, SectionKind};
     let elf = object::File::parse(b).map_err(|e| format!("not an ELF object: {e}"))?;
     let sym = |name: &str| {
@@ -815,18 +819,69 @@ fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
             crc_file = Some((off + (crc - sec.address())) as usize);
         }
     }
-    if let Some(gap) = image.iter().position(Option::is_none) {
+    if let Some(gap) = image.iter().position(Option::is_none).filter(|_| !zero_gaps) {
         return Err(format!("the board's flash image has a gap at {:#x}: the CRC range is not contiguous", FLASH_ORIGIN + gap as u64));
     }
-    let image: Vec<u8> = image.into_iter().flatten().collect();
+    let image: Vec<u8> = image.into_iter().map(|b| b.unwrap_or(0)).collect();
     Ok((image, crc_file.ok_or("FLINCH_FLASH_CRC is not in a flash section")?, (crc - FLASH_ORIGIN) as usize))
+}
+
+/// Alignment gaps between the flash-resident load segments (e.g. 4 bytes between `.text` and an
+/// 8-aligned `.rodata`) are not loaded: on the part they stay erased (0xFF), in QEMU zero, so the
+/// start-up CRC over them would differ. Grow the segment before each gap over it, when the file holds
+/// the gap's bytes right there and they are zeros, so that the loader (probe-rs, QEMU) writes zeros
+/// on both; anything else is an error. ELF32 little-endian program headers, edited in place.
+fn cover_flash_gaps(b: &mut [u8]) -> Result<(), String> {
+    let rd32 = |b: &[u8], at: usize| -> Result<u32, String> {
+        b.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).ok_or_else(|| "ELF truncated".to_string())
+    };
+    let rd16 = |b: &[u8], at: usize| -> Result<usize, String> { b.get(at..at + 2).map(|w| u16::from_le_bytes([w[0], w[1]]) as usize).ok_or_else(|| "ELF truncated".to_string()) };
+    let (phoff, phentsize, phnum) = (rd32(b, 0x1C)? as usize, rd16(b, 0x2A)?, rd16(b, 0x2C)?);
+    // (header offset, file offset, address, file size, memory size) of flash-resident LOAD segments.
+    let mut segs = Vec::new();
+    for k in 0..phnum {
+        let h = phoff + k * phentsize;
+        let (ty, off, vaddr, paddr, filesz, memsz) = (rd32(b, h)?, rd32(b, h + 4)?, rd32(b, h + 8)?, rd32(b, h + 12)?, rd32(b, h + 16)?, rd32(b, h + 20)?);
+        if ty == 1 && vaddr == paddr && filesz == memsz && (FLASH_ORIGIN..FLASH_END).contains(&u64::from(paddr)) && filesz > 0 {
+            segs.push((h, off, paddr, filesz));
+        }
+    }
+    // Where the next loaded flash bytes start: the next flash segment, or .data's load image.
+    let mut starts: Vec<u32> = segs.iter().map(|s| s.2).collect();
+    for k in 0..phnum {
+        let h = phoff + k * phentsize;
+        let (ty, paddr, filesz) = (rd32(b, h)?, rd32(b, h + 12)?, rd32(b, h + 16)?);
+        if ty == 1 && filesz > 0 && (FLASH_ORIGIN..FLASH_END).contains(&u64::from(paddr)) {
+            starts.push(paddr);
+        }
+    }
+    for &(h, off, addr, size) in &segs {
+        let end = addr + size;
+        let Some(&next) = starts.iter().filter(|&&a| a >= end).min() else { continue };
+        let gap = next - end;
+        if gap == 0 {
+            continue;
+        }
+        if gap >= 64 {
+            return Err(format!("a {gap}-byte gap in flash at {end:#x}: not an alignment gap"));
+        }
+        let (from, to) = ((off + size) as usize, (off + size + gap) as usize);
+        match b.get(from..to) {
+            Some(bytes) if bytes.iter().all(|&x| x == 0) => {}
+            _ => return Err(format!("a {gap}-byte gap in flash at {end:#x} whose bytes the file does not hold as zeros")),
+        }
+        b[h + 16..h + 20].copy_from_slice(&(size + gap).to_le_bytes());
+        b[h + 20..h + 24].copy_from_slice(&(size + gap).to_le_bytes());
+    }
+    Ok(())
 }
 
 /// Write the flash image's CRC-32 (`flinch_firmware::integrity::image_crc`, the routine the board
 /// runs at start-up) into the ELF's `FLINCH_FLASH_CRC`. Idempotent: the word itself counts as zeros.
 fn patch_flash_crc(path: &Path) -> Result<u32, String> {
     let mut b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let (image, file_off, crc_at) = flash_image(&b).map_err(|e| format!("{}: {e}", path.display()))?;
+    cover_flash_gaps(&mut b).map_err(|e| format!("{}: {e}", path.display()))?;
+    let (image, file_off, crc_at) = flash_image(&b, true).map_err(|e| format!("{}: {e}", path.display()))?;
     let crc = flinch_firmware::integrity::image_crc(&image, crc_at);
     b[file_off..file_off + 4].copy_from_slice(&crc.to_le_bytes());
     fs::write(path, &b).map_err(|e| format!("writing {}: {e}", path.display()))?;

@@ -214,25 +214,38 @@ impl<R: Real> Link<R> {
 /// The step's deadline, watched from the detection tick: the tick counts the ticks since the last
 /// step ended and the step resets the count. Once the count reaches `limit` the deadline is missed
 /// for good (latched: only a reset of the MCU clears it), and [`StepDeadline::tick`] says so, so
-/// that the tick stops feeding the watchdog. Atomics only: the tick and the step run at different
+/// that the tick stops feeding the watchdog. Until the first step has ended the limit is
+/// `first_limit` (the first step may wait for more: in QEMU its code is translated on first use;
+/// a first step that never ends still trips it). Counted in ticks, not read from a timer, so it
+/// holds however the timers are clocked. Atomics only: the tick and the step run at different
 /// priorities.
 pub struct StepDeadline {
     since: core::sync::atomic::AtomicU32,
     missed: core::sync::atomic::AtomicBool,
+    started: core::sync::atomic::AtomicBool,
     limit: u32,
+    first_limit: u32,
 }
 
 impl StepDeadline {
-    /// A deadline of `limit` ticks (the count starts at zero: the first step is due within it).
-    pub const fn new(limit: u32) -> Self {
-        StepDeadline { since: core::sync::atomic::AtomicU32::new(0), missed: core::sync::atomic::AtomicBool::new(false), limit }
+    /// A deadline of `limit` ticks between step ends, `first_limit` to the first one.
+    pub const fn new(limit: u32, first_limit: u32) -> Self {
+        StepDeadline {
+            since: core::sync::atomic::AtomicU32::new(0),
+            missed: core::sync::atomic::AtomicBool::new(false),
+            started: core::sync::atomic::AtomicBool::new(false),
+            limit,
+            first_limit,
+        }
     }
 
     /// One tick: `true` while every step has ended within `limit` ticks of the one before.
     pub fn tick(&self) -> bool {
         use core::sync::atomic::Ordering::Relaxed;
-        let n = self.since.fetch_add(1, Relaxed).saturating_add(1);
-        if n >= self.limit || n == 0 {
+        let n = self.since.load(Relaxed).saturating_add(1);
+        self.since.store(n, Relaxed);
+        let limit = if self.started.load(Relaxed) { self.limit } else { self.first_limit };
+        if n >= limit {
             self.missed.store(true, Relaxed);
         }
         !self.missed.load(Relaxed)
@@ -241,6 +254,7 @@ impl StepDeadline {
     /// A step ended.
     pub fn step_done(&self) {
         self.since.store(0, core::sync::atomic::Ordering::Relaxed);
+        self.started.store(true, core::sync::atomic::Ordering::Relaxed);
     }
 
     /// The deadline was missed (latched).
@@ -439,8 +453,18 @@ mod tests {
 
     #[test]
     fn a_missed_step_deadline_stays_missed() {
-        let d = StepDeadline::new(15);
-        // Steps every 10 ticks: always fed.
+        // No first step within 1000 ticks: missed.
+        let d = StepDeadline::new(15, 1000);
+        for _ in 0..999 {
+            assert!(d.tick());
+        }
+        assert!(!d.tick());
+        let d = StepDeadline::new(15, 1000);
+        // The first step late by the tick limit but within the first one, then steps every 10 ticks: always fed.
+        for _ in 0..500 {
+            assert!(d.tick());
+        }
+        d.step_done();
         for _ in 0..100 {
             for _ in 0..10 {
                 assert!(d.tick());

@@ -505,7 +505,7 @@ mod board {
             NVIC::unmask(Exti4);
         }
 
-        super::board_avoid::init(TIM2_HZ, &mut cp.NVIC);
+        super::board_avoid::init(&mut cp.NVIC);
         cp.SYST.set_clock_source(SystClkSource::Core);
         cp.SYST.set_reload(CORE_HZ / 1_000_000 * TICK_US - 1);
         cp.SYST.clear_current();

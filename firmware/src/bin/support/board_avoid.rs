@@ -1,6 +1,11 @@
 //! The avoidance step on the board (`flinch_firmware::avoidance::Link`): weights frames in over
-//! USART1, one step every 10 ms on TIM3, a velocity frame with a status word back over USART1, and
-//! the step's deadline watched by the tick that feeds the independent watchdog.
+//! USART1, one step every 10 ms (an interrupt on TIM3's line that the 1 ms SysTick tick pends every
+//! tenth tick), a velocity frame with a status word back over USART1, and the step's deadline
+//! watched by the tick that feeds the independent watchdog.
+//!
+//! Why the tick and not TIM3's own update: the step's period and its deadline are then counted on
+//! one clock, so the deadline holds however the timers are clocked. (Measured: in QEMU 7.2 TIM3's
+//! update came every 50-90 ms with a 10 ms setting, against SysTick's modelled rate.)
 //!
 //! Kept out of `board.rs` (it only calls [`init`] and [`on_tick`] and lists the two vectors).
 //!
@@ -11,7 +16,7 @@
 //!
 //! Priorities: the switch edge (0x00) above everything; the USART (0x40) above the detection tick
 //! (0x80), because its one-byte data register must be read within a character time (87 us at
-//! 115,200 baud) and the tick must not delay that; the step (TIM3, 0xC0) below the tick, so the
+//! 115,200 baud) and the tick must not delay that; the step (0xC0) below the tick, so the
 //! detection never waits for the avoidance.
 //!
 //! * Receive: the USART interrupt moves each byte into a 256-byte single-producer single-consumer
@@ -19,7 +24,7 @@
 //!   interrupt off (the step turns it back on after draining); on the part the next bytes then
 //!   overrun (ORE, counted) and the receiver refuses the damaged frame by its CRC. In QEMU the model
 //!   holds the input meanwhile (it offers a byte only when RXNE is clear).
-//! * The step (TIM3 update): drains the queue into the receiver's ring (`Receiver::push`), runs
+//! * The step (its interrupt, priority 0xC0): drains the queue into the receiver's ring (`Receiver::push`), runs
 //!   `Link::step` (which services at most `budget_bytes` of the ring), queues the velocity frame and
 //!   starts sending it: bytes go to the data register while TXE is set, the rest from the TXE
 //!   interrupt. QEMU 7.2's `stm32f2xx_usart` sends synchronously, keeps TXE set and raises no TXE
@@ -39,9 +44,12 @@ use cortex_m::peripheral::NVIC;
 use flinch_firmware::avoidance::link::{encode_velocity, StepDeadline, VEL_LEN};
 use flinch_firmware::avoidance::{BoardReal, Gains, Link, LinkConfig, Real, Repulsion, Watchdog};
 
-/// USART1's and TIM3's lines (RM0090 Table 61).
+/// USART1's line (RM0090 Table 61).
 pub const USART1_IRQ: u16 = 37;
+/// The step's interrupt: TIM3's line (RM0090 Table 61), pended by the tick every `TICKS_PER_STEP`
+/// ticks (TIM3 itself is not enabled).
 pub const TIM3_IRQ: u16 = 29;
+const STEP_IRQ: u16 = TIM3_IRQ;
 const PRIO_USART: u8 = 0x40;
 const PRIO_STEP: u8 = 0xC0;
 /// The control period, ms.
@@ -51,18 +59,10 @@ const BRR_115200_AT_16MHZ: u32 = 0x8B;
 
 // Registers by address (RM0090 sec. 2.3 memory map; the register offsets of secs. 6.3, 8.4, 18.4
 // and 30.6), 32-bit volatile accesses.
-const RCC_APB1ENR: u32 = 0x4002_3800 + 0x40;
 const RCC_APB2ENR: u32 = 0x4002_3800 + 0x44;
 const GPIOA_MODER: u32 = 0x4002_0000;
 const GPIOA_AFRH: u32 = 0x4002_0000 + 0x24;
 const TIM2_CNT: u32 = 0x4000_0000 + 0x24;
-const TIM3: u32 = 0x4000_0400;
-const TIM_CR1: u32 = 0x00;
-const TIM_DIER: u32 = 0x0C;
-const TIM_SR: u32 = 0x10;
-const TIM_EGR: u32 = 0x14;
-const TIM_PSC: u32 = 0x28;
-const TIM_ARR: u32 = 0x2C;
 const USART1: u32 = 0x4001_1000;
 const USART_SR: u32 = USART1;
 const USART_DR: u32 = USART1 + 0x04;
@@ -118,7 +118,12 @@ fn config() -> LinkConfig<BoardReal> {
 
 static LINK: IsrCell<Link<BoardReal>> = IsrCell::new();
 /// Watched by the tick (`on_tick`), reset by the step.
-static DEADLINE: StepDeadline = StepDeadline::new(15);
+/// 15 ticks between step ends, 1,000 (1 s) to the first.
+static DEADLINE: StepDeadline = StepDeadline::new(15, 1000);
+/// Ticks counted by `on_tick` (SysTick only).
+static TICKS: AtomicU32 = AtomicU32::new(0);
+/// The step is pended every this many ticks (1 ms each).
+const TICKS_PER_STEP: u32 = PERIOD_MS;
 
 // ---- Receive queue: the USART interrupt produces, the step consumes -----------------------------
 const RXQ: usize = 256;
@@ -154,27 +159,19 @@ const SR_TXE: u32 = 1 << 7;
 const SR_RXNE: u32 = 1 << 5;
 const SR_ORE: u32 = 1 << 3;
 
-/// Set up USART1 (PA9/PA10, 115,200 8N1, receive interrupt), TIM3 (10 ms update interrupt) and
-/// their priorities, then unmask both. Call once from `main`, after the firmware is built and
-/// before SysTick starts. `timer_hz` is TIM2's and TIM3's input clock (16 MHz on the board).
-pub fn init(timer_hz: u32, nvic: &mut NVIC) {
-    // SAFETY: once, before TIM3's interrupt (its only user) is unmasked below.
+/// Set up USART1 (PA9/PA10, 115,200 8N1, receive interrupt), the priorities of it and of the step's
+/// interrupt, then unmask both. Call once from `main`, after the firmware is built and before
+/// SysTick starts (the tick pends the step).
+pub fn init(nvic: &mut NVIC) {
+    // SAFETY: once, before the step's interrupt (its only user) is unmasked below.
     unsafe { LINK.init(Link::new(config())) };
-    // RCC APB2ENR USART1EN (bit 4), APB1ENR TIM3EN (bit 1); GPIOA MODER 10 = alternate function
+    // RCC APB2ENR USART1EN (bit 4); GPIOA MODER 10 = alternate function
     // for PA9/PA10; AFRH AF7 = USART1 for both.
     wr(RCC_APB2ENR, rd(RCC_APB2ENR) | (1 << 4));
-    wr(RCC_APB1ENR, rd(RCC_APB1ENR) | (1 << 1));
     wr(GPIOA_AFRH, (rd(GPIOA_AFRH) & !(0xFF << 4)) | (0x77 << 4));
     wr(GPIOA_MODER, (rd(GPIOA_MODER) & !(0b1111 << 18)) | (0b1010 << 18));
     wr(USART_BRR, BRR_115200_AT_16MHZ);
     wr(USART_CR1, CR1_UE | CR1_TE | CR1_RE | CR1_RXNEIE);
-    // TIM3: 1 MHz (PSC 16 - 1 on the board), update every PERIOD_MS.
-    wr(TIM3 + TIM_PSC, (timer_hz / 1_000_000).saturating_sub(1));
-    wr(TIM3 + TIM_ARR, PERIOD_MS * 1000 - 1);
-    wr(TIM3 + TIM_EGR, 1); // UG: load the prescaler
-    wr(TIM3 + TIM_SR, 0);
-    wr(TIM3 + TIM_DIER, 1); // UIE
-    wr(TIM3 + TIM_CR1, 1); // CEN
     // SAFETY: priorities, then unmask; the handlers' data is initialised above.
     unsafe {
         nvic.set_priority(Irq(USART1_IRQ), PRIO_USART);
@@ -188,6 +185,11 @@ pub fn init(timer_hz: u32, nvic: &mut NVIC) {
 /// the tick must then stop feeding the IWDG.
 #[inline(always)]
 pub fn on_tick() -> bool {
+    let n = TICKS.load(Relaxed).wrapping_add(1);
+    TICKS.store(n, Relaxed);
+    if n % TICKS_PER_STEP == 0 {
+        NVIC::pend(Irq(STEP_IRQ));
+    }
     DEADLINE.tick()
 }
 
@@ -271,11 +273,10 @@ fn now_ms() -> u32 {
     m.ms
 }
 
-/// TIM3 update: one avoidance step.
+/// The step's interrupt (pended by the tick every 10 ms): one avoidance step.
 fn step_irq() {
-    wr(TIM3 + TIM_SR, 0); // rc_w0: clear UIF
     let now = now_ms();
-    // SAFETY: TIM3's interrupt is the link's only user; initialised before it was unmasked.
+    // SAFETY: the step's interrupt is the link's only user; initialised before it was unmasked.
     let link = unsafe { LINK.get() };
     // The queue's bytes into the receiver's ring (at most one queue's worth).
     let head = RX_HEAD.load(Acquire);
