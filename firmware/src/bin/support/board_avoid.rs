@@ -187,7 +187,7 @@ pub fn init(nvic: &mut NVIC) {
 pub fn on_tick() -> bool {
     let n = TICKS.load(Relaxed).wrapping_add(1);
     TICKS.store(n, Relaxed);
-    if n % TICKS_PER_STEP == 0 {
+    if n.is_multiple_of(TICKS_PER_STEP) {
         NVIC::pend(Irq(STEP_IRQ));
     }
     DEADLINE.tick()
