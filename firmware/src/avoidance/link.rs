@@ -273,18 +273,9 @@ fn norm_bound<R: Real>(a: R, b: R) -> R {
     }
 }
 
-/// Metres (per second) to whole micrometres (per second), saturating.
+/// Metres (per second) to whole micrometres (per second), saturating ([`Real::to_micro`]).
 fn micro<R: Real>(v: R) -> i32 {
-    let u = v.to_f64() * 1e6;
-    if u.is_nan() {
-        0
-    } else if u >= i32::MAX as f64 {
-        i32::MAX
-    } else if u <= i32::MIN as f64 {
-        i32::MIN
-    } else {
-        libm::round(u) as i32
-    }
+    v.to_micro()
 }
 
 /// The velocity frame of one step.
