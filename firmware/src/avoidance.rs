@@ -9,7 +9,8 @@
 //!
 //! Everything is generic over the number type ([`num::Real`]: `I16F16`, `I8F24`, `I20F12`, `f32`,
 //! `f64`) and the Gaussian ([`gauss`]: lookup table, `micromath`, `libm`), so the host can measure the
-//! error of each choice against an `f64` reference while the target runs the fixed-point one.
+//! error of each choice against an `f64` reference; the board runs [`BoardReal`] (`f32` on the
+//! M4F, `I16F16` with the feature `avoid-fixed`). [`link`] is the step as the board runs it.
 //!
 //! [`safe`] then limits the command by speed and separation monitoring (ISO/TS 15066, 5.5.4), from
 //! the sensed separation and not from the field, and caps it at the configured speed.
@@ -33,6 +34,7 @@ pub mod control;
 pub mod field;
 pub mod frame;
 pub mod gauss;
+pub mod link;
 pub mod num;
 pub mod receiver;
 pub mod safe;
@@ -41,6 +43,19 @@ pub use control::{Command, Controller, Gains, Repulsion, Watchdog};
 pub use field::{sample, FieldSample, Grid, MAX_AXIS, MAX_CENTRES, MAX_WINDOW, TRUNC_SIGMAS};
 pub use frame::{encode_frame, frame_len, FrameHeader};
 pub use gauss::{Gauss, GaussLibm, GaussLut, GaussMicromath};
+pub use link::{Link, LinkConfig, Status, Velocity};
+
+/// The number type the board's avoidance step runs in. `f32` on the Cortex-M4F (it has an FPU): in
+/// QEMU's instruction count the `f32` step with the lookup-table Gaussian is the cheapest variant
+/// and on the host its path is the closest to the `f64` reference (docs/avoidance.md, "Speed
+/// against accuracy"). The cargo feature `avoid-fixed` selects `I16F16` for parts without an FPU
+/// (every avoidance type is generic over [`Real`], so nothing else changes).
+#[cfg(not(feature = "avoid-fixed"))]
+pub type BoardReal = f32;
+/// The number type the board's avoidance step runs in: `I16F16` (feature `avoid-fixed`, for parts
+/// without an FPU).
+#[cfg(feature = "avoid-fixed")]
+pub type BoardReal = num::I16F16;
 pub use num::Real;
 pub use receiver::{Receiver, RxStats};
 pub use safe::{SafeCommand, SafeController, SafeState, Sensed, SsmParams, Steer};

@@ -9,7 +9,7 @@
 //!      its output compared with `firmware/qemu/expected.txt` (skipped without `qemu-system-arm`);
 //!   4. instruction count: the self-test's `icount:` line, edge-to-stop best (idle) <= 40 and worst
 //!      (the edge during the trip tick) <= 60 instructions under `-icount` (issue 10 item 3);
-//!   5. size: flash and static RAM of the release `board` ELF, under 32 KiB / 8 KiB;
+//!   5. size: flash and static RAM of the release `board` ELF, under 64 KiB / 16 KiB (`FLASH_LIMIT`);
 //!   6. avoidance step cost: `firmware/avoid-cost` in QEMU, at most 5,000 instructions per step on
 //!      a 15 x 15 grid for every number type (issue 4); and the step plus its share of frame handling
 //!      (receiver fed one 10 ms step's bytes) at most 5,000 for the shipped grids and frame rates (issue 11).
@@ -27,6 +27,9 @@
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
+//! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-clock` board ELF
+//!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
+//!   against `firmware/qemu/board-serial.txt`.
 //! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stages
 //!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop; and
 //!   "board ELF edge in QEMU": the `qemu-io` build's edges against `firmware/qemu/board-edge.txt`).
@@ -42,8 +45,12 @@ use std::thread::sleep;
 use std::time::{Duration, Instant};
 
 const TARGET: &str = "thumbv7em-none-eabihf";
-const FLASH_LIMIT: u64 = 32 * 1024;
-const RAM_LIMIT: u64 = 8 * 1024;
+/// Raised from 32 KiB / 8 KiB for the avoidance step on the board (issue 11): measured 41,616 B of
+/// flash (20,216 B without it) and 14,232 B of static RAM (1,708 B without it; `Link`'s 12,144 B are
+/// the receiver's 4 KiB ring and its two 30 x 30 `f32` grids, double-buffered so a bad frame is never
+/// half-applied). The STM32F407VG has 1 MiB of flash and 128 KiB of RAM.
+const FLASH_LIMIT: u64 = 64 * 1024;
+const RAM_LIMIT: u64 = 16 * 1024;
 const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
 
 fn main() -> ExitCode {
@@ -55,6 +62,10 @@ fn main() -> ExitCode {
             let out = run_qemu()?;
             print!("{}", out.stdout);
             check_qemu_output(&out).and_then(|_| check_icount(&out.stdout)).and_then(|_| check_stack(&out.stdout).map(|_| ()))
+        }),
+        Some("board-serial") => single(|| {
+            build_board_qemu_clock()?;
+            board_serial().map(|m| println!("{m}"))
         }),
         Some("board-qemu") => single(|| {
             build_firmware()?;
@@ -203,6 +214,17 @@ fn test() -> ExitCode {
             },
         ));
         results.push((
+            "board serial in QEMU",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match build_board_qemu_clock().and_then(|()| board_serial()) {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
+        results.push((
             "size",
             match elf_size(&elf_path("board")).and_then(|s| check_size(&s).map(|_| s)) {
                 Ok(s) => Outcome::Pass(format!(
@@ -220,7 +242,8 @@ fn test() -> ExitCode {
                 match run_avoid_cost().and_then(|out| {
                     let step = check_avoid_cost(&out)?;
                     let budget = check_avoid_budget(&out)?;
-                    Ok(format!("{step}; {budget}"))
+                    let board = check_avoid_board(&out)?;
+                    Ok(format!("{step}; {budget}; {board}"))
                 }) {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
@@ -431,7 +454,7 @@ fn check_board_corrupt() -> Result<String, String> {
     use object::{Object, ObjectSection};
     let good = elf_path("board");
     let mut b = fs::read(&good).map_err(|e| format!("{}: {e}", good.display()))?;
-    let (_, crc_file, _) = flash_image(&b)?;
+    let (_, crc_file, _) = flash_image(&b, true)?;
     let off = {
         let elf = object::File::parse(&*b).map_err(|e| format!("not an ELF object: {e}"))?;
         let ro = elf.section_by_name(".rodata").ok_or("no .rodata in the board ELF")?;
@@ -476,14 +499,14 @@ fn check_board_vectors(path: &Path) -> Result<String, String> {
         let w = data.get(off..off + 4).ok_or("vector table truncated")?;
         Ok(u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) & !1)
     };
-    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)"), (50, "tim5_entry", "TIM5 (the LSI capture, clock check)")] {
+    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)"), (50, "tim5_entry", "TIM5 (the LSI capture, clock check)"), (37, "usart1_entry", "USART1 (the avoidance's weights in, velocity out)"), (29, "tim3_entry", "TIM3's line (the avoidance step, pended by the tick)")] {
         let want = sym(handler).ok_or_else(|| format!("no {handler} in the board ELF"))? & !1;
         let got = entry(irq)?;
         if got != want {
             return Err(format!("vector {irq}, {what}: {got:#x}, want {handler} at {want:#x}"));
         }
     }
-    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping, TIM5 -> LSI capture".into())
+    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping, TIM5 -> LSI capture, USART1 and TIM3 -> avoidance".into())
 }
 
 /// The `qemu-io` build of the board binary (`firmware/src/bin/support/board_bench.rs`): the same
@@ -502,7 +525,7 @@ fn build_board_qemu_io() -> Result<(), String> {
         let stored = patch_flash_crc(&elf, Seed::QemuBench)?;
         // The bench image must fail the production build's check (it must never drive a machine).
         let b = fs::read(&elf).map_err(|e| format!("{}: {e}", elf.display()))?;
-        let (image, _, crc_at) = flash_image(&b)?;
+        let (image, _, crc_at) = flash_image(&b, true)?;
         if flinch_firmware::integrity::image_crc(&image, crc_at) == stored {
             return Err("the qemu-io board image passes the production flash CRC check".into());
         }
@@ -510,6 +533,167 @@ fn build_board_qemu_io() -> Result<(), String> {
     } else {
         Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-io exited with {status}"))
     }
+}
+
+/// The `qemu-clock` build of the board binary: the production board with only its clock constants
+/// as QEMU's netduinoplus2 runs them (core 168 MHz, timers 1 GHz), so that its milliseconds are
+/// QEMU's. Its own target directory.
+fn build_board_qemu_clock() -> Result<(), String> {
+    let status = cargo()
+        .args(["build", "--release", "--target", TARGET, "--bin", "board", "--features", "qemu-clock", "--target-dir"])
+        .arg(qemu_clock_dir())
+        .current_dir(repo_root().join("firmware"))
+        .status()
+        .map_err(|e| format!("could not run cargo: {e}"))?;
+    if status.success() {
+        patch_flash_crc(&qemu_clock_dir().join(TARGET).join("release").join("board"), Seed::QemuBench).map(|_| ())
+    } else {
+        Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-clock exited with {status}"))
+    }
+}
+
+fn qemu_clock_dir() -> PathBuf {
+    target_dir().join("board-qemu-clock")
+}
+
+/// How long the whole serial conversation may take (QEMU's virtual clock follows the host's).
+const SERIAL_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// A 5 x 5 weights frame over the 1.05 m work plane (centres 0.21 m apart from 0.105 m, sigma
+/// 0.105 m), every weight `w_m`: the shipped demo's grid size; 0.5 m puts the field at the tool far
+/// above the board's stop height (the hand over the tool), 0 is an empty field.
+fn weights_frame(seq: u32, w_m: f64) -> Vec<u8> {
+    use flinch_firmware::avoidance::frame::{encode_frame, FrameHeader, MAX_FRAME};
+    let q = |v: f64| (v * 65536.0).round() as i32;
+    let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: q(0.105), y0_q16: q(0.105), spacing_q16: q(0.21), sigma_q16: q(0.105) };
+    let mut out = vec![0u8; MAX_FRAME];
+    let n = encode_frame(&h, &[q(w_m); 25], &mut out).unwrap_or(0);
+    out.truncate(n);
+    out
+}
+
+/// One velocity frame as the expected file writes it; `full` adds the numbers that depend only on
+/// the frames sent (not on when QEMU delivered them).
+fn velocity_line(what: &str, f: &flinch_firmware::avoidance::link::VelocityFrame, full: bool) -> String {
+    if full {
+        format!(
+            "{what}: status={} seq={} vx_umps={} vy_umps={} x_um={} y_um={} good={} refused={}",
+            f.status.name(), f.seq, f.vx_umps, f.vy_umps, f.x_um, f.y_um, f.good, f.refused
+        )
+    } else {
+        format!("{what}: status={} seq={}", f.status.name(), f.seq)
+    }
+}
+
+/// The board's avoidance over its serial port: the `qemu-clock` board ELF on netduinoplus2, USART1
+/// connected to a Unix socket this function listens on. Weights frames go in, the board's velocity
+/// frames come back and are decoded; the conversation waits for the board's answer before each
+/// next frame, so the lines compared do not depend on the host's timing. Compared with
+/// `firmware/qemu/board-serial.txt`; a mismatch, a missing frame or a timeout fails.
+fn board_serial() -> Result<String, String> {
+    use flinch_firmware::avoidance::link::{decode_velocity, Status, VelocityFrame, VEL_LEN, VEL_SYNC0, VEL_SYNC1};
+    use std::io::{Read, Write};
+    use std::os::unix::net::UnixListener;
+    let sock = target_dir().join("board-serial.sock");
+    let _ = fs::remove_file(&sock);
+    let listener = UnixListener::bind(&sock).map_err(|e| format!("binding {}: {e}", sock.display()))?;
+    let log = target_dir().join("board-serial.log");
+    let elf = qemu_clock_dir().join(TARGET).join("release").join("board");
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-chardev"])
+        .arg(format!("socket,id=s0,path={}", sock.display()))
+        .args(["-serial", "chardev:s0", "-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
+    let start = Instant::now();
+    let result = (|| -> Result<Vec<String>, String> {
+        listener.set_nonblocking(true).map_err(|e| e.to_string())?;
+        let mut stream = loop {
+            match listener.accept() {
+                Ok((s, _)) => break s,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    if start.elapsed() > SERIAL_TIMEOUT {
+                        return Err("QEMU never connected to the serial socket".into());
+                    }
+                    sleep(Duration::from_millis(20));
+                }
+                Err(e) => return Err(format!("accepting QEMU's serial connection: {e}")),
+            }
+        };
+        stream.set_nonblocking(false).map_err(|e| e.to_string())?;
+        stream.set_read_timeout(Some(Duration::from_millis(100))).map_err(|e| e.to_string())?;
+        let mut buf: Vec<u8> = Vec::new();
+        let mut frames = 0usize;
+        // The next velocity frame that satisfies `want` (frames before it are read and dropped).
+        let mut wait = |stream: &mut std::os::unix::net::UnixStream, what: &str, want: &dyn Fn(&VelocityFrame) -> bool| -> Result<VelocityFrame, String> {
+            loop {
+                while buf.len() >= VEL_LEN {
+                    if buf[0] == VEL_SYNC0 && buf[1] == VEL_SYNC1 {
+                        if let Some(f) = decode_velocity(&buf[..VEL_LEN]) {
+                            buf.drain(..VEL_LEN);
+                            frames += 1;
+                            if want(&f) {
+                                return Ok(f);
+                            }
+                            continue;
+                        }
+                    }
+                    buf.remove(0);
+                }
+                if start.elapsed() > SERIAL_TIMEOUT {
+                    return Err(format!("timed out after {} s waiting for {what} ({frames} velocity frames read)", SERIAL_TIMEOUT.as_secs()));
+                }
+                let mut chunk = [0u8; 512];
+                match stream.read(&mut chunk) {
+                    Ok(0) => return Err(format!("QEMU closed the serial port waiting for {what}")),
+                    Ok(n) => buf.extend_from_slice(&chunk[..n]),
+                    Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                    Err(e) => return Err(format!("reading the serial port: {e}")),
+                }
+            }
+        };
+        let mut lines = Vec::new();
+        let f = wait(&mut stream, "the first velocity frame", &|_| true)?;
+        lines.push(velocity_line("before any weights frame", &f, true));
+        stream.write_all(&weights_frame(1, 0.5)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 1 in use", &|f| f.seq == 1)?;
+        lines.push(velocity_line("frame 1 (field 0.5 m weights: the hand over the tool)", &f, true));
+        let mut bad = weights_frame(2, 0.0);
+        bad[40] ^= 0x01;
+        stream.write_all(&bad).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 2 refused", &|f| f.refused >= 1)?;
+        lines.push(velocity_line("frame 2 (one bit flipped)", &f, true));
+        stream.write_all(&weights_frame(3, 0.0)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 3 in use", &|f| f.seq == 3)?;
+        lines.push(velocity_line("frame 3 (empty field)", &f, true));
+        let f = wait(&mut stream, "the weights slowing with age", &|f| f.status != Status::Ok)?;
+        lines.push(velocity_line("the line silent, the weights ageing", &f, false));
+        let f = wait(&mut stream, "the weights stale", &|f| f.status == Status::StoppedStale)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("the line still silent", &f, false), f.vx_umps, f.vy_umps));
+        Ok(lines)
+    })();
+    let _ = child.kill();
+    let _ = child.wait();
+    let _ = fs::remove_file(&sock);
+    let got = result?;
+    for l in &got {
+        println!("board serial: {l}");
+    }
+    let want = read_expected("firmware/qemu/board-serial.txt")?;
+    if got != want {
+        return Err(format!(
+            "the board's velocity frames differ from firmware/qemu/board-serial.txt:\n--- got\n{}\n--- expected\n{}",
+            got.join("\n"),
+            want.join("\n")
+        ));
+    }
+    Ok(format!("board ELF (qemu-clock) on netduinoplus2: weights frames over USART1, {} velocity frames as in firmware/qemu/board-serial.txt", got.len()))
 }
 
 fn qemu_io_dir() -> PathBuf {
@@ -648,7 +832,7 @@ const FLASH_END: u64 = 0x0810_0000;
 /// and .data at its load address `__sidata`; from the start of flash to the end of .data's load
 /// image, which must be covered without gaps (the board's `flash_crc_ok` reads exactly that range).
 /// Returns the image, the file offset of `FLINCH_FLASH_CRC`, and its offset in the image.
-fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
+fn flash_image(b: &[u8], zero_gaps: bool) -> Result<(Vec<u8>, usize, usize), String> {
     use object::{Object, ObjectSection, ObjectSymbol, SectionKind};
     let elf = object::File::parse(b).map_err(|e| format!("not an ELF object: {e}"))?;
     let sym = |name: &str| {
@@ -680,11 +864,61 @@ fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
             crc_file = Some((off + (crc - sec.address())) as usize);
         }
     }
-    if let Some(gap) = image.iter().position(Option::is_none) {
+    if let Some(gap) = image.iter().position(Option::is_none).filter(|_| !zero_gaps) {
         return Err(format!("the board's flash image has a gap at {:#x}: the CRC range is not contiguous", FLASH_ORIGIN + gap as u64));
     }
-    let image: Vec<u8> = image.into_iter().flatten().collect();
+    let image: Vec<u8> = image.into_iter().map(|b| b.unwrap_or(0)).collect();
     Ok((image, crc_file.ok_or("FLINCH_FLASH_CRC is not in a flash section")?, (crc - FLASH_ORIGIN) as usize))
+}
+
+/// Alignment gaps between the flash-resident load segments (e.g. 4 bytes between `.text` and an
+/// 8-aligned `.rodata`) are not loaded: on the part they stay erased (0xFF), in QEMU zero, so the
+/// start-up CRC over them would differ. Grow the segment before each gap over it, when the file holds
+/// the gap's bytes right there and they are zeros, so that the loader (probe-rs, QEMU) writes zeros
+/// on both; anything else is an error. ELF32 little-endian program headers, edited in place.
+fn cover_flash_gaps(b: &mut [u8]) -> Result<(), String> {
+    let rd32 = |b: &[u8], at: usize| -> Result<u32, String> {
+        b.get(at..at + 4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).ok_or_else(|| "ELF truncated".to_string())
+    };
+    let rd16 = |b: &[u8], at: usize| -> Result<usize, String> { b.get(at..at + 2).map(|w| u16::from_le_bytes([w[0], w[1]]) as usize).ok_or_else(|| "ELF truncated".to_string()) };
+    let (phoff, phentsize, phnum) = (rd32(b, 0x1C)? as usize, rd16(b, 0x2A)?, rd16(b, 0x2C)?);
+    // (header offset, file offset, address, file size, memory size) of flash-resident LOAD segments.
+    let mut segs = Vec::new();
+    for k in 0..phnum {
+        let h = phoff + k * phentsize;
+        let (ty, off, vaddr, paddr, filesz, memsz) = (rd32(b, h)?, rd32(b, h + 4)?, rd32(b, h + 8)?, rd32(b, h + 12)?, rd32(b, h + 16)?, rd32(b, h + 20)?);
+        if ty == 1 && vaddr == paddr && filesz == memsz && (FLASH_ORIGIN..FLASH_END).contains(&u64::from(paddr)) && filesz > 0 {
+            segs.push((h, off, paddr, filesz));
+        }
+    }
+    // Where the next loaded flash bytes start: the next flash segment, or .data's load image.
+    let mut starts: Vec<u32> = segs.iter().map(|s| s.2).collect();
+    for k in 0..phnum {
+        let h = phoff + k * phentsize;
+        let (ty, paddr, filesz) = (rd32(b, h)?, rd32(b, h + 12)?, rd32(b, h + 16)?);
+        if ty == 1 && filesz > 0 && (FLASH_ORIGIN..FLASH_END).contains(&u64::from(paddr)) {
+            starts.push(paddr);
+        }
+    }
+    for &(h, off, addr, size) in &segs {
+        let end = addr + size;
+        let Some(&next) = starts.iter().filter(|&&a| a >= end).min() else { continue };
+        let gap = next - end;
+        if gap == 0 {
+            continue;
+        }
+        if gap >= 64 {
+            return Err(format!("a {gap}-byte gap in flash at {end:#x}: not an alignment gap"));
+        }
+        let (from, to) = ((off + size) as usize, (off + size + gap) as usize);
+        match b.get(from..to) {
+            Some(bytes) if bytes.iter().all(|&x| x == 0) => {}
+            _ => return Err(format!("a {gap}-byte gap in flash at {end:#x} whose bytes the file does not hold as zeros")),
+        }
+        b[h + 16..h + 20].copy_from_slice(&(size + gap).to_le_bytes());
+        b[h + 20..h + 24].copy_from_slice(&(size + gap).to_le_bytes());
+    }
+    Ok(())
 }
 
 /// Write the flash image's CRC-32 (`flinch_firmware::integrity::image_crc`, the routine the board
@@ -693,7 +927,8 @@ fn flash_image(b: &[u8]) -> Result<(Vec<u8>, usize, usize), String> {
 /// production check, `flinch_firmware::integrity::Seed`).
 fn patch_flash_crc(path: &Path, seed: Seed) -> Result<u32, String> {
     let mut b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let (image, file_off, crc_at) = flash_image(&b).map_err(|e| format!("{}: {e}", path.display()))?;
+    cover_flash_gaps(&mut b).map_err(|e| format!("{}: {e}", path.display()))?;
+    let (image, file_off, crc_at) = flash_image(&b, true).map_err(|e| format!("{}: {e}", path.display()))?;
     let crc = flinch_firmware::integrity::image_crc_seeded(&image, crc_at, seed);
     b[file_off..file_off + 4].copy_from_slice(&crc.to_le_bytes());
     fs::write(path, &b).map_err(|e| format!("writing {}: {e}", path.display()))?;
@@ -827,6 +1062,28 @@ fn check_avoid_cost(out: &str) -> Result<String, String> {
 /// the MCU: the demo's 5 x 5 grid at 30 frames a second (both number types) and the thesis's 15 x 15
 /// at 10 frames a second in f32. The other measured lines (15 x 15 at 30 Hz, 30 x 30) are printed,
 /// not shipped.
+/// The board's own step (`avoid_board` lines: bytes in, `Link::step`, `encode_velocity`) for the
+/// shipped grids and rates, each at most 5,000 instructions.
+fn check_avoid_board(out: &str) -> Result<String, String> {
+    let mut worst = 0u32;
+    for (grid, rate) in [("5x5", 30), ("15x15", 10)] {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("avoid_board grid={grid} ")) && l.contains(&format!(" rate_hz={rate} ")))
+            .ok_or_else(|| format!("avoid-cost printed no avoid_board line for grid {grid} at {rate} Hz"))?;
+        let max: u32 = line
+            .split_whitespace()
+            .find_map(|w| w.strip_prefix("max="))
+            .and_then(|v| v.parse().ok())
+            .ok_or_else(|| format!("no max= in: {line}"))?;
+        if max > 5000 {
+            return Err(format!("the board's step, grid {grid} at {rate} Hz: {max} > 5000 instructions"));
+        }
+        worst = worst.max(max);
+    }
+    Ok(format!("the board's step (Link, f32) worst {worst} <= 5000"))
+}
+
 fn check_avoid_budget(out: &str) -> Result<String, String> {
     const LIMIT: u32 = 5_000;
     const SHIPPED: [(&str, &str, &str); 3] = [("5x5", "30", "I16F16-lut"), ("5x5", "30", "f32-lut"), ("15x15", "10", "f32-lut")];
@@ -1146,6 +1403,14 @@ mod tests {
         let log = fs::read_to_string(&record).unwrap_or_default();
         let _ = fs::remove_dir_all(&dir);
         (status.success(), log)
+    }
+
+    #[test]
+    fn avoid_board_checks_both_grids() {
+        let line = |g: &str, r: u32, m: u32| format!("avoid_board grid={g} sigma'=1s rate_hz={r} variant=BoardReal max={m} steps=1\n");
+        assert!(check_avoid_board(&(line("5x5", 30, 2711) + &line("15x15", 10, 3489))).unwrap().contains("worst 3489"));
+        assert!(check_avoid_board(&(line("5x5", 30, 2711) + &line("15x15", 10, 5001))).unwrap_err().contains("5001 > 5000"));
+        assert!(check_avoid_board(&line("5x5", 30, 2711)).unwrap_err().contains("15x15 at 10 Hz"));
     }
 
     #[test]

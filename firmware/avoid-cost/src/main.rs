@@ -215,6 +215,80 @@ fn measure_rx<R: Real>(name: &str, n: usize, rate_hz: usize, overhead: u32) -> u
     }
 }
 
+/// The board's own step (`avoidance::Link<BoardReal>` as `src/bin/support/board_avoid.rs` runs it):
+/// one 10 ms step's bytes pushed into the receiver, then `Link::step` (receiver serviced, field,
+/// command, cap, status) and `encode_velocity` (the frame sent back), measured together; three
+/// frames' worth of steps at `rate_hz` frames a second, then 40 steps with the line silent. Prints
+/// the largest step.
+fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> u32 {
+    use flinch_firmware::avoidance::link::{encode_velocity, Link, LinkConfig};
+    use flinch_firmware::avoidance::BoardReal;
+    let r = BoardReal::from_f64;
+    let cfg = LinkConfig {
+        gains: Gains {
+            repulsion: Repulsion::Vortex { sign: 0 },
+            k_att: r(0.25),
+            k_rep: r(0.5),
+            capture_radius_m: r(0.03),
+            latch_height_m: r(0.02),
+            slow_height_m: r(0.05),
+            stop_height_m: r(0.15),
+            bounded: false,
+        },
+        watchdog: Watchdog { slow_after_ms: 100, stop_after_ms: 330 },
+        start_m: [r(0.3), r(0.4)],
+        goal_m: [r(0.95), r(0.5)],
+        speed_cap_mps: r(0.25),
+        period_ms: 10,
+        max_age_ms: 100,
+        byte_timeout_ms: 50,
+        budget_bytes: 256,
+    };
+    let mut link = Link::new(cfg);
+    let mut out = [0u8; frame::MAX_FRAME];
+    let len = frame::frame_len(n, n).unwrap_or(0);
+    let per_step = (len * rate_hz).div_ceil(100);
+    let s = 1.05 / n as f64;
+    let q = |v: f64| (v * 65536.0) as i32;
+    // A low hill (0.04 m peak weights) so that the step runs its full command path, not a stop.
+    let mut w = [0i32; flinch_firmware::avoidance::MAX_CENTRES];
+    let c = n as f64 / 2.0;
+    for j in 0..n {
+        for i in 0..n {
+            let d2 = (i as f64 - c) * (i as f64 - c) + (j as f64 - c) * (j as f64 - c);
+            if let Some(slot) = w.get_mut(j * n + i) {
+                *slot = if d2 < (n * n) as f64 / 30.0 { q(0.04) } else { 0 };
+            }
+        }
+    }
+    let (mut max, mut now, mut steps) = (0u32, 0u32, 0u32);
+    let mut states = [0u32; 4];
+    for seq in 1..=3u32 {
+        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: q(s / 2.0), y0_q16: q(s / 2.0), spacing_q16: q(s), sigma_q16: q(sigma_over_s * s) };
+        let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return u32::MAX };
+        let chunks = out.get(..l).unwrap_or(&[]).chunks(per_step.max(1));
+        for chunk in chunks.chain(core::iter::repeat_n(&[][..], 40 * (seq == 3) as usize)) {
+            link.receiver().push(chunk, now);
+            let t0 = now_ticks();
+            let v = link.step(black_box(now));
+            let f = encode_velocity(&v);
+            let t1 = now_ticks();
+            black_box(f);
+            if let Some(k) = states.get_mut(v.status as usize) {
+                *k += 1;
+            }
+            max = max.max(counts(t0, t1).saturating_sub(overhead) * 40 / 64);
+            now = now.wrapping_add(10);
+            steps += 1;
+        }
+    }
+    hprintln!(
+        "avoid_board grid={}x{} sigma'={}s rate_hz={} variant=BoardReal max={} steps={} ok/slowed/stale/no_path={}/{}/{}/{} (instructions per 10 ms step: bytes in, Link::step, encode_velocity; limit 5000)",
+        n, n, sigma_over_s, rate_hz, max, steps, states[0], states[1], states[2], states[3]
+    );
+    max
+}
+
 /// Exit QEMU through semihosting (and spin if not under a debugger).
 fn exit(code: debug::ExitStatus) -> ! {
     debug::exit(code);
@@ -331,6 +405,9 @@ fn main() -> ! {
         }
     }
     measure_vec(overhead);
+    for (n, sig, rate) in [(5usize, 1.0, 30usize), (15, 0.75, 10)] {
+        measure_board(n, sig, rate, overhead);
+    }
     exit(debug::EXIT_SUCCESS)
 }
 

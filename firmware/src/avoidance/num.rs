@@ -40,6 +40,9 @@ pub trait Real: Copy + PartialOrd {
     fn sqrt(self) -> Self;
     /// Largest integer not above `self`, clamped to `i32`.
     fn floor_int(self) -> i32;
+    /// `self x 10^6` rounded to the nearest integer and saturated to `i32` (NaN: 0): metres to
+    /// micrometres for the velocity frame, without `f64` arithmetic on the target.
+    fn to_micro(self) -> i32;
     /// `(sum w_k g_k, sum w_k h_k)` over the shortest of the three slices (the field's inner loop).
     #[inline]
     fn dot2(ws: &[Self], gs: &[Self], hs: &[Self]) -> (Self, Self) {
@@ -157,6 +160,13 @@ macro_rules! impl_fixed {
                 <$t>::from_bits(if r > i32::MAX as u64 { i32::MAX } else { r as i32 })
             }
             #[inline]
+            fn to_micro(self) -> i32 {
+                // |bits| < 2^31, times 10^6 < 2^51: no overflow in i64; round half up.
+                let wide = (self.to_bits() as i64).wrapping_mul(1_000_000);
+                let r = wide.wrapping_add(1 << (<$t>::FRAC_NBITS - 1)) >> <$t>::FRAC_NBITS;
+                r.clamp(i32::MIN as i64, i32::MAX as i64) as i32
+            }
+            #[inline]
             fn floor_int(self) -> i32 {
                 // Arithmetic shift right is floor for two's complement.
                 self.to_bits() >> <$t>::FRAC_NBITS
@@ -187,7 +197,7 @@ impl_fixed!(I8F24);
 impl_fixed!(I20F12);
 
 macro_rules! impl_float {
-    ($t:ty, $sqrt:path, $floor:path) => {
+    ($t:ty, $sqrt:path, $floor:path, $round:path) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -268,6 +278,11 @@ macro_rules! impl_float {
                 }
             }
             #[inline]
+            fn to_micro(self) -> i32 {
+                // `as` saturates and maps NaN to 0: no panic.
+                $round(self * 1e6) as i32
+            }
+            #[inline]
             fn floor_int(self) -> i32 {
                 // `as` saturates and maps NaN to 0: no panic.
                 $floor(self) as i32
@@ -276,8 +291,8 @@ macro_rules! impl_float {
     };
 }
 
-impl_float!(f32, libm::sqrtf, libm::floorf);
-impl_float!(f64, libm::sqrt, libm::floor);
+impl_float!(f32, libm::sqrtf, libm::floorf, libm::roundf);
+impl_float!(f64, libm::sqrt, libm::floor, libm::round);
 
 #[cfg(test)]
 mod tests {
@@ -292,6 +307,8 @@ mod tests {
         assert_eq!(R::from_f64(2.5).floor_int(), 2);
         assert_eq!(R::from_f64(1.0).div(R::ZERO).to_f64() > 1.0, true);
         assert!((R::from_q16(3 << 15).to_f64() - 1.5).abs() < 1e-6);
+        assert_eq!(R::from_f64(0.25).to_micro(), 250_000);
+        assert_eq!(R::from_f64(-0.5).to_micro(), -500_000);
     }
 
     #[test]

@@ -64,6 +64,11 @@ mod isr_cell;
 #[path = "support/board_bench.rs"]
 mod bench;
 
+// The avoidance step (USART1 in and out, TIM3 every 10 ms, its deadline on the IWDG's tick).
+#[cfg(target_os = "none")]
+#[path = "support/board_avoid.rs"]
+mod board_avoid;
+
 #[cfg(target_os = "none")]
 mod board {
     use super::isr_cell::IsrCell;
@@ -144,13 +149,13 @@ mod board {
     /// The core clock (SysTick) and TIM2's input clock: the 16 MHz HSI on the board. QEMU 7.2's
     /// netduinoplus2 clocks the core at 168 MHz and its timers at 1 GHz whatever RCC says, so the
     /// `qemu-io` build scales both to keep a 1 MHz `Clock` and a `TICK_US` tick there.
-    #[cfg(not(feature = "qemu-io"))]
+    #[cfg(not(feature = "qemu-clock"))]
     const CORE_HZ: u32 = 16_000_000;
-    #[cfg(not(feature = "qemu-io"))]
+    #[cfg(not(feature = "qemu-clock"))]
     const TIM2_HZ: u32 = 16_000_000;
-    #[cfg(feature = "qemu-io")]
+    #[cfg(feature = "qemu-clock")]
     const CORE_HZ: u32 = 168_000_000;
-    #[cfg(feature = "qemu-io")]
+    #[cfg(feature = "qemu-clock")]
     const TIM2_HZ: u32 = 1_000_000_000;
     const TICK_US: u32 = 1_000;
 
@@ -305,13 +310,13 @@ mod board {
     #[no_mangle]
     #[used]
     static FLINCH_FLASH_CRC: u32 = 0;
-    /// The production build checks its image with the production seed; the `qemu-io` bench build,
-    /// which must never run the machine, is patched (xtask) and checked with its own, so its stored
-    /// CRC fails the production check (`integrity::Seed`; host test
-    /// `a_bench_image_fails_the_production_check`).
-    #[cfg(not(feature = "qemu-io"))]
+    /// The production build checks its image with the production seed; every `qemu-clock` build
+    /// (the `qemu-io` bench and the serial test: their tick is scaled for QEMU), which must never run
+    /// the machine, is patched (xtask) and checked with its own, so its stored CRC fails the
+    /// production check (`integrity::Seed`; host test `a_bench_image_fails_the_production_check`).
+    #[cfg(not(feature = "qemu-clock"))]
     const FLASH_SEED: integrity::Seed = integrity::Seed::Production;
-    #[cfg(feature = "qemu-io")]
+    #[cfg(feature = "qemu-clock")]
     const FLASH_SEED: integrity::Seed = integrity::Seed::QemuBench;
 
     extern "C" {
@@ -366,8 +371,8 @@ mod board {
     const SELF_RAM: u8 = 1;
     const SELF_FLASH: u8 = 2;
     const SELF_BOR: u8 = 3;
-    /// A `qemu-io` bench image found real GPIO (it runs on silicon, not in QEMU).
-    #[cfg(feature = "qemu-io")]
+    /// A `qemu-clock` image (bench or serial test) found real GPIO (it runs on silicon, not in QEMU).
+    #[cfg(feature = "qemu-clock")]
     const SELF_NOT_QEMU: u8 = 4;
 
     /// The option bytes through the flash interface's registers (`flinch_firmware::option_bytes`:
@@ -520,9 +525,9 @@ mod board {
             integrity_failed(SELF_FLASH, 0);
         }
         backup_on();
-        // The qemu-io bench build must never drive a machine: on silicon GPIOD's MODER reads back
-        // what `early_outputs_low` wrote; QEMU 7.2 does not model GPIO and reads 0.
-        #[cfg(feature = "qemu-io")]
+        // A qemu-clock build (its tick scaled for QEMU) must never drive a machine: on silicon GPIOD's
+        // MODER reads back what `early_outputs_low` wrote; QEMU 7.2 does not model GPIO and reads 0.
+        #[cfg(feature = "qemu-clock")]
         if gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0 {
             integrity_failed(SELF_NOT_QEMU, 0);
         }
@@ -619,6 +624,7 @@ mod board {
             NVIC::unmask(Exti4);
         }
 
+        super::board_avoid::init(&mut cp.NVIC);
         cp.SYST.set_clock_source(SystClkSource::Core);
         cp.SYST.set_reload(CORE_HZ / 1_000_000 * TICK_US - 1);
         cp.SYST.clear_current();
@@ -780,7 +786,10 @@ mod board {
         let fw = unsafe { FW.get() };
         fw.tick();
         retained_store(fw.retained());
-        iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) }); // the tick ran: feed the watchdog (SAFETY: the reload key)
+        // The tick ran and the avoidance step kept its deadline: feed the watchdog (SAFETY: the reload key).
+        if super::board_avoid::on_tick() {
+            iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
+        }
     }
 
     #[exception]
@@ -826,6 +835,8 @@ mod board {
         v[EXTI4_IRQ as usize] = Vector { handler: exti4_entry };
         v[BOOK_IRQ as usize] = Vector { handler: book_entry };
         v[TIM5_IRQ as usize] = Vector { handler: tim5_entry };
+        v[super::board_avoid::USART1_IRQ as usize] = Vector { handler: super::board_avoid::usart1_entry };
+        v[super::board_avoid::TIM3_IRQ as usize] = Vector { handler: super::board_avoid::tim3_entry };
         v
     }
     unsafe extern "C" fn exti0_entry() {
