@@ -153,6 +153,8 @@ impl<R: Real> Link<R> {
     pub fn new(cfg: LinkConfig<R>) -> Self {
         let mut rx = Receiver::new(cfg.max_age_ms, cfg.byte_timeout_ms);
         rx.budget_bytes = cfg.budget_bytes;
+        // A restarted host's new session is taken once the weights watchdog has stopped the robot.
+        rx.new_session_after_ms = cfg.watchdog.stop_after_ms;
         let dt_s = R::from_int(cfg.period_ms.min(60_000) as i32).div(R::from_int(1000));
         Link { rx, ctl: Controller::new(cfg.gains), gauss: GaussLut::new(), cfg, dt_s, x: cfg.start_m[0], y: cfg.start_m[1], step: 0 }
     }
