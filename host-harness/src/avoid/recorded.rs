@@ -327,7 +327,7 @@ impl FrameSource for RecordedSource {
         s.frames_used += 1;
         s.max_unknown_fraction = s.max_unknown_fraction.max(info.unknown_cells as f64 / cells);
         s.max_filled_cells = s.max_filled_cells.max(info.filled_cells);
-        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc }))
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc, goal_separation_m: None }))
     }
 }
 
