@@ -429,15 +429,17 @@ fn cli_verdict_and_csv() {
 }
 
 /// One row of the docs' table: `| scene | law | status | reason | min_signed_distance_m |
-/// max_speed_near_operator_mps | time_to_goal_s |`.
+/// max_speed_near_operator_mps | time_to_goal_s | ssm_violations | max_speed_over_ssm_mps |`.
 fn table_row(name: &str, law: &str, r: &PathResult) -> String {
     format!(
-        "| `{name}` | {law} | {} | {} | {:.4} | {:.3} | {} |",
+        "| `{name}` | {law} | {} | {} | {:.4} | {:.3} | {} | {} | {:.3} |",
         r.status.name(),
         r.status.reason().map_or("-", |x| x.name()),
         r.min_signed_distance_m,
         r.max_speed_near_operator_mps,
-        r.time_to_goal_s.map_or("-".to_string(), |t| format!("{t:.2}"))
+        r.time_to_goal_s.map_or("-".to_string(), |t| format!("{t:.2}")),
+        r.ssm_violations,
+        r.max_speed_over_ssm_mps
     )
 }
 
@@ -454,8 +456,8 @@ fn docs_table_is_current() {
         .collect();
     names.sort();
     let mut rows = vec![
-        "| scene | law | status | reason | min_signed_distance_m | max_speed_near_operator_mps | time_to_goal_s |".to_string(),
-        "|---|---|---|---|---|---|---|".to_string(),
+        "| scene | law | status | reason | min_signed_distance_m | max_speed_near_operator_mps | time_to_goal_s | ssm_violations | max_speed_over_ssm_mps |".to_string(),
+        "|---|---|---|---|---|---|---|---|---|".to_string(),
     ];
     for name in &names {
         let (ts, t) = thesis(name);
@@ -556,7 +558,10 @@ fn ssm_verdict_uses_the_true_separation() {
     honest("hand at 3.2 m/s", &scene, &r);
     assert!(r.ssm_violations > 0, "the true separation fell below S_p while the tool moved: {:?}, {} m", r.status, r.min_signed_distance_m);
     assert!(r.max_speed_over_ssm_mps > 0.0);
-    assert!(matches!(r.status, Status::SsmViolation(_) | Status::Collision(_)), "{:?}", r.status);
+    // Never inside: without the verdict this run read "stopped, blocked", a clean stop (measured:
+    // 3 steps over the bound by up to 0.224 m/s, the surface 0.165 m from the hand at the closest).
+    assert!(matches!(r.status, Status::SsmViolation(Some(_))), "{:?}", r.status);
+    assert!(r.min_signed_distance_m > 0.0, "{}", r.min_signed_distance_m);
     let json = avoid::metrics_json(&r, Engine::Reference, true);
     assert_eq!(json["ssm_violations"].as_u64(), Some(r.ssm_violations as u64));
     assert!(json["max_speed_over_ssm_mps"].as_f64().unwrap() > 0.0);
@@ -702,7 +707,9 @@ fn no_room_stops_at_once() {
 /// anywhere at least 0.3 m apart; grid 15 x 15 or 30 x 30; latency 0 to 0.2 s. Our law (not
 /// `--thesis`) every time: a run reported reached kept the clearance and the SSM bound; any run that
 /// went inside is a collision and `flinch avoid` would exit 1; and, stronger, every run is safe
-/// (`safe`: never inside, never over the SSM bound at the true separation, never moving in contact).
+/// (`safe`: never over the SSM bound at the true separation, never moving in contact). A hand whose
+/// key frames run into the tool held in a protective stop is a `collision` (ISO/TS 15066 5.5.4
+/// allows contact with a stopped robot; the report still says so), with the tool at rest.
 #[test]
 fn random_variants_are_safe_and_honest() {
     let base = Avoid::load(&scene_path("avoid_fast_hand.toml")).unwrap();
@@ -721,6 +728,8 @@ fn random_variants_are_safe_and_honest() {
         })
         .collect();
     let mut tally = std::collections::BTreeMap::new();
+    let mut reached_near = f64::INFINITY;
+    let t_start = std::time::Instant::now();
     for k in 0..n {
         let mut s = base.clone();
         let mut pt = || [0.1 + 0.85 * next(), 0.1 + 0.85 * next()];
@@ -738,7 +747,9 @@ fn random_variants_are_safe_and_honest() {
         s.operator.forearm_width_m = 0.04 + 0.06 * next();
         s.operator.hand_height_m = 0.05 + 0.2 * next();
         s.operator.forearm_height_m = 0.05 + 0.2 * next();
-        let h0 = [ex, 0.02 + 0.9 * next()];
+        // The hand starts within 0.4 m of its edge (farther, its forearm leaves most starts or
+        // goals inside S_p: `no_room` at once) and then reaches anywhere.
+        let h0 = [ex, 0.02 + 0.38 * next()];
         let h1 = [0.05 + 0.9 * next(), 0.05 + 0.9 * next()];
         let t0 = 1.5 * next();
         let speed = 1.6 * next();
@@ -771,7 +782,8 @@ fn random_variants_are_safe_and_honest() {
             assert!(matches!(r.status, Status::Collision(_)) && !r.status.ok(), "{name}: inside but {:?}", r.status);
         }
         safe(&name, &s, &r);
+        if r.status == Status::Reached { reached_near = reached_near.min(r.min_signed_distance_m); }
         *tally.entry(format!("{} {}", r.status.name(), r.status.reason().map_or("", |x| x.name()))).or_insert(0) += 1;
     }
-    println!("{n} variants: {tally:?}");
+    println!("{n} variants: {tally:?}; closest reached run {reached_near} m; {:.1} s", t_start.elapsed().as_secs_f64());
 }
