@@ -25,7 +25,7 @@ pub const NAMED: &[(&str, &str)] = &[
     ("events", "1"), ("schema_version", "1"), ("points", "1"), ("seq", "1"), ("flags", "1"),
     // avoid: counts.
     ("heading_reversals", "1"), ("stalls", "1"), ("frames", "1"), ("good", "1"), ("bad_crc", "1"), ("bad_header", "1"), ("short", "1"), ("stale", "1"),
-    ("skipped_bytes", "1"),
+    ("skipped_bytes", "1"), ("ssm_violations", "1"),
     // hil: the phase is a fraction of the scan cycle.
     ("phase", "1"),
     // --measured: each comparison states its unit in its own `unit` field.
