@@ -160,7 +160,7 @@ fn safe(name: &str, scene: &Avoid, r: &PathResult) {
     // (ISO/TS 15066 5.5.4 allows contact with a stopped robot), which is still reported as a
     // collision, but no step ever commands motion while touching or into the operator.
     for (k, row) in r.rows.iter().enumerate() {
-        if row.separation_m < 0.0 || r.signed_distance_m[k] < 0.0 {
+        if row.separation_m < 0.0 || r.signed_distance_m[k] < 0.0 || row.swept_separation_m < 0.0 {
             assert!(row.v_mps[0].hypot(row.v_mps[1]) == 0.0, "{name}: t = {} s: moving in contact", row.t_s);
         }
     }

@@ -93,9 +93,12 @@ pub struct AvoidMetrics {
     pub engine: &'static str,
     /// The speed and separation monitor: "ssm" or "off".
     pub monitor: &'static str,
-    /// How the run ended.
+    /// How the run ended: `reached`, `stopped`, `too_close`, `collision` (the tool's surface entered
+    /// an obstacle, over any step's swept segment) or `ssm_violation` (never inside, but faster than
+    /// the SSM bound at the true separation at some step); only `reached` exits 0.
     pub status: &'static str,
-    /// Why it stopped before the goal, if it did.
+    /// Why it stopped before the goal, if it did: `stalled`, `no_path`, `no_room`, `blocked`,
+    /// `stale_weights`, `timeout` or `left_view`.
     pub reason: Option<&'static str>,
     /// Why `reason` is null.
     pub reason_null_reason: Option<&'static str>,
