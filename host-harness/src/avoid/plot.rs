@@ -48,16 +48,16 @@ where
     let (w, h) = scene.extent_m();
     let snap = &res.snapshot;
     let title = format!(
-        "{}{}: f* (sigma' = {:.2} sigma) at t = {:.2} s, min signed distance {:.0} mm, {} steps over SSM",
+        "{}{}: min {:.0} mm, {} steps over SSM | f* (sigma' {:.2} sigma) at t = {:.2} s",
         res.status.name(),
         res.status.reason().map_or(String::new(), |r| format!(" ({})", r.name())),
-        scene.fit.eval_sigma_factor,
-        snap.t_s,
         res.min_signed_distance_m * 1e3,
-        res.ssm_violations
+        res.ssm_violations,
+        scene.fit.eval_sigma_factor,
+        snap.t_s
     );
     let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
+        .caption(title, ("sans-serif", 17))
         .margin(15)
         .x_label_area_size(40)
         .y_label_area_size(50)
