@@ -646,9 +646,14 @@ fn swept_bound_is_conservative_and_tight() {
     o.center_m = [0.5, 0.5];
     let v = max_obstacle_speed_mps(&s);
     assert_eq!(v, 0.0);
-    // Past the disc's side 5 mm from the wrist: ends 0.3 m away each side.
-    let d = swept_min_m(&s, v, (0.0, [0.2, 0.5 + 0.01 + w + 0.005]), (0.1, [0.8, 0.5 + 0.01 + w + 0.005]));
+    // Past the disc's side 5 mm from the wrist: ends 0.15 m away each side.
+    let d = swept_min_m(&s, v, (0.0, [0.35, 0.5 + 0.01 + w + 0.005]), (0.1, [0.65, 0.5 + 0.01 + w + 0.005]));
     assert!(d <= 0.005 && d >= 0.005 - SWEPT_TOL_M, "{d}");
+    // A step longer than the sample cap allows at 0.1 mm (0.6 m): still conservative, within
+    // L / (2 n).
+    let d = swept_min_m(&s, v, (0.0, [0.2, 0.5 + 0.01 + w + 0.005]), (0.1, [0.8, 0.5 + 0.01 + w + 0.005]));
+    let cap = flinch_harness::avoid::path::SWEPT_MAX_SAMPLES as f64;
+    assert!(d <= 0.005 && d >= 0.005 - 0.6 / (2.0 * cap), "{d}");
     // Straight through.
     let d = swept_min_m(&s, v, (0.0, [0.2, 0.5]), (0.1, [0.8, 0.5]));
     assert!(d <= -(0.01 + w) + 1e-12 && d >= -(0.01 + w) - SWEPT_TOL_M, "{d}");
