@@ -2,7 +2,7 @@
 //! law does, the outcome is reported honestly from the true geometry. A run that put the tool inside
 //! the operator is never "reached", its signed distance is negative (not clamped at 0), and
 //! `flinch avoid` answers `false` (exit 1).
-use flinch_harness::avoid::path::{simulate, Engine, PathResult, Setup, Status};
+use flinch_harness::avoid::path::{simulate, Engine, PathResult, Reason, Setup, Status};
 use flinch_harness::avoid::scene::Avoid;
 use flinch_harness::avoid::{self, AvoidArgs};
 use flinch_tests::scene_path;
@@ -26,8 +26,27 @@ fn run_scene(scene: Avoid) -> (Avoid, PathResult) {
 
 /// What every run must satisfy, whatever the scene.
 fn honest(name: &str, scene: &Avoid, r: &PathResult) {
+    // The minimum is over the swept segments, never above the step ends' minimum.
     let min = r.signed_distance_m.iter().copied().fold(f64::INFINITY, f64::min);
-    assert_eq!(min, r.min_signed_distance_m, "{name}: min over the path");
+    assert!(r.min_signed_distance_m <= min, "{name}: swept min {} above the step ends' {min}", r.min_signed_distance_m);
+    let swept = r.rows.iter().map(|w| w.swept_separation_m).fold(r.signed_distance_m[0], f64::min);
+    assert_eq!(swept, r.min_signed_distance_m, "{name}: min over the swept steps");
+    for (k, w) in r.rows.iter().enumerate() {
+        assert!(w.swept_separation_m <= r.signed_distance_m[k].min(r.signed_distance_m[k + 1]), "{name}: step {k}: swept above an end");
+        // Conservative: never above any sample of the segment.
+        let mut sampled = f64::INFINITY;
+        for i in 0..=20 {
+            let a = i as f64 / 20.0;
+            let (p0, p1) = (r.points[k], r.points[k + 1]);
+            let t = (k as f64 + a) * scene.dt_s;
+            sampled = sampled.min(scene.signed_distance_m(t, [p0[0] + a * (p1[0] - p0[0]), p0[1] + a * (p1[1] - p0[1])]));
+        }
+        assert!(w.swept_separation_m <= sampled + 1e-12, "{name}: step {k}: swept {} above a sample {sampled}", w.swept_separation_m);
+        // The 21 samples are within L / 40 of the segment's minimum (L: the step's Lipschitz term),
+        // the swept bound within its resolution below it.
+        let slack = flinch_harness::avoid::path::SWEPT_TOL_M + step_motion(scene, r, k) / 40.0 + 1e-12;
+        assert!(w.swept_separation_m >= sampled - slack, "{name}: step {k}: swept {} far below {sampled}", w.swept_separation_m);
+    }
     // Recomputed here from the true geometry at every step, not from the sensed image: from the
     // tool's surface (the wrist disc), not its centre.
     for (k, (p, s)) in r.points.iter().zip(&r.signed_distance_m).enumerate() {
@@ -37,8 +56,20 @@ fn honest(name: &str, scene: &Avoid, r: &PathResult) {
         assert!((surface - s).abs() < 1e-9, "{name}: step {k}");
     }
     assert_eq!(r.clearance_m, scene.clearance_m);
-    let inside_steps = r.signed_distance_m.iter().skip(1).filter(|s| **s < 0.0).count();
+    let inside_steps = r.rows.iter().filter(|w| w.swept_separation_m < 0.0).count();
     assert!((r.time_inside_s - inside_steps as f64 * scene.dt_s).abs() < 1e-9, "{name}: time inside");
+    // The SSM verdict, recomputed here from the true geometry with the ISO/TS 15066 formula.
+    let mut violations = 0;
+    for (k, row) in r.rows.iter().enumerate() {
+        let bound = ssm_bound(scene, r.signed_distance_m[k]);
+        assert!((row.ssm_bound_mps - bound).abs() < 1e-9, "{name}: step {k}: bound {} != {bound}", row.ssm_bound_mps);
+        if row.v_mps[0].hypot(row.v_mps[1]) > bound + 1e-6 {
+            violations += 1;
+        }
+    }
+    assert_eq!(violations, r.ssm_violations, "{name}: SSM violations");
+    assert_eq!(r.ssm_violations > 0, r.max_speed_over_ssm_mps > 0.0, "{name}");
+    assert_eq!(r.ssm_violations > 0, r.first_ssm_violation_s.is_some(), "{name}");
     match r.status {
         Status::Reached | Status::TooClose => {
             if r.status == Status::Reached {
@@ -54,6 +85,12 @@ fn honest(name: &str, scene: &Avoid, r: &PathResult) {
         Status::Collision(_) => {
             assert!(r.min_signed_distance_m < 0.0 && r.time_inside_s > 0.0, "{name}: collision needs a penetration");
         }
+        Status::SsmViolation(_) => assert!(r.min_signed_distance_m >= 0.0 && r.ssm_violations > 0, "{name}: ssm_violation is for runs never inside"),
+    }
+    if r.min_signed_distance_m < 0.0 {
+        assert!(matches!(r.status, Status::Collision(_)), "{name}: inside but {:?}", r.status);
+    } else if r.ssm_violations > 0 {
+        assert!(matches!(r.status, Status::SsmViolation(_)), "{name}: over the SSM bound but {:?}", r.status);
     }
     assert_eq!(r.status.ok(), r.status == Status::Reached);
     // The speeds are those of the rows.
@@ -99,6 +136,13 @@ const ADVERSARIAL: [&str; 19] = [
     "avoid_moving_disc_wide.toml",
 ];
 
+/// How far the tool and the fastest obstacle move over step `k`, m (the swept check's Lipschitz
+/// term).
+fn step_motion(scene: &Avoid, r: &PathResult, k: usize) -> f64 {
+    let (p0, p1) = (r.points[k], r.points[k + 1]);
+    (p1[0] - p0[0]).hypot(p1[1] - p0[1]) + flinch_harness::avoid::path::max_obstacle_speed_mps(scene) * scene.dt_s
+}
+
 /// The speed limit of ISO/TS 15066 5.5.4 at a true separation `s` (the bound the monitor must stay
 /// under, whatever it sensed), m/s.
 fn ssm_bound(scene: &Avoid, s: f64) -> f64 {
@@ -116,7 +160,7 @@ fn safe(name: &str, scene: &Avoid, r: &PathResult) {
     // (ISO/TS 15066 5.5.4 allows contact with a stopped robot), which is still reported as a
     // collision, but no step ever commands motion while touching or into the operator.
     for (k, row) in r.rows.iter().enumerate() {
-        if row.separation_m < 0.0 || r.signed_distance_m[k] < 0.0 {
+        if row.separation_m < 0.0 || r.signed_distance_m[k] < 0.0 || row.swept_separation_m < 0.0 {
             assert!(row.v_mps[0].hypot(row.v_mps[1]) == 0.0, "{name}: t = {} s: moving in contact", row.t_s);
         }
     }
@@ -128,6 +172,7 @@ fn safe(name: &str, scene: &Avoid, r: &PathResult) {
         assert!(r.min_signed_distance_m >= scene.clearance_m, "{name}: {} m < clearance {} m", r.min_signed_distance_m, scene.clearance_m);
     }
     assert!(r.max_speed_mps <= scene.speed_mps + 1e-9, "{name}: {} m/s", r.max_speed_mps);
+    assert_eq!(r.ssm_violations, 0, "{name}: {} steps over the SSM bound, by up to {} m/s", r.ssm_violations, r.max_speed_over_ssm_mps);
     for (k, row) in r.rows.iter().enumerate() {
         let s_true = r.signed_distance_m[k];
         let v = row.v_mps[0].hypot(row.v_mps[1]);
@@ -231,9 +276,12 @@ fn clearance_is_from_the_surface_and_enforced() {
     assert!(centre > t.clearance_m, "the tool point keeps {centre} m");
     assert!(r.min_signed_distance_m < t.clearance_m, "the surface does not: {}", r.min_signed_distance_m);
     if r.min_signed_distance_m >= 0.0 {
-        assert_eq!(r.status, Status::TooClose);
+        // Too close, and (the thesis's law has no monitor) faster than SSM allows there: the
+        // speed verdict takes precedence in `status`, `clearance_kept` says the rest.
         let json = avoid::metrics_json(&r, Engine::Reference, false);
-        assert_eq!((json["status"].as_str(), json["clearance_kept"].as_bool(), json["reached_goal"].as_bool()), (Some("too_close"), Some(false), Some(false)));
+        let expect = if r.ssm_violations > 0 { "ssm_violation" } else { "too_close" };
+        assert_eq!((json["status"].as_str(), json["clearance_kept"].as_bool(), json["reached_goal"].as_bool()), (Some(expect), Some(false), Some(false)));
+        assert!(matches!(r.status, Status::TooClose | Status::SsmViolation(None)), "{:?}", r.status);
     } else {
         assert!(matches!(r.status, Status::Collision(_)));
     }
@@ -366,9 +414,12 @@ fn cli_verdict_and_csv() {
     assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(false));
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state"));
-    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').take(7).map(|v| v.parse().unwrap()).collect()).collect();
+    assert_eq!(lines.next(), Some("t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state,swept_separation_m,ssm_bound_mps"));
+    assert_eq!(avoid::CSV_HEADER.split(',').count(), 10);
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').enumerate().filter(|(k, _)| *k != 7).map(|(_, v)| v.parse().unwrap()).collect()).collect();
     assert!(rows.iter().any(|r| r[5] < 0.0), "the crossing shows in the CSV's separation");
+    assert!(rows.iter().all(|r| r[7] <= r[5]), "swept separation never above the step's end");
+    assert!(rows.iter().any(|r| r[3].hypot(r[4]) > r[8] + 1e-6), "the thesis's law exceeds the SSM bound: the CSV shows where");
     std::fs::remove_file(&csv).ok();
     // With the monitor the wall is a safe stop, still exit 1 (the goal is not reached).
     assert_eq!(avoid::run(&args("avoid_wall.toml", None, false)), Ok(false));
@@ -378,15 +429,17 @@ fn cli_verdict_and_csv() {
 }
 
 /// One row of the docs' table: `| scene | law | status | reason | min_signed_distance_m |
-/// max_speed_near_operator_mps | time_to_goal_s |`.
+/// max_speed_near_operator_mps | time_to_goal_s | ssm_violations | max_speed_over_ssm_mps |`.
 fn table_row(name: &str, law: &str, r: &PathResult) -> String {
     format!(
-        "| `{name}` | {law} | {} | {} | {:.4} | {:.3} | {} |",
+        "| `{name}` | {law} | {} | {} | {:.4} | {:.3} | {} | {} | {:.3} |",
         r.status.name(),
         r.status.reason().map_or("-", |x| x.name()),
         r.min_signed_distance_m,
         r.max_speed_near_operator_mps,
-        r.time_to_goal_s.map_or("-".to_string(), |t| format!("{t:.2}"))
+        r.time_to_goal_s.map_or("-".to_string(), |t| format!("{t:.2}")),
+        r.ssm_violations,
+        r.max_speed_over_ssm_mps
     )
 }
 
@@ -403,8 +456,8 @@ fn docs_table_is_current() {
         .collect();
     names.sort();
     let mut rows = vec![
-        "| scene | law | status | reason | min_signed_distance_m | max_speed_near_operator_mps | time_to_goal_s |".to_string(),
-        "|---|---|---|---|---|---|---|".to_string(),
+        "| scene | law | status | reason | min_signed_distance_m | max_speed_near_operator_mps | time_to_goal_s | ssm_violations | max_speed_over_ssm_mps |".to_string(),
+        "|---|---|---|---|---|---|---|---|---|".to_string(),
     ];
     for name in &names {
         let (ts, t) = thesis(name);
@@ -488,4 +541,254 @@ fn obstacles_trap_and_wall() {
     assert!(e.contains("avoid.operator.obstacles[0].size_m[1] = -1: must be > 0"), "{e}");
     let e = Avoid::parse(&text.replacen("height_m = 0.20", "height_m = 0.20\nradius = 1", 1)).unwrap_err();
     assert!(e.contains("radius"), "{e}");
+}
+
+/// Item 1 of the follow-up to issue 9: the run's own verdict checks the commanded speed against the
+/// SSM bound at the TRUE separation. Adversarial case: the fast-hand scene with the hand twice as fast
+/// as the `v_h` the monitor assumes (3.2 m/s against 1.6 m/s), so the separation the monitor
+/// believes (sensed, less `v_h` times the frame's age) is optimistic. The tool is moving when the
+/// hand lands near it: the run is `ssm_violation` (or `collision`), never `reached` or a clean
+/// stop, and `flinch avoid` exits 1. With the hand at `v_h` (the shipped scene) no step violates.
+#[test]
+fn ssm_verdict_uses_the_true_separation() {
+    let mut s = Avoid::load(&scene_path("avoid_fast_hand.toml")).unwrap();
+    // 0.4 m in 0.125 s: 3.2 m/s.
+    s.operator.keyframes[2].t_s = s.operator.keyframes[1].t_s + 0.125;
+    let (scene, r) = run_scene(s.clone());
+    honest("hand at 3.2 m/s", &scene, &r);
+    assert!(r.ssm_violations > 0, "the true separation fell below S_p while the tool moved: {:?}, {} m", r.status, r.min_signed_distance_m);
+    assert!(r.max_speed_over_ssm_mps > 0.0);
+    // Never inside: without the verdict this run read "stopped, blocked", a clean stop (measured:
+    // 3 steps over the bound by up to 0.224 m/s, the surface 0.165 m from the hand at the closest).
+    assert!(matches!(r.status, Status::SsmViolation(Some(_))), "{:?}", r.status);
+    assert!(r.min_signed_distance_m > 0.0, "{}", r.min_signed_distance_m);
+    let json = avoid::metrics_json(&r, Engine::Reference, true);
+    assert_eq!(json["ssm_violations"].as_u64(), Some(r.ssm_violations as u64));
+    assert!(json["max_speed_over_ssm_mps"].as_f64().unwrap() > 0.0);
+    assert_eq!(json["reached_goal"], false);
+    let args = AvoidArgs {
+        scene: scene_path("avoid_fast_hand.toml"),
+        plot: None,
+        json: true,
+        mcu: false,
+        calibration: None,
+        save_calibration: None,
+        compare: false,
+        csv: None,
+        thesis: false,
+        save_depth: None,
+        depth: None,
+        robot_poses: None,
+    };
+    assert_eq!(avoid::run_scene(&args, s), Ok(false), "exit 1");
+    // As shipped (1.6 m/s = v_h): within the bound at every step.
+    let (scene, r) = run("avoid_fast_hand.toml");
+    safe("avoid_fast_hand.toml", &scene, &r);
+}
+
+/// Item 2: the distance is checked over each step's segment, not only at its ends. Adversarial
+/// case: a thin wall (a 4 mm box) across the straight line, the tool at 3 m/s with 50 ms steps
+/// (150 mm a step, more than the 90 mm wrist plus the wall) and the field and monitor off, placed so
+/// that two step ends straddle it: every end is clear of it, the tool went through, and the run is
+/// a collision (exit 1).
+#[test]
+fn a_thin_wall_between_two_steps_is_a_collision() {
+    let mut s = Avoid::load(&scene_path("avoid_box_wall.toml")).unwrap();
+    s.thesis_mode();
+    s.k_rep = 0.0;
+    s.speed_mps = 3.0;
+    s.dt_s = 0.05;
+    s.latency_s = 0.0;
+    s.start_m = [0.12, 0.5];
+    s.goal_m = [0.93, 0.5];
+    let o = &mut s.operator.obstacles[0];
+    o.size_m = [0.004, 0.9];
+    // The hand and forearm out of the way.
+    s.operator.entry_m = [1.0, 0.0];
+    s.operator.keyframes.truncate(1);
+    s.operator.keyframes[0].hand_m = [1.0, 0.05];
+    s.operator.keyframes[0].t_s = 0.0;
+    s.operator.obstacles.truncate(1);
+    // Find the wall position where the step ends straddle it, from the run without it.
+    let mut free = s.clone();
+    free.operator.obstacles[0].center_m = [0.5, 5.0];
+    let (_, f) = run_scene(free);
+    let xs: Vec<f64> = f.points.iter().map(|p| p[0]).collect();
+    let k = xs.iter().position(|x| *x > 0.5).unwrap();
+    let wall_x = 0.5 * (xs[k - 1] + xs[k]);
+    assert!(xs[k] - xs[k - 1] > 2.0 * s.robot.wrist_radius_m + 0.004 + 0.01, "steps of {} m", xs[k] - xs[k - 1]);
+    s.operator.obstacles[0].center_m = [wall_x, 0.5];
+    let (scene, r) = run_scene(s);
+    honest("thin wall", &scene, &r);
+    let ends = r.signed_distance_m.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(ends > 0.0, "every step end is clear of the wall: {ends} m");
+    assert!(r.min_signed_distance_m < -0.04, "the swept check finds the crossing: {} m", r.min_signed_distance_m);
+    assert!(matches!(r.status, Status::Collision(_)), "{:?}", r.status);
+    assert!(r.time_inside_s > 0.0);
+    assert_eq!(avoid::metrics_json(&r, Engine::Reference, false)["collided"], true);
+}
+
+/// The swept bound itself: a tool passing a static disc, and a disc moving across a still tool
+/// between two step times, are found inside, and the bound is never above the true minimum.
+#[test]
+fn swept_bound_is_conservative_and_tight() {
+    use flinch_harness::avoid::path::{max_obstacle_speed_mps, swept_min_m, SWEPT_TOL_M};
+    let mut s = Avoid::load(&scene_path("avoid_box_wall.toml")).unwrap();
+    s.operator.entry_m = [1.0, 0.0];
+    s.operator.keyframes.truncate(1);
+    s.operator.keyframes[0].hand_m = [1.0, 0.05];
+    s.operator.keyframes[0].t_s = 0.0;
+    s.operator.obstacles.truncate(1);
+    let w = s.robot.wrist_radius_m;
+    let o = &mut s.operator.obstacles[0];
+    o.kind = "disc".into();
+    o.radius_m = 0.01;
+    o.center_m = [0.5, 0.5];
+    let v = max_obstacle_speed_mps(&s);
+    assert_eq!(v, 0.0);
+    // Past the disc's side 5 mm from the wrist: ends 0.15 m away each side.
+    let d = swept_min_m(&s, v, (0.0, [0.35, 0.5 + 0.01 + w + 0.005]), (0.1, [0.65, 0.5 + 0.01 + w + 0.005]));
+    assert!(d <= 0.005 && d >= 0.005 - SWEPT_TOL_M, "{d}");
+    // A step longer than the sample cap allows at 0.1 mm (0.6 m): still conservative, within
+    // L / (2 n).
+    let d = swept_min_m(&s, v, (0.0, [0.2, 0.5 + 0.01 + w + 0.005]), (0.1, [0.8, 0.5 + 0.01 + w + 0.005]));
+    let cap = flinch_harness::avoid::path::SWEPT_MAX_SAMPLES as f64;
+    assert!(d <= 0.005 && d >= 0.005 - 0.6 / (2.0 * cap), "{d}");
+    // Straight through.
+    let d = swept_min_m(&s, v, (0.0, [0.2, 0.5]), (0.1, [0.8, 0.5]));
+    assert!(d <= -(0.01 + w) + 1e-12 && d >= -(0.01 + w) - SWEPT_TOL_M, "{d}");
+    // The disc moves across a tool standing still, between two step times.
+    let o = &mut s.operator.obstacles[0];
+    o.keyframes = vec![
+        flinch_harness::avoid::depth::ObstacleKeyframe { t_s: 0.0, x_m: 0.2, y_m: 0.5 },
+        flinch_harness::avoid::depth::ObstacleKeyframe { t_s: 0.1, x_m: 0.8, y_m: 0.5 },
+    ];
+    let v = max_obstacle_speed_mps(&s);
+    assert!((v - 6.0).abs() < 1e-9, "{v}");
+    let ends = s.signed_distance_m(0.0, [0.5, 0.5]).min(s.signed_distance_m(0.1, [0.5, 0.5]));
+    assert!(ends > 0.2);
+    let d = swept_min_m(&s, v, (0.0, [0.5, 0.5]), (0.1, [0.5, 0.5]));
+    assert!(d <= -(0.01 + w) + 1e-12 && d >= -(0.01 + w) - SWEPT_TOL_M, "{d}");
+}
+
+/// Item 3: no room. The goal under the hand, or the start already inside the protective
+/// separation at rest: the tool does not move at all and the run says `no_room` at the first
+/// frame, instead of waiting in a protective stop or stalling until the timeout. The thesis's law
+/// (no monitor) has no such stop.
+#[test]
+fn no_room_stops_at_once() {
+    for name in ["avoid_goal_covered.toml", "avoid_hand_at_tool.toml"] {
+        let (scene, r) = run(name);
+        safe(name, &scene, &r);
+        assert_eq!(r.status, Status::Stopped(Reason::NoRoom), "{name}");
+        assert_eq!(r.max_speed_mps, 0.0, "{name}");
+        // Stopped as soon as the first frame reached the controller.
+        let first = (scene.latency_s / scene.dt_s).ceil() as usize + 1;
+        assert!(r.rows.len() <= first, "{name}: {} steps", r.rows.len());
+        let json = avoid::metrics_json(&r, Engine::Reference, true);
+        assert_eq!((json["status"].as_str(), json["reason"].as_str()), (Some("stopped"), Some("no_room")), "{name}");
+        let (_, t) = thesis(name);
+        assert_ne!(t.status.reason(), Some(Reason::NoRoom), "{name}");
+    }
+    // The start clear but the goal 0.1 m from a static hand (inside S_p at rest, about 0.27 m).
+    let mut s = Avoid::load(&scene_path("avoid_empty_diagonal.toml")).unwrap();
+    s.operator.keyframes.truncate(1);
+    s.operator.keyframes[0].hand_m = [s.goal_m[0] - 0.2, s.goal_m[1]];
+    s.operator.entry_m = [s.goal_m[0] - 0.2, 0.0];
+    let (scene, r) = run_scene(s.clone());
+    safe("goal near the hand", &scene, &r);
+    assert_eq!(r.status, Status::Stopped(Reason::NoRoom));
+    // The same hand far from the start, the goal and the line between them: room enough.
+    s.operator.keyframes[0].hand_m = [0.8, 0.25];
+    s.operator.entry_m = [0.8, 0.0];
+    let (scene, r) = run_scene(s);
+    safe("hand away from the goal", &scene, &r);
+    assert_ne!(r.status.reason(), Some(Reason::NoRoom), "{:?}", r.status);
+}
+
+/// Item 4: variants nobody tuned for, seeded and reproducible (`FLINCH_AVOID_VARIANTS` sets how
+/// many; 200 by default). The operator anywhere along the near edge, hand 30-80 mm, forearm
+/// 40-100 mm wide, 50-250 mm high, still or moving at up to `v_h` (1.6 m/s); start and goal
+/// anywhere at least 0.3 m apart; grid 15 x 15 or 30 x 30; latency 0 to 0.2 s. Our law (not
+/// `--thesis`) every time: a run reported reached kept the clearance and the SSM bound; any run that
+/// went inside is a collision and `flinch avoid` would exit 1; and, stronger, every run is safe
+/// (`safe`: never over the SSM bound at the true separation, never moving in contact). A hand whose
+/// key frames run into the tool held in a protective stop is a `collision` (ISO/TS 15066 5.5.4
+/// allows contact with a stopped robot; the report still says so), with the tool at rest.
+#[test]
+fn random_variants_are_safe_and_honest() {
+    let base = Avoid::load(&scene_path("avoid_fast_hand.toml")).unwrap();
+    let n: usize = std::env::var("FLINCH_AVOID_VARIANTS").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
+    let mut seed: u64 = 0x0A70_1D09;
+    let mut next = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let setups: Vec<(usize, Setup)> = [15, 30]
+        .into_iter()
+        .map(|g| {
+            let mut s = base.clone();
+            s.fit.grid = g;
+            (g, Setup::new(&s, None).unwrap())
+        })
+        .collect();
+    let mut tally = std::collections::BTreeMap::new();
+    let mut reached_near = f64::INFINITY;
+    let t_start = std::time::Instant::now();
+    for k in 0..n {
+        let mut s = base.clone();
+        let mut pt = || [0.1 + 0.85 * next(), 0.1 + 0.85 * next()];
+        let (start, goal) = loop {
+            let (a, b) = (pt(), pt());
+            if (a[0] - b[0]).hypot(a[1] - b[1]) > 0.3 {
+                break (a, b);
+            }
+        };
+        s.start_m = start;
+        s.goal_m = goal;
+        let ex = 0.05 + 0.95 * next();
+        s.operator.entry_m = [ex, 0.0];
+        s.operator.hand_radius_m = 0.03 + 0.05 * next();
+        s.operator.forearm_width_m = 0.04 + 0.06 * next();
+        s.operator.hand_height_m = 0.05 + 0.2 * next();
+        s.operator.forearm_height_m = 0.05 + 0.2 * next();
+        // The hand starts within 0.4 m of its edge (farther, its forearm leaves most starts or
+        // goals inside S_p: `no_room` at once) and then reaches anywhere.
+        let h0 = [ex, 0.02 + 0.38 * next()];
+        let h1 = [0.05 + 0.9 * next(), 0.05 + 0.9 * next()];
+        let t0 = 1.5 * next();
+        let speed = 1.6 * next();
+        let still = next() < 0.3;
+        s.operator.keyframes.truncate(1);
+        s.operator.keyframes[0].t_s = t0;
+        s.operator.keyframes[0].hand_m = h0;
+        if !still {
+            let mut kf = s.operator.keyframes[0].clone();
+            kf.t_s = t0 + (h1[0] - h0[0]).hypot(h1[1] - h0[1]) / speed.max(0.05);
+            kf.hand_m = h1;
+            s.operator.keyframes.push(kf);
+        }
+        let grid = if next() < 0.5 { 15 } else { 30 };
+        s.fit.grid = grid;
+        s.latency_s = 0.2 * next();
+        s.camera.seed = k as u64;
+        s.max_time_s = 5.0;
+        let setup = &setups.iter().find(|(g, _)| *g == grid).unwrap().1;
+        let r = simulate(&s, setup, Engine::Reference).unwrap();
+        let name = format!(
+            "variant {k}: start {start:.2?} goal {goal:.2?}, hand {h0:.2?} -> {h1:.2?} at {speed:.2} m/s from {t0:.2} s (still {still}), grid {grid}, latency {:.3} s",
+            s.latency_s
+        );
+        // The brief's assertions first (they name the defect), then everything `safe` checks.
+        if r.status == Status::Reached {
+            assert!(r.min_signed_distance_m >= s.clearance_m && r.ssm_violations == 0, "{name}: reached unsafely");
+        }
+        if r.min_signed_distance_m < 0.0 {
+            assert!(matches!(r.status, Status::Collision(_)) && !r.status.ok(), "{name}: inside but {:?}", r.status);
+        }
+        safe(&name, &s, &r);
+        if r.status == Status::Reached { reached_near = reached_near.min(r.min_signed_distance_m); }
+        *tally.entry(format!("{} {}", r.status.name(), r.status.reason().map_or("", |x| x.name()))).or_insert(0) += 1;
+    }
+    println!("{n} variants: {tally:?}; closest reached run {reached_near} m; {:.1} s", t_start.elapsed().as_secs_f64());
 }

@@ -166,7 +166,8 @@ fn a_null_hole_over_the_hand_is_an_obstacle() {
 }
 
 /// Without `--robot-poses` nothing is removed: the robot at the tool is an obstacle at zero
-/// separation and the tool never moves.
+/// separation, inside the protective separation from the first frame: `no_room`, the tool never
+/// moves.
 #[test]
 fn without_poses_the_robot_is_an_obstacle() {
     let (_, mut scene) = scene();
@@ -176,7 +177,7 @@ fn without_poses_the_robot_is_an_obstacle() {
     let root = tmp("noposes");
     render_recording(&scene, &[(&root, 0.001)], 240, 240, &track).unwrap();
     let (res, _) = recorded::simulate(&scene, &setup, Engine::Reference, &root, None).unwrap();
-    assert_eq!(res.status, Status::Stopped(flinch_harness::avoid::path::Reason::Blocked));
+    assert_eq!(res.status, Status::Stopped(flinch_harness::avoid::path::Reason::NoRoom));
     assert!(res.path_length_m < 1e-9, "{}", res.path_length_m);
     std::fs::remove_dir_all(&root).ok();
 }

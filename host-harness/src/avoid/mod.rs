@@ -49,7 +49,7 @@ pub struct AvoidArgs {
     #[arg(long)]
     pub thesis: bool,
     /// Write the path, one row per control step (`t_s,x_m,y_m,vx_mps,vy_mps,separation_m,
-    /// speed_limit_mps,state`); `-` is standard output.
+    /// speed_limit_mps,state,swept_separation_m,ssm_bound_mps`); `-` is standard output.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Write the first synthetic depth frame (16-bit, `.png` or `.pgm`) to this file.
@@ -102,9 +102,12 @@ pub struct AvoidMetrics {
     pub engine: &'static str,
     /// The speed and separation monitor: "ssm" or "off".
     pub monitor: &'static str,
-    /// How the run ended.
+    /// How the run ended: `reached`, `stopped`, `too_close`, `collision` (the tool's surface entered
+    /// an obstacle, over any step's swept segment) or `ssm_violation` (never inside, but faster than
+    /// the SSM bound at the true separation at some step); only `reached` exits 0.
     pub status: &'static str,
-    /// Why it stopped before the goal, if it did.
+    /// Why it stopped before the goal, if it did: `stalled`, `no_path`, `no_room`, `blocked`,
+    /// `stale_weights`, `timeout` or `left_view`.
     pub reason: Option<&'static str>,
     /// Why `reason` is null.
     pub reason_null_reason: Option<&'static str>,
@@ -117,12 +120,24 @@ pub struct AvoidMetrics {
     /// Why `time_to_goal_s` is null.
     pub time_to_goal_null_reason: Option<&'static str>,
     /// Smallest signed distance from the tool's surface to the operator's true footprint, m
-    /// (negative inside).
+    /// (negative inside), over the whole path: each control step's segment is checked, the
+    /// obstacles moving meanwhile (a lower bound within 0.1 mm of the true minimum).
     pub min_signed_distance_m: f64,
     /// The clearance the scene asks for, m.
     pub clearance_m: f64,
     /// `min_signed_distance_m` is at least `clearance_m`.
     pub clearance_kept: bool,
+    /// Control steps whose commanded speed exceeded the speed and separation bound (ISO/TS 15066
+    /// 5.5.4) computed from the TRUE separation at the step's start (ground truth, not the sensed
+    /// image; the scene's `v_h`, `T_r`, `T_s`, `C`, `Z_d`, `Z_r`, clearance and cap), count. Any
+    /// makes `status` `ssm_violation` (unless `collision`) and `flinch avoid` exit 1.
+    pub ssm_violations: usize,
+    /// Largest excess of the commanded speed over that bound, m/s (0 when none).
+    pub max_speed_over_ssm_mps: f64,
+    /// End of the first step that exceeded it, s.
+    pub first_ssm_violation_s: Option<f64>,
+    /// Why `first_ssm_violation_s` is null.
+    pub first_ssm_violation_null_reason: Option<&'static str>,
     /// Time with the tool inside the operator, s.
     pub time_inside_s: f64,
     /// Largest commanded speed, m/s.
@@ -168,6 +183,10 @@ impl AvoidMetrics {
             min_signed_distance_m: res.min_signed_distance_m,
             clearance_m: res.clearance_m,
             clearance_kept: res.min_signed_distance_m >= res.clearance_m,
+            ssm_violations: res.ssm_violations,
+            max_speed_over_ssm_mps: res.max_speed_over_ssm_mps,
+            first_ssm_violation_s: res.first_ssm_violation_s,
+            first_ssm_violation_null_reason: res.first_ssm_violation_s.is_none().then_some("the speed stayed within the bound at every step"),
             time_inside_s: res.time_inside_s,
             max_speed_mps: res.max_speed_mps,
             max_speed_near_operator_mps: res.max_speed_near_operator_mps,
@@ -199,16 +218,21 @@ pub fn metrics_json(res: &PathResult, engine: Engine, monitor: bool) -> serde_js
     serde_json::to_value(AvoidMetrics::new(res, engine, monitor)).unwrap_or_default()
 }
 
-/// Writes the path, one row per control step: `t_s,x_m,y_m,vx_mps,vy_mps,separation_m,
-/// speed_limit_mps,state` (`separation_m`: signed distance to the operator's true footprint).
+/// The CSV's header (docs/avoidance.md).
+pub const CSV_HEADER: &str = "t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state,swept_separation_m,ssm_bound_mps";
+
+/// Writes the path, one row per control step: [`CSV_HEADER`] (`separation_m`: signed distance to
+/// the operator's true footprint at the step's end; `swept_separation_m`: its lower bound over the
+/// step's segment; `speed_limit_mps`: the monitor's limit from what it sensed; `ssm_bound_mps`:
+/// the SSM bound at the true separation at the step's start, which the speed must not exceed).
 pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> {
     use crate::report::output;
     let mut w = output::create(out).map_err(|f| f.message)?;
-    let mut body = String::from("t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state\n");
+    let mut body = format!("{CSV_HEADER}\n");
     for r in &res.rows {
         body.push_str(&format!(
-            "{},{},{},{},{},{},{},{}\n",
-            r.t_s, r.p_m[0], r.p_m[1], r.v_mps[0], r.v_mps[1], r.separation_m, r.speed_limit_mps, r.state
+            "{},{},{},{},{},{},{},{},{},{}\n",
+            r.t_s, r.p_m[0], r.p_m[1], r.v_mps[0], r.v_mps[1], r.separation_m, r.speed_limit_mps, r.state, r.swept_separation_m, r.ssm_bound_mps
         ));
     }
     std::io::Write::write_all(&mut w, body.as_bytes())
@@ -217,7 +241,8 @@ pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> 
 }
 
 /// Entry point of `flinch avoid`: `Ok(true)` when the tool reached the goal without ever entering
-/// the operator, `Ok(false)` otherwise (exit 1: a collision, or a stop before the goal).
+/// the operator, keeping the clearance and the SSM bound at every step; `Ok(false)` otherwise (exit
+/// 1: a collision, an SSM violation, too close, or a stop before the goal).
 pub fn run(args: &AvoidArgs) -> Result<bool, String> {
     run_scene(args, scene::Avoid::load(&args.scene)?)
 }
@@ -309,6 +334,13 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             path::Status::TooClose => format!("TOO CLOSE: reached the goal but came closer to the operator than clearance_m = {} m", res.clearance_m),
             path::Status::Collision(None) => "COLLISION: the tool entered the operator (then reached the goal)".to_string(),
             path::Status::Collision(Some(r)) => format!("COLLISION: the tool entered the operator (then stopped: {})", r.name()),
+            path::Status::SsmViolation(e) => format!(
+                "SSM VIOLATION: {} steps faster than ISO/TS 15066 5.5.4 allows at the true separation, by up to {:.3} m/s (first at t = {:.2} s); then {}",
+                res.ssm_violations,
+                res.max_speed_over_ssm_mps,
+                res.first_ssm_violation_s.unwrap_or(0.0),
+                e.map_or("reached the goal".to_string(), |r| format!("stopped: {}", r.name()))
+            ),
         };
         println!("  status            {} ({verdict})", res.status.name());
         match res.time_to_goal_s {

@@ -60,14 +60,112 @@ fn state_name(s: SafeState) -> &'static str {
 
 /// The monitor's parameters for a scene (`None`: monitor off).
 pub fn ssm<R: Real>(scene: &Avoid) -> Option<SsmParams<R>> {
+    scene.safety.on().then(|| ssm_params(scene))
+}
+
+/// The scene's speed and separation parameters (ISO/TS 15066 5.5.4), whether the monitor is on or
+/// not: what the monitor uses, and what the run's verdict checks every step against.
+pub fn ssm_params<R: Real>(scene: &Avoid) -> SsmParams<R> {
     let s = &scene.safety;
-    s.on().then(|| SsmParams {
+    SsmParams {
         human_speed_mps: R::from_f64(s.human_speed_mps),
         reaction_time_s: R::from_f64(s.reaction_time_s),
         stopping_time_s: R::from_f64(s.stopping_time_s),
         margin_m: R::from_f64(s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m),
         speed_cap_mps: R::from_f64(scene.speed_mps),
-    })
+    }
+}
+
+/// The speed the SSM bound of ISO/TS 15066 5.5.4 allows at a TRUE separation `s_m` (from the tool's
+/// surface to the obstacles' true footprint, m), m/s: the largest `v_r` with
+/// `S_p(v_r) = v_h (T_r + T_s) + v_r (T_r + T_s / 2) + C + Z_d + Z_r + clearance <= s_m`, at most the
+/// cap (`T_s` is the stopping time from the cap). The same function the firmware's monitor applies
+/// to its sensed lower bound ([`SafeController::speed_limit`]); here it is given the ground truth,
+/// so a sensing chain that overstates the separation (a hidden hand, a hand faster than `v_h`, an
+/// age not counted) shows. The sensing latency is not added to `T_r`: the verdict uses the true
+/// separation at the instant the command is given, so no sensing delay stands between the person's
+/// position and the check (the monitor counts it in the frame's age).
+pub struct SsmVerdict(SafeController<f64>);
+
+impl SsmVerdict {
+    /// For a scene.
+    pub fn new(scene: &Avoid) -> Self {
+        SsmVerdict(SafeController::new(ssm_params(scene)))
+    }
+    /// The bound at true separation `s_m`, m/s (0: only standing still is allowed).
+    pub fn bound_mps(&self, s_m: f64) -> f64 {
+        self.0.speed_limit(s_m)
+    }
+}
+
+/// A commanded speed above the SSM bound by more than this counts as a violation, m/s (the monitor
+/// scales to at most its limit; this absorbs rounding only).
+pub const SSM_TOL_MPS: f64 = 1e-6;
+
+/// The swept distance's resolution: over each control step the signed distance is bounded from
+/// below to within this of the true minimum over the step's segment, m.
+pub const SWEPT_TOL_M: f64 = 1e-4;
+
+/// The most samples [`swept_min_m`] takes over one step (a hand at 1.6 m/s and the tool at 0.25 m/s
+/// with 10 ms steps need 93).
+pub const SWEPT_MAX_SAMPLES: usize = 2048;
+
+/// The fastest any part of the operator or an obstacle moves, m/s: the largest speed between
+/// consecutive key frames of the hand (the forearm's segment follows its end, no faster) and of
+/// every moving obstacle.
+pub fn max_obstacle_speed_mps(scene: &Avoid) -> f64 {
+    obstacle_speed_mps(scene, f64::NEG_INFINITY, f64::INFINITY)
+}
+
+/// [`max_obstacle_speed_mps`] over the key-frame segments that overlap the times `[t0, t1]` (held
+/// positions before the first and after the last key frame do not move), m/s.
+pub fn obstacle_speed_mps(scene: &Avoid, t0: f64, t1: f64) -> f64 {
+    let seg = |a: (f64, [f64; 2]), b: (f64, [f64; 2])| {
+        let d = (b.1[0] - a.1[0]).hypot(b.1[1] - a.1[1]);
+        if d == 0.0 || b.0 <= t0 || a.0 >= t1 {
+            0.0
+        } else if b.0 > a.0 {
+            d / (b.0 - a.0)
+        } else {
+            f64::INFINITY
+        }
+    };
+    let hand = scene.operator.keyframes.windows(2).map(|w| seg((w[0].t_s, w[0].hand_m), (w[1].t_s, w[1].hand_m))).fold(0.0, f64::max);
+    scene
+        .operator
+        .obstacles
+        .iter()
+        .flat_map(|o| o.keyframes.windows(2).map(|w| seg((w[0].t_s, [w[0].x_m, w[0].y_m]), (w[1].t_s, [w[1].x_m, w[1].y_m]))))
+        .fold(hand, f64::max)
+}
+
+/// A lower bound of the signed distance (tool surface to the true footprint) over a control step:
+/// the tool moving at constant velocity from `p0` (time `t0`) to `p1` (time `t1`), the operator and
+/// the obstacles moving on their key frames meanwhile; m. Along the step the signed distance is
+/// Lipschitz with constant `L = |p1 - p0| + v_o (t1 - t0)` per unit of the step's fraction (the
+/// footprint's signed distance is 1-Lipschitz in the point, and changes by no more than its parts
+/// move, at most `v_o`: [`obstacle_speed_mps`] over the step, or any larger value). Sampled at `n`
+/// equal parts, each part's minimum is at least `(d_a + d_b - L / n) / 2`; `n` is chosen so that
+/// this is within [`SWEPT_TOL_M`] of the samples, at most [`SWEPT_MAX_SAMPLES`] (beyond, the bound
+/// stays conservative and is looser: within `L / (2 n)`). Never above the distance at either end.
+pub fn swept_min_m(scene: &Avoid, v_o: f64, (t0, p0): (f64, [f64; 2]), (t1, p1): (f64, [f64; 2])) -> f64 {
+    let d0 = scene.signed_distance_m(t0, p0);
+    let d1 = scene.signed_distance_m(t1, p1);
+    let l = (p1[0] - p0[0]).hypot(p1[1] - p0[1]) + v_o * (t1 - t0).max(0.0);
+    if !(l > 0.0) || !l.is_finite() {
+        // Nothing moves (or a key frame jumps: the end points are all that is known; a jump is
+        // refused by the loader).
+        return d0.min(d1);
+    }
+    let n = (l / (2.0 * SWEPT_TOL_M)).ceil().clamp(1.0, SWEPT_MAX_SAMPLES as f64) as usize;
+    let (mut lower, mut prev) = (d0.min(d1), d0);
+    for i in 1..=n {
+        let s = i as f64 / n as f64;
+        let d = if i == n { d1 } else { scene.signed_distance_m(t0 + s * (t1 - t0), [p0[0] + s * (p1[0] - p0[0]), p0[1] + s * (p1[1] - p0[1])]) };
+        lower = lower.min(0.5 * (prev + d - l / n as f64));
+        prev = d;
+    }
+    lower
 }
 
 /// Capture to command for a scene: the latency plus, when the baud rate is modelled, one frame's
@@ -320,6 +418,10 @@ pub enum Reason {
     Timeout,
     /// The tool left the camera's view (the sensed workspace): stopped there.
     LeftView,
+    /// With the monitor on, the first frame shows the start or the goal inside the protective
+    /// separation at rest (`S_p(0)`, the clearance included): no path can keep it, so the tool
+    /// does not move at all (instead of waiting in a protective stop or stalling to the timeout).
+    NoRoom,
 }
 
 impl Reason {
@@ -332,6 +434,7 @@ impl Reason {
             Reason::StaleWeights => "stale_weights",
             Reason::Timeout => "timeout",
             Reason::LeftView => "left_view",
+            Reason::NoRoom => "no_room",
         }
     }
 }
@@ -351,6 +454,10 @@ pub enum Status {
     /// The tool entered the operator (signed distance < 0) at least once; `None`: it then reached
     /// the goal, `Some(reason)`: it then stopped for that reason.
     Collision(Option<Reason>),
+    /// Never inside, but at some step the commanded speed exceeded the SSM bound computed from the
+    /// TRUE separation ([`SsmVerdict`]); `None`: it then reached the goal, `Some(reason)`: it
+    /// stopped for that reason. Reported in place of `reached`, `too_close` and `stopped`.
+    SsmViolation(Option<Reason>),
 }
 
 impl Status {
@@ -361,13 +468,14 @@ impl Status {
             Status::Stopped(_) => "stopped",
             Status::TooClose => "too_close",
             Status::Collision(_) => "collision",
+            Status::SsmViolation(_) => "ssm_violation",
         }
     }
     /// Why it stopped (also after a collision), if it did not reach the goal.
     pub fn reason(self) -> Option<Reason> {
         match self {
-            Status::Reached | Status::TooClose | Status::Collision(None) => None,
-            Status::Stopped(r) | Status::Collision(Some(r)) => Some(r),
+            Status::Reached | Status::TooClose | Status::Collision(None) | Status::SsmViolation(None) => None,
+            Status::Stopped(r) | Status::Collision(Some(r)) | Status::SsmViolation(Some(r)) => Some(r),
         }
     }
     /// The verdict: reached the goal and never touched the operator.
@@ -391,6 +499,11 @@ pub struct StepRow {
     pub speed_limit_mps: f64,
     /// What the controller did: `run`, `slow`, `protective_stop`, `stopped`.
     pub state: &'static str,
+    /// Lower bound of the signed distance over the step's whole segment (the obstacles moving
+    /// meanwhile), m: [`swept_min_m`].
+    pub swept_separation_m: f64,
+    /// The SSM bound at the TRUE separation at the start of the step ([`SsmVerdict`]), m/s.
+    pub ssm_bound_mps: f64,
 }
 
 /// Near the operator, for `max_speed_near_operator_mps`: signed distance below this, m.
@@ -403,19 +516,30 @@ pub struct PathResult {
     pub points: Vec<[f64; 2]>,
     /// Signed distance to the operator's true footprint at each point, m (negative inside).
     pub signed_distance_m: Vec<f64>,
-    /// Smallest signed distance, m: negative is the depth the tool went into the operator.
+    /// Smallest signed distance over the whole path, m, the segments between control steps
+    /// included ([`swept_min_m`], to within [`SWEPT_TOL_M`] below): negative is the depth the tool
+    /// went into the operator.
     pub min_signed_distance_m: f64,
+    /// Steps whose commanded speed exceeded the SSM bound at the true separation ([`SsmVerdict`]),
+    /// count.
+    pub ssm_violations: usize,
+    /// Largest excess of the commanded speed over that bound, m/s (0 when none).
+    pub max_speed_over_ssm_mps: f64,
+    /// Time of the first such step (its end), s.
+    pub first_ssm_violation_s: Option<f64>,
     /// The clearance asked for (`clearance_m` of the scene), m.
     pub clearance_m: f64,
     /// Every control step.
     pub rows: Vec<StepRow>,
     /// How the run ended.
     pub status: Status,
-    /// Time spent with the tool inside the operator, s.
+    /// Time spent with the tool inside the operator, s: every step whose segment entered it
+    /// (swept distance below 0) counts whole.
     pub time_inside_s: f64,
     /// Largest commanded speed, m/s.
     pub max_speed_mps: f64,
-    /// Largest commanded speed while within [`NEAR_OPERATOR_M`] of the operator, m/s (0 if never).
+    /// Largest commanded speed on a step that came within [`NEAR_OPERATOR_M`] of the operator
+    /// (swept distance), m/s (0 if never).
     pub max_speed_near_operator_mps: f64,
     /// Steps at which the commanded direction turned by more than 90 degrees from the previous
     /// command (both above 1 mm/s).
@@ -465,6 +589,12 @@ pub fn fit_and_sense_at_time(scene: &Avoid, setup: &Setup, tool: [f64; 2], t_s: 
 }
 
 fn fit_and_sense_with(scene: &Avoid, setup: &Setup, tool: [f64; 2], op: &super::depth::OperatorShape, hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2]) {
+    let (f, sep, near, _) = fit_and_sense_full(scene, setup, tool, op, hand, rng);
+    (f, sep, near)
+}
+
+/// [`fit_and_sense_with`], and the separation sensed from the goal (the tool's surface there), m.
+fn fit_and_sense_full(scene: &Avoid, setup: &Setup, tool: [f64; 2], op: &super::depth::OperatorShape, hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2], f64) {
     let cam = scene.camera();
     let robot = scene.robot_shape();
     let img = render(&cam, Some((&robot, tool)), Some((op, hand)), rng);
@@ -482,6 +612,12 @@ fn fit_and_sense_with(scene: &Avoid, setup: &Setup, tool: [f64; 2], op: &super::
     };
     // From the tool's surface, as the signed distance is measured.
     let sep = (from_centre - robot.wrist_radius_m).max(0.0);
+    let goal_from_centre = if scene.robot.removal == "model" {
+        sensed_nearest_from(&img, &cam, &robot, tool, scene.goal_m, scene.robot.removal_margin_m, scene.safety.sense_height_m).0
+    } else {
+        nearest_obstacle_at(&map, cam.m_per_px, scene.goal_m, scene.safety.sense_height_m).0
+    };
+    let goal_sep = (goal_from_centre - robot.wrist_radius_m).max(0.0);
     super::depth::raise(&mut map, scene.fit.offset_m);
     let mut w = setup.fitter.weights(&map);
     if scene.fit.remove_plane {
@@ -490,7 +626,7 @@ fn fit_and_sense_with(scene: &Avoid, setup: &Setup, tool: [f64; 2], op: &super::
         }
     }
     filter_weights(&mut w);
-    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep, nearest)
+    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep, nearest, goal_sep)
 }
 
 /// Robot removal by the robot-only height model: a pixel is cleared only when the robot, at the
@@ -523,8 +659,13 @@ pub fn sensed_separation(img: &super::depth::DepthImage, cam: &super::depth::Cam
 
 /// [`sensed_separation`] and the nearest pixel's centre, m.
 pub fn sensed_nearest(img: &super::depth::DepthImage, cam: &super::depth::Camera, robot: &super::depth::RobotShape, tool: [f64; 2], margin_m: f64, sense_m: f64) -> (f64, [f64; 2]) {
+    sensed_nearest_from(img, cam, robot, tool, tool, margin_m, sense_m)
+}
+
+/// [`sensed_nearest`] measured from the point `from` (the robot removed at `tool`).
+pub fn sensed_nearest_from(img: &super::depth::DepthImage, cam: &super::depth::Camera, robot: &super::depth::RobotShape, tool: [f64; 2], from: [f64; 2], margin_m: f64, sense_m: f64) -> (f64, [f64; 2]) {
     let mut best = f64::INFINITY;
-    let mut at = [tool[0] + NOTHING_SENSED_M, tool[1]];
+    let mut at = [from[0] + NOTHING_SENSED_M, from[1]];
     let w = img.width;
     for (k, &d) in img.mm.iter().enumerate() {
         if d == 0 {
@@ -536,7 +677,7 @@ pub fn sensed_nearest(img: &super::depth::DepthImage, cam: &super::depth::Camera
         if h <= sense_m || (hr > 0.0 && h <= hr + margin_m) {
             continue;
         }
-        let d2 = (p[0] - tool[0]).powi(2) + (p[1] - tool[1]).powi(2);
+        let d2 = (p[0] - from[0]).powi(2) + (p[1] - from[1]).powi(2);
         if d2 < best {
             (best, at) = (d2, p);
         }
@@ -629,6 +770,9 @@ pub struct Frame {
     pub nearest_m: [f64; 2],
     /// Its capture time, s (at most the loop time asked for).
     pub capture_s: f64,
+    /// The separation the sensor sees from the goal (the tool's surface there), m; `None` when the
+    /// source does not measure it.
+    pub goal_separation_m: Option<f64>,
 }
 
 /// The synthetic camera: the scene rendered at every frame, captured when asked.
@@ -636,8 +780,8 @@ pub struct Synthetic(pub Rng);
 
 impl FrameSource for Synthetic {
     fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<Frame>, String> {
-        let (field, separation_m, nearest_m) = fit_and_sense_at_time(scene, setup, tool, t_s, &mut self.0);
-        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: t_s }))
+        let (field, separation_m, nearest_m, goal) = fit_and_sense_full(scene, setup, tool, &scene.operator_shape_at(t_s), scene.hand_at(t_s), &mut self.0);
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: t_s, goal_separation_m: Some(goal) }))
     }
 }
 
@@ -664,14 +808,19 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     let mut rows = Vec::with_capacity(steps.min(1 << 20));
     // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
     // capture). Each reaches the controller `latency_s` after capture.
-    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2], [f64; 2])> = std::collections::VecDeque::new();
-    let Some(Frame { field: f0, separation_m: sep0, nearest_m: near0, .. }) = source.frame(scene, setup, 0.0, p)? else {
+    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2], [f64; 2], Option<f64>)> = std::collections::VecDeque::new();
+    let Some(Frame { field: f0, separation_m: sep0, nearest_m: near0, goal_separation_m: goal0, .. }) = source.frame(scene, setup, 0.0, p)? else {
         return Err("no camera frame at t = 0".into());
     };
     let mut field = f0.clone();
     // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
     let delay = frame_delay_s(scene)?;
-    in_flight.push_back((delay, 0.0, f0, sep0, p, near0));
+    in_flight.push_back((delay, 0.0, f0, sep0, p, near0, goal0));
+    // The verdict: the SSM bound at the true separation, and the swept distance's Lipschitz term.
+    let verdict = SsmVerdict::new(scene);
+    let (mut ssm_violations, mut over_max, mut first_violation) = (0usize, 0.0f64, None);
+    // `no_room` is the monitor's call, on the first frame it sees.
+    let monitor = ssm::<f64>(scene).map(SafeController::new);
     let mut frames = 1;
     let mut seq: u32 = 0;
     let mut sensed: Option<Sensed<f64>> = None;
@@ -695,18 +844,26 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         let t_prev = t - dt;
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
-            if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc }) = source.frame(scene, setup, t_prev, p)? {
+            if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc, goal_separation_m: gs }) = source.frame(scene, setup, t_prev, p)? {
                 // The separation was measured from the tool where it is now (`p`), so the monitor's
                 // correction for the tool's motion since counts from `p` too; counting from the tool
                 // at a recorded frame's (earlier) capture would be optimistic by up to v (t - tc)
                 // when the tool turned back in between (review finding).
-                in_flight.push_back((tc + delay, tc, f, sep, p, near));
+                in_flight.push_back((tc + delay, tc, f, sep, p, near, gs));
                 frames += 1;
             }
             next_frame += scene.frame_period_s;
         }
+        let mut no_room = false;
         while in_flight.front().is_some_and(|f| f.0 <= t_prev + 1e-12) {
-            let Some((_, tc, f, sep, at, near)) = in_flight.pop_front() else { break };
+            let Some((_, tc, f, sep, at, near, gs)) = in_flight.pop_front() else { break };
+            if sensed.is_none() {
+                if let Some(m) = &monitor {
+                    // At rest and with a fresh frame the protective separation is `S_p(0)`: below
+                    // it at the start, or at the goal, no path can keep it.
+                    no_room = m.speed_limit(sep) <= 0.0 || gs.is_some_and(|g| m.speed_limit(g) <= 0.0);
+                }
+            }
             engine.new_field(&f, seq, now)?;
             seq = seq.wrapping_add(1);
             field = f;
@@ -716,6 +873,10 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         if let Some(sn) = sensed.as_mut() {
             // Counted from capture: latency plus the time since it arrived.
             sn.age_s = t_prev - capture_t;
+        }
+        if no_room {
+            ended = Some(Reason::NoRoom);
+            break;
         }
         let cmd = engine.command(p, goal, now, sensed.as_ref());
         last_state = cmd.state;
@@ -727,12 +888,21 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         p = q;
         let hand = scene.hand_at(t);
         let sd = scene.signed_distance_m(t, p);
+        let s_start = *signed.last().unwrap_or(&sd);
+        let swept = swept_min_m(scene, obstacle_speed_mps(scene, t_prev, t), (t_prev, points[points.len() - 1]), (t, p));
         vmax = vmax.max(speed);
-        if sd.min(*signed.last().unwrap_or(&sd)) < NEAR_OPERATOR_M {
+        if swept < NEAR_OPERATOR_M {
             vmax_near = vmax_near.max(speed);
         }
-        if sd < 0.0 {
+        if swept < 0.0 {
             time_inside += dt;
+        }
+        // The verdict on the command: the SSM bound at the true separation when it was given.
+        let bound = verdict.bound_mps(s_start);
+        if speed > bound + SSM_TOL_MPS {
+            ssm_violations += 1;
+            over_max = over_max.max(speed - bound);
+            first_violation.get_or_insert(t);
         }
         if speed > 1e-3 {
             if let Some(l) = last_v {
@@ -744,9 +914,9 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         }
         points.push(p);
         signed.push(sd);
-        rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: cmd.limit_mps, state: cmd.state });
-        if sd < min_s {
-            min_s = sd;
+        rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: cmd.limit_mps, state: cmd.state, swept_separation_m: swept, ssm_bound_mps: bound });
+        if swept < min_s {
+            min_s = swept;
             best = Snapshot { t_s: t, tool_m: p, hand_m: hand, field: field.clone() };
         }
         if dist_goal(p) <= scene.goal_tolerance_m {
@@ -788,6 +958,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     // Stopped runs are judged against contact only: a person may walk up to a stopped robot.
     let status = match (collided, ended) {
         (true, e) => Status::Collision(e),
+        (false, e) if ssm_violations > 0 => Status::SsmViolation(e),
         (false, None) if min_s < scene.clearance_m => Status::TooClose,
         (false, None) => Status::Reached,
         (false, Some(r)) => Status::Stopped(r),
@@ -798,6 +969,9 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         points,
         signed_distance_m: signed,
         min_signed_distance_m: min_s,
+        ssm_violations,
+        max_speed_over_ssm_mps: over_max,
+        first_ssm_violation_s: first_violation,
         clearance_m: scene.clearance_m,
         rows,
         status,
@@ -886,7 +1060,11 @@ mod tests {
         assert!(res.time_to_goal_s.is_none());
         assert!(res.stalls >= 1, "local minimum in front of the hand");
         assert!(res.min_signed_distance_m > 0.0);
-        assert_eq!(res.status, Status::Stopped(Reason::Stalled), "the progress monitor stops it and says why");
+        // The progress monitor stops it and says why; without the monitor (the thesis's law) the
+        // speed in front of the hand may also exceed the SSM bound, which `status` then reports.
+        assert_eq!(res.status.reason(), Some(Reason::Stalled), "{:?}", res.status);
+        assert!(matches!(res.status, Status::Stopped(_) | Status::SsmViolation(_)), "{:?}", res.status);
+        assert_eq!(res.status == Status::Stopped(Reason::Stalled), res.ssm_violations == 0);
         // The stall counter itself: moving, stopped, moving, stopped at the goal.
         let mut pts: Vec<[f64; 2]> = (0..10).map(|k| [k as f64 * 0.01, 0.0]).collect();
         pts.extend(std::iter::repeat([0.1, 0.0]).take(10));

@@ -48,13 +48,16 @@ where
     let (w, h) = scene.extent_m();
     let snap = &res.snapshot;
     let title = format!(
-        "f* (sigma' = {:.2} sigma) at t = {:.2} s, min clearance {:.0} mm",
+        "{}{}: min {:.0} mm, {} steps over SSM | f* (sigma' {:.2} sigma) at t = {:.2} s",
+        res.status.name(),
+        res.status.reason().map_or(String::new(), |r| format!(" ({})", r.name())),
+        res.min_signed_distance_m * 1e3,
+        res.ssm_violations,
         scene.fit.eval_sigma_factor,
-        snap.t_s,
-        res.min_signed_distance_m * 1e3
+        snap.t_s
     );
     let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
+        .caption(title, ("sans-serif", 17))
         .margin(15)
         .x_label_area_size(40)
         .y_label_area_size(50)
@@ -170,6 +173,31 @@ where
         .map_err(e)?
         .label("tool path")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(2)));
+    // Where the run's own verdict failed: steps faster than the SSM bound at the true separation
+    // (red crosses at the step's start), and steps whose swept segment entered an obstacle (red
+    // dots at the step's end).
+    let over: Vec<(f64, f64)> = res
+        .rows
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| w.v_mps[0].hypot(w.v_mps[1]) > w.ssm_bound_mps + super::path::SSM_TOL_MPS)
+        .map(|(k, _)| (res.points[k][0], res.points[k][1]))
+        .collect();
+    if !over.is_empty() {
+        chart
+            .draw_series(over.into_iter().map(|p| Cross::new(p, 5, red.stroke_width(2))))
+            .map_err(e)?
+            .label("over the SSM bound (true separation)")
+            .legend(move |(x, y)| Cross::new((x + 9, y), 5, red.stroke_width(2)));
+    }
+    let inside: Vec<(f64, f64)> = res.rows.iter().filter(|w| w.swept_separation_m < 0.0).map(|w| (w.p_m[0], w.p_m[1])).collect();
+    if !inside.is_empty() {
+        chart
+            .draw_series(inside.into_iter().map(|p| Circle::new(p, 3, red.filled())))
+            .map_err(e)?
+            .label("step entered an obstacle (swept)")
+            .legend(move |(x, y)| Circle::new((x + 9, y), 3, red.filled()));
+    }
     chart.draw_series(std::iter::once(Circle::new((scene.start_m[0], scene.start_m[1]), 6, GREEN.filled()))).map_err(e)?.label("start").legend(|(x, y)| Circle::new((x + 9, y), 5, GREEN.filled()));
     chart.draw_series(std::iter::once(Cross::new((scene.goal_m[0], scene.goal_m[1]), 8, MAGENTA.stroke_width(3)))).map_err(e)?.label("goal").legend(|(x, y)| Cross::new((x + 9, y), 5, MAGENTA.stroke_width(2)));
     chart.draw_series(std::iter::once(Circle::new((snap.tool_m[0], snap.tool_m[1]), 5, WHITE.stroke_width(2)))).map_err(e)?;

@@ -338,7 +338,7 @@ impl FrameSource for RecordedSource {
         s.max_unknown_fraction = s.max_unknown_fraction.max(info.unknown_cells as f64 / cells);
         s.max_filled_cells = s.max_filled_cells.max(info.filled_cells);
         s.below_plane_points += info.below_plane_points;
-        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc }))
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc, goal_separation_m: None }))
     }
 }
 
