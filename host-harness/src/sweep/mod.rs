@@ -642,10 +642,21 @@ pub fn summary_fields(s: &Summary) -> Vec<(String, Json)> {
     serde_json::to_string(s).ok().and_then(|t| serde_json::from_str::<Ordered>(&t).ok()).map(|o| o.0).unwrap_or_default()
 }
 
+/// Every field of a summary by name (sorted, not in declaration order: [`summary_fields`] gives
+/// that). Straight to JSON values, without printing and parsing a JSON text: a sweep looks up
+/// every point's fields, and that round trip was 6 % of a Tables 5-7 sweep point's instructions
+/// (callgrind, docs/accuracy.md). Same values, so the same CSV cells.
+pub fn summary_map(s: &Summary) -> serde_json::Map<String, Json> {
+    match serde_json::to_value(s) {
+        Ok(Json::Object(m)) => m,
+        _ => serde_json::Map::new(),
+    }
+}
+
 /// A numeric field of a summary by name (`None` when null, not numeric or unknown). Booleans are
 /// 0/1 so `stroke_exhausted` can be drawn.
 pub fn metric(s: &Summary, name: &str) -> Option<f64> {
-    summary_fields(s).into_iter().find(|(k, _)| k == name).and_then(|(_, v)| match v {
+    summary_map(s).remove(name).and_then(|v| match v {
         Json::Number(n) => n.as_f64(),
         Json::Bool(b) => Some(f64::from(u8::from(b))),
         _ => None,
@@ -697,8 +708,8 @@ impl SweepResult {
             let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
             match &p.outcome {
                 Ok(s) => {
-                    let fields = summary_fields(s);
-                    row.extend(names.iter().map(|n| fields.iter().find(|(k, _)| k == n).map_or(String::new(), |(_, v)| csv_cell(v))));
+                    let fields = summary_map(s);
+                    row.extend(names.iter().map(|n| fields.get(n).map_or(String::new(), csv_cell)));
                     row.push(p.status.as_str().into());
                     row.push(String::new());
                 }
