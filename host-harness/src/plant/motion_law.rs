@@ -25,6 +25,13 @@ pub struct MotionLaw {
     pub adjusted: Option<&'static str>,
     /// Drive power removed (category-0 stop, `plant/brake.rs`): when, and the brakes that stop it.
     power_off: Option<(f64, PowerOffBrake)>,
+    /// End of the acceleration phase, s ([`MotionLaw::t_cruise`]), kept: the law is evaluated at
+    /// every right-hand side and event function, and its divisions were 8 % of a run's
+    /// instructions (callgrind, docs/accuracy.md). The same arithmetic, so the same bits.
+    t1: f64,
+    /// At the start of braking: the commanded state there and the time to rest, s (set with
+    /// `t_brake`, from the same expressions [`MotionLaw::controlled`] evaluated every call).
+    brake_from: (Commanded, f64),
 }
 
 /// Commanded position, velocity and acceleration at one instant.
@@ -41,7 +48,9 @@ pub struct Commanded {
 impl MotionLaw {
     /// The law of a scene's `[motion]`, not yet braking.
     pub fn new(m: &Motion) -> Self {
-        Self { speed: m.speed, accel: m.accel, decel: m.decel, start_at_speed: m.start_at_speed, t_brake: None, stopping: m.stopping, adjusted: None, power_off: None }
+        let t1 = if m.start_at_speed { 0.0 } else { m.speed / m.accel };
+        let rest = Commanded { x: 0.0, v: 0.0, a: 0.0 };
+        Self { speed: m.speed, accel: m.accel, decel: m.decel, start_at_speed: m.start_at_speed, t_brake: None, stopping: m.stopping, adjusted: None, power_off: None, t1, brake_from: (rest, 0.0) }
     }
 
     /// The robot gets the stop signal at `t`: without a table braking starts then (`brake_at`);
@@ -73,13 +82,16 @@ impl MotionLaw {
 
     /// End of the acceleration phase, s (0 when the scene starts at speed).
     pub fn t_cruise(&self) -> f64 {
-        if self.start_at_speed { 0.0 } else { self.speed / self.accel }
+        self.t1
     }
 
     /// Schedule braking at `t` (the first call wins: braking cannot be re-planned).
     pub fn brake_at(&mut self, t: f64) {
         if self.t_brake.is_none() {
-            self.t_brake = Some(t.max(0.0));
+            let tb = t.max(0.0);
+            self.t_brake = Some(tb);
+            let c0 = self.unbraked(tb);
+            self.brake_from = (c0, c0.v / self.decel);
         }
     }
 
@@ -99,7 +111,7 @@ impl MotionLaw {
     }
 
     fn controlled_stop(&self) -> Option<f64> {
-        self.t_brake.map(|tb| tb + self.unbraked(tb).v / self.decel)
+        self.t_brake.map(|tb| tb + self.brake_from.1)
     }
 
     /// Drive power is removed at `t` (a category-0 stop, IEC 60204-1 9.2.2): from then on the arm
@@ -150,8 +162,7 @@ impl MotionLaw {
     fn controlled(&self, t: f64) -> Commanded {
         match self.t_brake {
             Some(tb) if t > tb => {
-                let c0 = self.unbraked(tb);
-                let t_rest = c0.v / self.decel;
+                let (c0, t_rest) = self.brake_from;
                 let tau = (t - tb).min(t_rest);
                 let moving = t - tb < t_rest;
                 Commanded {
@@ -167,7 +178,7 @@ impl MotionLaw {
     /// The trapezoid without braking.
     fn unbraked(&self, t: f64) -> Commanded {
         let t = t.max(0.0);
-        let t1 = self.t_cruise();
+        let t1 = self.t1;
         if t < t1 {
             Commanded { x: 0.5 * self.accel * t * t, v: self.accel * t, a: self.accel }
         } else {

@@ -145,6 +145,11 @@ impl Axis {
 pub struct Template {
     doc: DocumentMut,
     file: String,
+    /// The file's text, when printing `doc` reproduces it byte for byte: a point's text is then
+    /// the file with its swept numbers spliced in ([`Template::splice_plan`]), the text the
+    /// document would print after [`set`], without cloning and printing the document for every
+    /// point (0.18M instructions a point, a quarter of a Table 1 sweep point; docs/accuracy.md).
+    text: Option<String>,
     /// The validated scene as the file stands.
     pub base: Scene,
 }
@@ -157,7 +162,11 @@ enum Found<'a> {
 }
 
 fn lookup<'a>(doc: &'a DocumentMut, key: &str) -> Found<'a> {
-    let mut item: &Item = doc.as_item();
+    lookup_in(doc.as_item(), key)
+}
+
+fn lookup_in<'a>(root: &'a Item, key: &str) -> Found<'a> {
+    let mut item: &Item = root;
     let segs: Vec<&str> = key.split('.').collect();
     for (i, seg) in segs.iter().enumerate() {
         // An element of an array of numbers (`robot.joints.1`, `robot.direction.2`): the last
@@ -283,7 +292,8 @@ impl Template {
     pub fn from_text(text: &str, file: &str) -> Result<Self, SweepError> {
         let base = scene::parse(text, file).map_err(|e| SweepError(e.to_string()))?;
         let doc: DocumentMut = text.parse().map_err(|e| SweepError(format!("{file}: {e}")))?;
-        Ok(Self { doc, file: file.to_string(), base })
+        let text = (doc.to_string() == text).then(|| text.to_string());
+        Ok(Self { doc, file: file.to_string(), base, text })
     }
 
     /// The file name used in messages.
@@ -357,7 +367,7 @@ impl Template {
             set(&mut doc, k, x);
         }
         // `with` above refused any key that cannot be set.
-        Ok(Self { doc, file: self.file.clone(), base })
+        Ok(Self { doc, file: self.file.clone(), base, text: None })
     }
 
     /// The scene with `sets` applied, validated; the error names the values and the validator's
@@ -375,7 +385,56 @@ impl Template {
                 return Err((SweepError(format!("{}: {k} cannot be set to {x}: the path runs into a value that is not a table", self.file)), vec![k.to_string()]));
             }
         }
-        scene::parse(&doc.to_string(), &self.file).map_err(|e| {
+        self.validated(&doc.to_string(), sets)
+    }
+
+    /// Where each of `keys` sits in the file's text, and the value there, when every key is a
+    /// number the file sets and the text prints back exactly; `None` otherwise (a point is then
+    /// built by [`Template::with`]).
+    pub fn splice_plan(&self, keys: &[&str]) -> Option<Vec<(std::ops::Range<usize>, Value)>> {
+        let text = self.text.as_deref()?;
+        let im = toml_edit::ImDocument::parse(text).ok()?;
+        let mut plan: Vec<(std::ops::Range<usize>, Value)> = Vec::with_capacity(keys.len());
+        for k in keys {
+            let Found::Number(v) = lookup_in(im.as_item(), k) else { return None };
+            let span = v.span()?;
+            if plan.iter().any(|(r, _)| r.start < span.end && span.start < r.end) {
+                return None;
+            }
+            plan.push((span, v.clone()));
+        }
+        Some(plan)
+    }
+
+    /// The file's text with the numbers of `plan` replaced by `xs` (in plan order), printed as
+    /// [`set`] prints them (an integer stays one when the value is whole).
+    pub fn spliced(&self, plan: &[(std::ops::Range<usize>, Value)], xs: &[f64]) -> String {
+        let text = self.text.as_deref().unwrap_or_default();
+        let mut order: Vec<usize> = (0..plan.len()).collect();
+        order.sort_by_key(|&i| plan[i].0.start);
+        let mut out = String::with_capacity(text.len() + 32);
+        let mut at = 0;
+        for i in order {
+            let (span, old) = &plan[i];
+            out.push_str(&text[at..span.start]);
+            let mut v = number_like(Some(old), xs[i]);
+            v.decor_mut().clear();
+            out.push_str(&v.to_string());
+            at = span.end;
+        }
+        out.push_str(&text[at..]);
+        out
+    }
+
+    /// As [`Template::with`] for the keys of `plan`, on the spliced text: the same scene, or the
+    /// same refusal.
+    pub fn with_spliced(&self, plan: &[(std::ops::Range<usize>, Value)], sets: &[(&str, f64)]) -> Result<Scene, SweepError> {
+        let xs: Vec<f64> = sets.iter().map(|&(_, x)| x).collect();
+        self.validated(&self.spliced(plan, &xs), sets).map_err(|(e, _)| e)
+    }
+
+    fn validated(&self, text: &str, sets: &[(&str, f64)]) -> Result<Scene, (SweepError, Vec<String>)> {
+        scene::parse(text, &self.file).map_err(|e| {
             let what: Vec<String> = sets.iter().map(|(k, x)| format!("{k} = {x}")).collect();
             let mut keys: Vec<String> = Vec::new();
             for i in &e.issues {
@@ -393,7 +452,7 @@ impl Template {
         let mut doc = self.doc.clone();
         edit(&mut doc);
         let base = scene::parse(&doc.to_string(), &self.file).map_err(|e| SweepError(format!("{what}: the scene validator refuses it: {e}")))?;
-        Ok(Self { doc, file: self.file.clone(), base })
+        Ok(Self { doc, file: self.file.clone(), base, text: None })
     }
 }
 
@@ -504,6 +563,8 @@ impl Sweep {
             template.check_key(&a.key, a.start)?;
         }
         let values: Vec<Vec<f64>> = axes.iter().map(Axis::values).collect();
+        let keys: Vec<&str> = axes.iter().map(|a| a.key.as_str()).collect();
+        let plan = template.splice_plan(&keys);
         let sizes: Vec<usize> = values.iter().map(Vec::len).collect();
         let total: usize = sizes.iter().product();
         if total > 1_000_000 {
@@ -514,7 +575,10 @@ impl Sweep {
             .map(|k| {
                 let idx = grid_index(&sizes, k);
                 let sets: Vec<(&str, f64)> = axes.iter().zip(&idx).zip(&values).map(|((a, &i), v)| (a.key.as_str(), v[i])).collect();
-                template.with(&sets)
+                match &plan {
+                    Some(p) => template.with_spliced(p, &sets),
+                    None => template.with(&sets),
+                }
             })
             .collect();
         let n_refused = built.iter().filter(|b| b.is_err()).count();
@@ -642,10 +706,21 @@ pub fn summary_fields(s: &Summary) -> Vec<(String, Json)> {
     serde_json::to_string(s).ok().and_then(|t| serde_json::from_str::<Ordered>(&t).ok()).map(|o| o.0).unwrap_or_default()
 }
 
+/// Every field of a summary by name (sorted, not in declaration order: [`summary_fields`] gives
+/// that). Straight to JSON values, without printing and parsing a JSON text: a sweep looks up
+/// every point's fields, and that round trip was 6 % of a Tables 5-7 sweep point's instructions
+/// (callgrind, docs/accuracy.md). Same values, so the same CSV cells.
+pub fn summary_map(s: &Summary) -> serde_json::Map<String, Json> {
+    match serde_json::to_value(s) {
+        Ok(Json::Object(m)) => m,
+        _ => serde_json::Map::new(),
+    }
+}
+
 /// A numeric field of a summary by name (`None` when null, not numeric or unknown). Booleans are
 /// 0/1 so `stroke_exhausted` can be drawn.
 pub fn metric(s: &Summary, name: &str) -> Option<f64> {
-    summary_fields(s).into_iter().find(|(k, _)| k == name).and_then(|(_, v)| match v {
+    summary_map(s).remove(name).and_then(|v| match v {
         Json::Number(n) => n.as_f64(),
         Json::Bool(b) => Some(f64::from(u8::from(b))),
         _ => None,
@@ -697,8 +772,8 @@ impl SweepResult {
             let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
             match &p.outcome {
                 Ok(s) => {
-                    let fields = summary_fields(s);
-                    row.extend(names.iter().map(|n| fields.iter().find(|(k, _)| k == n).map_or(String::new(), |(_, v)| csv_cell(v))));
+                    let fields = summary_map(s);
+                    row.extend(names.iter().map(|n| fields.get(n).map_or(String::new(), csv_cell)));
                     row.push(p.status.as_str().into());
                     row.push(String::new());
                 }
@@ -769,6 +844,42 @@ mod tests {
         assert_eq!(distance("speed", "sped"), 1);
         assert_eq!(distance("", "abc"), 3);
         assert_eq!(close_matches("motion.sped", &["motion.speed".into(), "motion.decel".into(), "tool.mass".into()]), vec!["motion.speed".to_string()]);
+    }
+
+    /// A point's spliced text is the text the edited document prints, for every shipped scene
+    /// and a number of every kind (float, integer kept whole, integer made fractional, an array
+    /// element), so the fast path validates exactly what the slow one did.
+    #[test]
+    fn spliced_text_is_the_edited_documents_text() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        let mut checked = 0;
+        for e in std::fs::read_dir(&dir).unwrap().flatten() {
+            let path = e.path();
+            if path.extension().is_none_or(|x| x != "toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            let Ok(t) = Template::from_text(&text, "x.toml") else { continue };
+            assert!(t.text.is_some(), "{}: the document does not print back its text", path.display());
+            let keys = t.numeric_keys();
+            for key in &keys {
+                for x in [0.25, 3.0, 1e-7, 12345.678] {
+                    let plan = t.splice_plan(&[key.as_str()]).unwrap_or_else(|| panic!("{}: {key}", path.display()));
+                    let mut doc = t.doc.clone();
+                    assert!(set(&mut doc, key, x));
+                    assert_eq!(t.spliced(&plan, &[x]), doc.to_string(), "{}: {key} = {x}", path.display());
+                    checked += 1;
+                }
+            }
+            if keys.len() >= 2 {
+                let (a, b) = (keys[keys.len() - 1].as_str(), keys[0].as_str());
+                let plan = t.splice_plan(&[a, b]).unwrap();
+                let mut doc = t.doc.clone();
+                assert!(set(&mut doc, a, 0.5) && set(&mut doc, b, 7.0));
+                assert_eq!(t.spliced(&plan, &[0.5, 7.0]), doc.to_string(), "{}: {a}, {b}", path.display());
+            }
+        }
+        assert!(checked > 1000, "{checked}");
     }
 
     #[test]
