@@ -28,10 +28,13 @@
 //! field stops the tool at its edge and the vortex steers round it). Slowing only was not chosen: a
 //! slowed tool still enters the region. Only holes the camera's own sampling leaves are filled: one
 //! pass, each unknown cell with a seen 8-neighbour takes the highest of them (the highest: a partly
-//! seen hand grows into the hole rather than being painted over as table). Open (review finding,
-//! issue 11 follow-up 6a): a null strip up to 2 cells wide with only floor beside it (a black glove's
-//! rim, a black finger) is painted as floor, and the intrusion distance does not count it (test
-//! `a_null_strip_over_the_hands_edge_is_not_painted_as_table`, ignored). One pass is a fixed
+//! seen hand grows into the hole rather than being painted over as table). A null strip up to 2
+//! cells wide with only floor beside it (a black glove's rim) is still painted as floor, so whenever
+//! the fill paints floor the separation the monitor gets is shortened by the fill's reach, two cell
+//! diagonals ([`FILL_REACH_CELLS`]; test `a_null_strip_over_the_hands_edge_is_not_painted_as_table`).
+//! Still open: a black object narrower than that reach with nothing seen around it (a black finger
+//! alone) is invisible; ISO 13855's reasoning (the hand it belongs to is seen) covers a person, not an
+//! object. One pass is a fixed
 //! bound on the time (each cell looks at its 8 neighbours once: 9 reads a cell, whatever the hole),
 //! where the thesis's fill repeats until every hole is closed (82 ms for a 300 x 300 px hole, issue
 //! 11) and paints what was inside it as the mean of its rim. A point more than the sense height
@@ -221,6 +224,7 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
     // One pass of fill, from the cells seen in the frame only.
     let mut cells = rep.cells.clone();
     let mut filled = 0;
+    let mut filled_floor = 0;
     for r in 0..h {
         for col in 0..w {
             if rep.cells[r * w + col] != Cell::Unknown {
@@ -238,6 +242,9 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
             if let Some(v) = best {
                 cells[r * w + col] = Cell::Seen(v);
                 filled += 1;
+                if v <= sense {
+                    filled_floor += 1;
+                }
             }
         }
     }
@@ -272,7 +279,12 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
         m.push(height);
     }
     let from_centre = if best.is_finite() { (best.sqrt() - 0.5 * plane.m_per_px).max(0.0) } else { NOTHING_SENSED_M };
-    let sep = (from_centre - robot.wrist_radius_m).max(0.0);
+    // A cell filled with floor may hide an obstacle's edge: a null strip up to two cells wide is
+    // filled from both sides, so a black rim or finger there reads as floor and the nearest seen
+    // obstacle can be up to two cell diagonals farther than the true one. The separation the monitor
+    // gets is shortened by that reach whenever the fill painted floor (review finding 6a).
+    let fill_reach = if filled_floor > 0 { FILL_REACH_CELLS * plane.m_per_px } else { 0.0 };
+    let sep = (from_centre - robot.wrist_radius_m - fill_reach).max(0.0);
     let mut map = HeightMap { width: w, height: h, m };
     super::depth::raise(&mut map, scene.fit.offset_m);
     let mut wts = setup.fitter.weights(&map);
@@ -285,6 +297,10 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
     let info = FrameInfo { unknown_cells: unknown, filled_cells: filled, robot_points: rep.robot_points, below_plane_points: rep.below_plane_points };
     (Field::new(&setup.fitter.grid, wts, scene.fit.eval_sigma_factor), sep, nearest, info)
 }
+
+/// How far (in cells) the one-pass fill can paint floor over an obstacle's edge: a strip two
+/// cells wide, measured along a diagonal.
+pub const FILL_REACH_CELLS: f64 = 2.0 * std::f64::consts::SQRT_2;
 
 /// Counts of one processed frame.
 #[derive(Clone, Copy, Debug)]
