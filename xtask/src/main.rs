@@ -775,10 +775,20 @@ fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
     let lines: Vec<&str> = trace.lines().collect();
     let mut expected_boot = read_expected("firmware/qemu/board-boot.txt")?;
     // The qemu-io build's one difference in the boot: right after the backup SRAM is switched on
-    // (the PWR_CR write) it reads GPIOD's MODER back, and stops for good if it holds the outputs
-    // written before the RAM test (real GPIO: the bench image is on silicon, not in QEMU).
+    // (the PWR_CR write) its two "not on silicon" checks: it reads GPIOD's MODER back, writes a test
+    // word ("QEMU") to the last backup SRAM word and reads it back, and stops for good if either
+    // read is not 0 (real GPIO or real backup SRAM: the bench image is on silicon, not in QEMU).
     let pwr = expected_boot.iter().position(|l| l.starts_with("PWR: unimplemented device write")).ok_or("board-boot.txt has no PWR_CR write")?;
-    expected_boot.insert(pwr + 1, "GPIOD: unimplemented device read  (size 4, offset 0x000)".into());
+    for (i, l) in [
+        "GPIOD: unimplemented device read  (size 4, offset 0x000)",
+        "BKPSRAM: unimplemented device write (size 4, offset 0x3fc, value 0x51534d55)",
+        "BKPSRAM: unimplemented device read  (size 4, offset 0x3fc)",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        expected_boot.insert(pwr + 1 + i, l.into());
+    }
     if lines.len() < expected_boot.len() || !trace_matches(&lines[..expected_boot.len()], &expected_boot) {
         return Err(format!(
             "the qemu-io board's boot differs from firmware/qemu/board-boot.txt:\n--- got\n{}",

@@ -375,6 +375,35 @@ mod board {
     #[cfg(feature = "qemu-clock")]
     const SELF_NOT_QEMU: u8 = 4;
 
+    /// The backup SRAM word the qemu-clock guard writes and reads back: past every record (the
+    /// latch, the log, the BOR-pending mark at word 96), inside the 1 KB QEMU maps.
+    #[cfg(feature = "qemu-clock")]
+    const NOT_QEMU_PROBE_AT: usize = BKPSRAM_WORDS - 1;
+    #[cfg(feature = "qemu-clock")]
+    const NOT_QEMU_PROBE: u32 = 0x5153_4D55; // "QEMU"
+
+    /// The qemu-clock guard: `None` only when two independent checks both say "QEMU". (1) GPIOD's
+    /// MODER, written by `early_outputs_low` after the clock enable and a DSB, reads back the
+    /// outputs on silicon and 0 in QEMU 7.2 (GPIO not modelled). (2) A test word written to the
+    /// backup SRAM (clocked and opened by `backup_on`, with DSBs) reads back on silicon and 0 in QEMU
+    /// (unimplemented device: writes ignored). Any non-zero read of either stops: on silicon a lost
+    /// write leaves the other check, and a backup SRAM whose write was lost reads its old (power-on:
+    /// arbitrary) content. The flags' detail: bit 0 = MODER, bit 1 = backup SRAM.
+    #[cfg(feature = "qemu-clock")]
+    fn not_qemu() -> Option<i32> {
+        let moder = gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0;
+        let mut b = Bkp;
+        b.write(NOT_QEMU_PROBE_AT, NOT_QEMU_PROBE);
+        cortex_m::asm::dsb();
+        let bkp = b.read(NOT_QEMU_PROBE_AT) != 0;
+        let which = i32::from(moder) | (i32::from(bkp) << 1);
+        if which != 0 {
+            Some(which)
+        } else {
+            None
+        }
+    }
+
     /// The option bytes through the flash interface's registers (`flinch_firmware::option_bytes`:
     /// BOR level 3 programmed once, error flags checked, verified at the next boot).
     struct OptionRegs;
@@ -444,7 +473,11 @@ mod board {
     fn backup_on() {
         rcc().apb1enr().modify(|_, w| w.pwren().set_bit());
         rcc().ahb1enr().modify(|_, w| w.bkpsramen().set_bit());
+        // STM32F40x errata (ES0182, "Delay after an RCC peripheral clock enabling"): an access right
+        // after the enable can be lost; the DSB completes the enable first.
+        cortex_m::asm::dsb();
         pwr().cr().modify(|_, w| w.dbp().set_bit());
+        cortex_m::asm::dsb();
     }
 
     /// The log's `next_seq` as `main` stored it (before any interrupt runs), for the drain.
@@ -504,6 +537,9 @@ mod board {
     #[inline(always)]
     fn early_outputs_low() {
         rcc().ahb1enr().modify(|_, w| w.gpioden().set_bit());
+        // The errata's delay after an RCC clock enable (see `backup_on`): without it the MODER write
+        // below can be lost on silicon, which would also blind the qemu-clock guard's MODER check.
+        cortex_m::asm::dsb();
         // SAFETY: BSRR takes any pattern (reset PD12..14); MODER: two-bit fields, 0b01 = output.
         gpio(GPIOD).bsrr().write(|w| unsafe { w.bits(0b111 << (12 + 16)) });
         gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) });
@@ -525,11 +561,10 @@ mod board {
             integrity_failed(SELF_FLASH, 0);
         }
         backup_on();
-        // A qemu-clock build (its tick scaled for QEMU) must never drive a machine: on silicon GPIOD's
-        // MODER reads back what `early_outputs_low` wrote; QEMU 7.2 does not model GPIO and reads 0.
+        // A qemu-clock build (its tick scaled for QEMU) must never drive a machine (`not_qemu`).
         #[cfg(feature = "qemu-clock")]
-        if gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0 {
-            integrity_failed(SELF_NOT_QEMU, 0);
+        if let Some(which) = not_qemu() {
+            integrity_failed(SELF_NOT_QEMU, which);
         }
         // The brown-out level, only with a good flash image, before the IWDG runs.
         match option_bytes::ensure_bor_level(&mut OptionRegs, &mut Bkp, BOR_BUSY_SPINS) {
@@ -545,6 +580,7 @@ mod board {
         rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioden().set_bit());
         rcc().apb1enr().modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
         rcc().apb2enr().modify(|_, w| w.syscfgen().set_bit());
+        cortex_m::asm::dsb(); // the errata's delay after an RCC clock enable (see `backup_on`)
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
         // SAFETY (the three): two-bit mode fields, 0b01 = output, 0b00 = input; pull 0b10 = down, 0b01 = up.
