@@ -220,6 +220,17 @@ impl<const N: usize> EventLog<N> {
         self.ring.iter()
     }
 
+    /// The events not yet seen by a reader whose cursor is `cursor` (the sequence number after the
+    /// last event it took; `None`: it took none, all are new), oldest first. Wrap-safe: an event is
+    /// new when it is no further behind the next sequence number than the cursor is, so the test
+    /// never compares two sequence numbers that may be more than the ring apart, and sequence
+    /// numbers that continue across resets (`restored`) past 0x8000 or 0xFFFF are no special case.
+    pub fn since(&self, cursor: Option<u16>) -> impl Iterator<Item = &TripEvent> {
+        let head = self.next_seq;
+        let behind = cursor.map_or(u16::MAX, |c| head.wrapping_sub(c));
+        self.ring.iter().filter(move |e| head.wrapping_sub(e.seq) <= behind && head != e.seq)
+    }
+
     /// The newest event.
     pub fn last(&self) -> Option<&TripEvent> {
         self.ring.back()
@@ -284,6 +295,45 @@ pub fn decode(bytes: &[u8]) -> Option<(LogHeader, impl Iterator<Item = TripEvent
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn seqs<const N: usize>(log: &EventLog<N>, cursor: Option<u16>) -> heapless::Vec<u16, 16> {
+        log.since(cursor).map(|e| e.seq).collect()
+    }
+
+    #[test]
+    fn a_reader_sees_each_event_once_across_0x8000_and_the_u16_wrap() {
+        // Sequence numbers continue across resets: a restored log may start anywhere, e.g. where
+        // the drain's old filter (seq - cursor < 0x8000 with the cursor at 0) saw nothing.
+        for start in [0u16, 5, 0x7FFE, 0x8000, 0x9000, 0xFFF0, 0xFFFE] {
+            let ev = |k: u16| TripEvent {
+                seq: start.wrapping_add(k),
+                cause: Cause::Trip,
+                flags: 0,
+                at: Micros(0),
+                first_seen: Micros(0),
+                travel_um: 0,
+            };
+            let mut log: EventLog<4> = EventLog::restored(0, (0..3).map(ev));
+            // A fresh reader (the drain at boot) sees the whole restored log.
+            assert_eq!(&seqs(&log, None)[..], &[start, start.wrapping_add(1), start.wrapping_add(2)], "start {start:#x}");
+            let mut cursor = log.last().map(|e| e.seq.wrapping_add(1));
+            assert!(seqs(&log, cursor).is_empty());
+            // Then each new event exactly once, past 0xFFFF too, and overwrites of unseen ones.
+            for k in 0..40u16 {
+                let pushes = 1 + k % 6;
+                for _ in 0..pushes {
+                    log.push(Cause::Trip, 0, Micros(0), Micros(0), 0);
+                }
+                let got = seqs(&log, cursor);
+                let want: heapless::Vec<u16, 16> = (0..pushes.min(4)).rev().map(|b| log.next_seq().wrapping_sub(b + 1)).collect();
+                assert_eq!(got, want, "start {start:#x} step {k}");
+                cursor = got.last().map(|s| s.wrapping_add(1));
+            }
+        }
+        // A cursor of 0 on a log far past 0x8000 still sees what is new (the old filter saw nothing).
+        let log: EventLog<4> = EventLog::restored(0, (0x9000u16..0x9002).map(|seq| TripEvent { seq, cause: Cause::Trip, flags: 0, at: Micros(0), first_seen: Micros(0), travel_um: 0 }));
+        assert_eq!(&seqs(&log, Some(0))[..], &[0x9000, 0x9001]);
+    }
 
     #[test]
     fn wraps_keeping_the_newest_and_counting_the_loss() {

@@ -667,7 +667,7 @@ mod board {
         cp.SYST.enable_interrupt();
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
-        let mut drain = LogDrain { next_seq: 0, state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
+        let mut drain = LogDrain { next_seq: None, state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
         // The bench plays the world in thread mode and runs the drain on every pass.
         #[cfg(feature = "qemu-io")]
         super::bench::run_scenario(|| tim2().cnt().read().bits(), || drain.run());
@@ -688,7 +688,9 @@ mod board {
     /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
     /// truncates the message; only an attached probe-rs switches it to blocking).
     struct LogDrain {
-        next_seq: u16,
+        /// The sequence number after the last event logged (`None`: none yet, the whole restored
+        /// log is new); `EventLog::since` compares wrap-safely, sequence numbers continue across resets.
+        next_seq: Option<u16>,
         state: Option<flinch_firmware::State>,
         /// The log's `next_seq` when it was last written to the backup SRAM.
         saved_seq: Option<u16>,
@@ -703,7 +705,7 @@ mod board {
             let state = unsafe {
                 cortex_m::register::basepri::write(PRIO_TICK);
                 let fw = FW.get();
-                for e in fw.log().iter().filter(|e| e.seq.wrapping_sub(self.next_seq) < 0x8000) {
+                for e in fw.log().since(self.next_seq) {
                     let _ = batch.push(*e);
                 }
                 if self.saved_seq != Some(fw.log().next_seq()) {
@@ -731,7 +733,7 @@ mod board {
                     e.first_seen.0,
                     e.travel_um
                 );
-                self.next_seq = e.seq.wrapping_add(1);
+                self.next_seq = Some(e.seq.wrapping_add(1));
             }
             if self.state != Some(state) {
                 self.state = Some(state);
