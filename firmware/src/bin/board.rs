@@ -667,7 +667,7 @@ mod board {
         cp.SYST.enable_interrupt();
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
-        let mut drain = LogDrain { next_seq: None, state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
+        let mut drain = LogDrain { copy: EventLog::new(), state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
         // The bench plays the world in thread mode and runs the drain on every pass.
         #[cfg(feature = "qemu-io")]
         super::bench::run_scenario(|| tim2().cnt().read().bits(), || drain.run());
@@ -688,9 +688,11 @@ mod board {
     /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
     /// truncates the message; only an attached probe-rs switches it to blocking).
     struct LogDrain {
-        /// The sequence number after the last event logged (`None`: none yet, the whole restored
-        /// log is new); `EventLog::since` compares wrap-safely, sequence numbers continue across resets.
-        next_seq: Option<u16>,
+        /// The drain's own copy of the firmware's log, brought up to date from a snapshot of the new
+        /// events only (`EventLog::snapshot`/`follow`; its cursor is `None` until the first one, so
+        /// the whole restored log is new then; sequence numbers compare wrap-safely and continue
+        /// across resets). The backup SRAM store is made from this copy, with interrupts enabled.
+        copy: EventLog<16>,
         state: Option<flinch_firmware::State>,
         /// The log's `next_seq` when it was last written to the backup SRAM.
         saved_seq: Option<u16>,
@@ -698,32 +700,33 @@ mod board {
 
     impl LogDrain {
         fn run(&mut self) {
-            let mut batch: heapless::Vec<flinch_firmware::TripEvent, 16> = heapless::Vec::new();
-            let mut to_save: Option<EventLog<16>> = None;
             // SAFETY: BASEPRI = PRIO_TICK masks SysTick and the bookkeeping, FW's only other users
             // (the edge, at priority 0, never touches FW), so this is the one reference meanwhile.
-            let state = unsafe {
+            // Masked: at most DRAIN_BATCH new events (usually none), two counters and the state; this
+            // section is measured as `drain_masked` (`src/bin/qemu.rs`, README). A burst of events is
+            // taken over a few runs (one per interrupt), so it reaches the backup SRAM a few ticks
+            // later (the latch is stored at once by the tick and the bookkeeping).
+            let (snap, state) = unsafe {
                 cortex_m::register::basepri::write(PRIO_TICK);
                 let fw = FW.get();
-                for e in fw.log().since(self.next_seq) {
-                    let _ = batch.push(*e);
-                }
-                if self.saved_seq != Some(fw.log().next_seq()) {
-                    to_save = Some(fw.log().clone());
-                }
+                let snap = fw.log().snapshot(self.copy.cursor(), flinch_firmware::event_log::DRAIN_BATCH);
                 let state = fw.state();
                 cortex_m::register::basepri::write(0);
-                state
+                (snap, state)
             };
+            self.copy.follow(&snap);
             // The log into the backup SRAM, with every interrupt enabled (the latch is stored by the
             // tick and the bookkeeping themselves, 4 words, at once). The drain runs after every
-            // interrupt (`wfi`), so an event reaches the backup SRAM within a tick; a reset in the
+            // interrupt (`wfi`), so an event reaches the backup SRAM within a few ticks; a reset in the
             // middle of the store loses the log (its CRC), never the latch (`backup.rs`).
-            if let Some(log) = to_save {
-                backup::store_log(&mut Bkp, &log);
-                self.saved_seq = Some(log.next_seq());
+            // Only a copy that has caught up is stored: a partial one (a burst taken one event a
+            // run) would replace a whole record with a prefix of it.
+            if snap.complete && self.saved_seq != Some(self.copy.next_seq()) {
+                backup::store_log(&mut Bkp, &self.copy);
+                self.saved_seq = Some(self.copy.next_seq());
             }
-            for e in &batch {
+            let batch = &snap.new;
+            for e in batch {
                 defmt::warn!(
                     "event {=u16}: {=str} flags {=u8:#x} at {=u32} us (first seen {=u32} us), travel {=i32} um",
                     e.seq,
@@ -733,7 +736,6 @@ mod board {
                     e.first_seen.0,
                     e.travel_um
                 );
-                self.next_seq = Some(e.seq.wrapping_add(1));
             }
             if self.state != Some(state) {
                 self.state = Some(state);
