@@ -226,7 +226,9 @@ mod tests {
         // whatever was there before: the magic is invalidated first and written last.
         let old = b.clone();
         assert!(load_log::<_, 16>(&mut old.clone()).is_some(), "nothing written yet: the old record stands");
-        for stop_after in 1..words_needed(7) - LOG_AT {
+        // The store's writes: the invalidation, the record's words after the magic, the magic last.
+        let writes = 1 + (words_needed(7) - LOG_AT - 1) + 1;
+        for stop_after in 1..=writes {
             struct Torn<'a> {
                 inner: &'a mut RamBackup<128>,
                 left: usize,
@@ -247,7 +249,13 @@ mod tests {
             }
             let mut m = old.clone();
             store_log(&mut Torn { inner: &mut m, left: stop_after }, &log_of(7));
-            assert!(load_log::<_, 16>(&mut m).is_none(), "torn after {stop_after} words");
+            if stop_after < writes {
+                // Up to and including "everything but the final magic" (stop_after = writes - 1).
+                assert!(load_log::<_, 16>(&mut m).is_none(), "torn after {stop_after} of {writes} words");
+            } else {
+                // The count is exact: with every write the new record stands.
+                assert_eq!(load_log::<_, 16>(&mut m).map(|l| l.len()), Some(7), "all {writes} writes");
+            }
         }
     }
 

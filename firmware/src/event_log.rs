@@ -158,6 +158,25 @@ pub struct BufferTooSmall {
     pub needed: usize,
 }
 
+/// Events the board's log drain copies per run under its priority ceiling (it runs after every
+/// interrupt, so a burst is taken over a few ticks): what bounds that masked section (QEMU
+/// `drain_masked`, firmware/README.md).
+pub const DRAIN_BATCH: usize = 1;
+
+/// The part of a log a reader has not taken yet ([`EventLog::snapshot`], [`EventLog::follow`]).
+#[derive(Clone, Debug)]
+pub struct LogSnapshot<const N: usize> {
+    /// The events not taken yet, oldest first.
+    pub new: heapless::Vec<TripEvent, N>,
+    /// The log's next sequence number.
+    pub next_seq: u16,
+    /// The log's loss count.
+    pub overwritten: u32,
+    /// No new event was left behind: a copy that follows this snapshot equals the log (before, it
+    /// holds a prefix of what is new: not a copy to store).
+    pub complete: bool,
+}
+
 /// A ring of the last `N` events.
 #[derive(Clone, Debug)]
 pub struct EventLog<const N: usize> {
@@ -218,6 +237,56 @@ impl<const N: usize> EventLog<N> {
     /// Events oldest first.
     pub fn iter(&self) -> impl Iterator<Item = &TripEvent> {
         self.ring.iter()
+    }
+
+    /// The events not yet seen by a reader whose cursor is `cursor` (the sequence number after the
+    /// last event it took; `None`: it took none, all are new), oldest first. Wrap-safe: an event is
+    /// new when it is no further behind the next sequence number than the cursor is, so the test
+    /// never compares two sequence numbers that may be more than the ring apart, and sequence
+    /// numbers that continue across resets (`restored`) past 0x8000 or 0xFFFF are no special case.
+    pub fn since(&self, cursor: Option<u16>) -> impl Iterator<Item = &TripEvent> {
+        let head = self.next_seq;
+        let behind = cursor.map_or(u16::MAX, |c| head.wrapping_sub(c));
+        self.ring.iter().filter(move |e| head.wrapping_sub(e.seq) <= behind && head != e.seq)
+    }
+
+    /// What a reader whose cursor is `cursor` (as for [`EventLog::since`]) has not taken yet, at most
+    /// `max` events of it (the oldest): those events, the sequence number after the last of them
+    /// (the log's next one when none is left behind) and the loss count. What the board's log drain
+    /// copies under its priority ceiling instead of the whole log ([`DRAIN_BATCH`] events a run).
+    pub fn snapshot(&self, cursor: Option<u16>, max: usize) -> LogSnapshot<N> {
+        let mut new = heapless::Vec::new();
+        for e in self.since(cursor).take(max) {
+            let _ = new.push(*e); // cannot fail: at most N events are held
+        }
+        let next_seq = match new.last() {
+            Some(e) if new.len() == max => e.seq.wrapping_add(1),
+            _ => self.next_seq,
+        };
+        LogSnapshot { new, next_seq, overwritten: self.overwritten, complete: next_seq == self.next_seq }
+    }
+
+    /// Bring a reader's copy of a log up to date with a snapshot of it taken with this copy's cursor
+    /// (`None` while the copy is empty): the copy then holds what the log holds (its events, next
+    /// sequence number and loss count), without the whole log having been copied at once.
+    pub fn follow(&mut self, s: &LogSnapshot<N>) {
+        for e in &s.new {
+            if self.ring.is_full() {
+                let _ = self.ring.pop_front();
+            }
+            let _ = self.ring.push_back(*e);
+        }
+        self.next_seq = s.next_seq;
+        self.overwritten = s.overwritten;
+    }
+
+    /// The cursor of a reader whose copy this is (for [`EventLog::snapshot`]): `None` while empty.
+    pub fn cursor(&self) -> Option<u16> {
+        if self.ring.is_empty() && self.next_seq == 0 {
+            None
+        } else {
+            Some(self.next_seq)
+        }
     }
 
     /// The newest event.
@@ -284,6 +353,76 @@ pub fn decode(bytes: &[u8]) -> Option<(LogHeader, impl Iterator<Item = TripEvent
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn seqs<const N: usize>(log: &EventLog<N>, cursor: Option<u16>) -> heapless::Vec<u16, 16> {
+        log.since(cursor).map(|e| e.seq).collect()
+    }
+
+    #[test]
+    fn a_reader_sees_each_event_once_across_0x8000_and_the_u16_wrap() {
+        // Sequence numbers continue across resets: a restored log may start anywhere, e.g. where
+        // the drain's old filter (seq - cursor < 0x8000 with the cursor at 0) saw nothing.
+        for start in [0u16, 5, 0x7FFE, 0x8000, 0x9000, 0xFFF0, 0xFFFE] {
+            let ev = |k: u16| TripEvent {
+                seq: start.wrapping_add(k),
+                cause: Cause::Trip,
+                flags: 0,
+                at: Micros(0),
+                first_seen: Micros(0),
+                travel_um: 0,
+            };
+            let mut log: EventLog<4> = EventLog::restored(0, (0..3).map(ev));
+            // A fresh reader (the drain at boot) sees the whole restored log.
+            assert_eq!(&seqs(&log, None)[..], &[start, start.wrapping_add(1), start.wrapping_add(2)], "start {start:#x}");
+            let mut cursor = log.last().map(|e| e.seq.wrapping_add(1));
+            assert!(seqs(&log, cursor).is_empty());
+            // Then each new event exactly once, past 0xFFFF too, and overwrites of unseen ones.
+            for k in 0..40u16 {
+                let pushes = 1 + k % 6;
+                for _ in 0..pushes {
+                    log.push(Cause::Trip, 0, Micros(0), Micros(0), 0);
+                }
+                let got = seqs(&log, cursor);
+                let want: heapless::Vec<u16, 16> = (0..pushes.min(4)).rev().map(|b| log.next_seq().wrapping_sub(b + 1)).collect();
+                assert_eq!(got, want, "start {start:#x} step {k}");
+                cursor = got.last().map(|s| s.wrapping_add(1));
+            }
+        }
+        // A cursor of 0 on a log far past 0x8000 still sees what is new (the old filter saw nothing).
+        let log: EventLog<4> = EventLog::restored(0, (0x9000u16..0x9002).map(|seq| TripEvent { seq, cause: Cause::Trip, flags: 0, at: Micros(0), first_seen: Micros(0), travel_um: 0 }));
+        assert_eq!(&seqs(&log, Some(0))[..], &[0x9000, 0x9001]);
+    }
+
+    #[test]
+    fn a_copy_following_snapshots_equals_the_log_byte_for_byte() {
+        for start in [0u16, 0x7FF0, 0xFFF5] {
+            let ev = |k: u16| TripEvent { seq: start.wrapping_add(k), cause: Cause::Reset, flags: 1, at: Micros(7), first_seen: Micros(3), travel_um: -2 };
+            let mut log: EventLog<16> = EventLog::restored(3, (0..9).map(ev));
+            let mut copy: EventLog<16> = EventLog::new();
+            for k in 0..60u32 {
+                // 0 to 20 events between two snapshots (more than the ring: the oldest are lost).
+                for j in 0..(k * 7 % 21) {
+                    log.push(Cause::Trip, j as u8, Micros(k), Micros(j), k as i32);
+                }
+                // Followed DRAIN_BATCH events at a time until nothing is new.
+                for _ in 0..16 {
+                    let s = log.snapshot(copy.cursor(), DRAIN_BATCH);
+                    assert!(s.new.len() <= DRAIN_BATCH);
+                    copy.follow(&s);
+                    if s.complete {
+                        break;
+                    }
+                }
+                let (mut a, mut b) = ([0u8; 300], [0u8; 300]);
+                let (na, nb) = (log.serialize(&mut a), copy.serialize(&mut b));
+                assert_eq!(na, nb);
+                assert_eq!(a, b, "start {start:#x} round {k}");
+                assert_eq!(copy.next_seq(), log.next_seq());
+                // Nothing new: an empty snapshot.
+                assert!(log.snapshot(copy.cursor(), 16).new.is_empty());
+            }
+        }
+    }
 
     #[test]
     fn wraps_keeping_the_newest_and_counting_the_loss() {

@@ -142,7 +142,7 @@ pub use debounce::{ChatterGuard, Filter};
 pub use detector::{ResetPolicy, State};
 pub use dual::DualSwitch;
 pub use edm::{Edm, Feedback, NoFeedback};
-pub use event_log::{Cause, EventLog, TripEvent};
+pub use event_log::{Cause, EventLog, LogSnapshot, TripEvent};
 pub use firmware::{Config, ConfigError, Firmware};
 pub use pins::Unconnected;
 pub use reset::{Boot, ResetCause, ResetPress, Retained, StartPolicy};

@@ -11,8 +11,11 @@
 //! 2. Not level 3 and no mark in the backup store: program it. Error flags cleared first, the
 //!    option bytes unlocked, `BOR_LEV` written, `OPTSTRT`, a bounded wait on `BSY`, then the error
 //!    flags (`OPERR`, `WRPERR`, `PGAERR`, `PGPERR`, `PGSERR`, RM0090 sec. 3.9.5) read; relocked in
-//!    every case. Success sets the mark and asks for a reset ([`BorOutcome::ResetToVerify`]): the
-//!    next boot reads the value the option bytes really hold.
+//!    every case. The mark is set and read back *before* the programming (a mark that does not
+//!    stick, e.g. the backup domain not writable, ends in [`BorFailure::MarkLost`] with nothing
+//!    programmed; without it every boot would program and reset for ever, nothing logged), cleared
+//!    again on a time-out or an error flag, and read back once more before success asks for a reset
+//!    ([`BorOutcome::ResetToVerify`]): the next boot reads the value the option bytes really hold.
 //! 3. Not level 3 although the mark says it was programmed: the programming did not take. A
 //!    time-out, an error flag or this end in [`BorOutcome::Failed`]: the board stops for good and
 //!    logs [`Cause::SelfCheck`](crate::Cause::SelfCheck).
@@ -71,6 +74,9 @@ pub enum BorFailure {
     FlashError = 2,
     /// Programmed at the last boot, but the option bytes do not hold level 3 now.
     NotInEffect = 3,
+    /// The pending mark did not read back from the backup store (backup domain not writable): a
+    /// reset to verify would find no mark and program again, for ever, so nothing is programmed.
+    MarkLost = 4,
 }
 
 /// Check the brown-out level and program it if needed; `busy_spins` bounds the wait on `BSY` (the
@@ -87,6 +93,12 @@ pub fn ensure_bor_level<F: OptionBytes, B: BackupRam>(f: &mut F, backup: &mut B,
         backup.write(PENDING_AT, 0);
         return (BorOutcome::Failed(BorFailure::NotInEffect), 0);
     }
+    // The mark first, read back: without it the next boot could not tell "programmed, did not
+    // take" from "never programmed" and would program and reset for ever, with nothing logged.
+    backup.write(PENDING_AT, PENDING_MAGIC);
+    if backup.read(PENDING_AT) != PENDING_MAGIC {
+        return (BorOutcome::Failed(BorFailure::MarkLost), 0);
+    }
     f.clear_status(SR_ERRORS);
     f.unlock();
     f.program_bor(BOR_LEVEL_3);
@@ -102,13 +114,18 @@ pub fn ensure_bor_level<F: OptionBytes, B: BackupRam>(f: &mut F, backup: &mut B,
     let errors = f.status() & SR_ERRORS;
     f.lock();
     if !done {
+        backup.write(PENDING_AT, 0);
         return (BorOutcome::Failed(BorFailure::Timeout), errors);
     }
     if errors != 0 {
         f.clear_status(errors);
+        backup.write(PENDING_AT, 0);
         return (BorOutcome::Failed(BorFailure::FlashError), errors);
     }
-    backup.write(PENDING_AT, PENDING_MAGIC);
+    // Still there (read back again right before the reset that relies on it).
+    if backup.read(PENDING_AT) != PENDING_MAGIC {
+        return (BorOutcome::Failed(BorFailure::MarkLost), 0);
+    }
     (BorOutcome::ResetToVerify, 0)
 }
 
@@ -225,6 +242,43 @@ mod tests {
         f.sr = 1 << 7;
         let mut b = RamBackup::<128>::filled(0);
         assert_eq!(ensure_bor_level(&mut f, &mut b, 100), (BorOutcome::ResetToVerify, 0));
+    }
+
+    /// A backup store whose writes are lost (DBP not set, the domain not clocked): reads `fill`.
+    struct LostWrites(u32);
+    impl BackupRam for LostWrites {
+        fn len(&self) -> usize {
+            128
+        }
+        fn read(&mut self, _: usize) -> u32 {
+            self.0
+        }
+        fn write(&mut self, _: usize, _: u32) {}
+    }
+
+    #[test]
+    fn a_mark_that_does_not_stick_fails_without_programming_instead_of_resetting_for_ever() {
+        for fill in [0, 0xFFFF_FFFF, 0x1234_5678] {
+            let mut f = Fake::new(0b11);
+            f.takes = false;
+            let mut b = LostWrites(fill);
+            // Boot after boot: never a reset to verify (that would loop), never a programming.
+            for _ in 0..3 {
+                assert_eq!(ensure_bor_level(&mut f, &mut b, 100), (BorOutcome::Failed(BorFailure::MarkLost), 0));
+                f.reset();
+            }
+            assert_eq!(f.programmed, 0);
+            assert!(!f.unlocked);
+        }
+    }
+
+    #[test]
+    fn a_failed_programming_clears_its_mark() {
+        let mut f = Fake::new(0b11);
+        f.raises = 1 << 4;
+        let mut b = RamBackup::<128>::filled(0);
+        assert_eq!(ensure_bor_level(&mut f, &mut b, 100).0, BorOutcome::Failed(BorFailure::FlashError));
+        assert_eq!(b.words[PENDING_AT], 0);
     }
 
     #[test]

@@ -375,6 +375,35 @@ mod board {
     #[cfg(feature = "qemu-clock")]
     const SELF_NOT_QEMU: u8 = 4;
 
+    /// The backup SRAM word the qemu-clock guard writes and reads back: past every record (the
+    /// latch, the log, the BOR-pending mark at word 96), inside the 1 KB QEMU maps.
+    #[cfg(feature = "qemu-clock")]
+    const NOT_QEMU_PROBE_AT: usize = BKPSRAM_WORDS - 1;
+    #[cfg(feature = "qemu-clock")]
+    const NOT_QEMU_PROBE: u32 = 0x5153_4D55; // "QEMU"
+
+    /// The qemu-clock guard: `None` only when two independent checks both say "QEMU". (1) GPIOD's
+    /// MODER, written by `early_outputs_low` after the clock enable and a DSB, reads back the
+    /// outputs on silicon and 0 in QEMU 7.2 (GPIO not modelled). (2) A test word written to the
+    /// backup SRAM (clocked and opened by `backup_on`, with DSBs) reads back on silicon and 0 in QEMU
+    /// (unimplemented device: writes ignored). Any non-zero read of either stops: on silicon a lost
+    /// write leaves the other check, and a backup SRAM whose write was lost reads its old (power-on:
+    /// arbitrary) content. The flags' detail: bit 0 = MODER, bit 1 = backup SRAM.
+    #[cfg(feature = "qemu-clock")]
+    fn not_qemu() -> Option<i32> {
+        let moder = gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0;
+        let mut b = Bkp;
+        b.write(NOT_QEMU_PROBE_AT, NOT_QEMU_PROBE);
+        cortex_m::asm::dsb();
+        let bkp = b.read(NOT_QEMU_PROBE_AT) != 0;
+        let which = i32::from(moder) | (i32::from(bkp) << 1);
+        if which != 0 {
+            Some(which)
+        } else {
+            None
+        }
+    }
+
     /// The option bytes through the flash interface's registers (`flinch_firmware::option_bytes`:
     /// BOR level 3 programmed once, error flags checked, verified at the next boot).
     struct OptionRegs;
@@ -444,7 +473,11 @@ mod board {
     fn backup_on() {
         rcc().apb1enr().modify(|_, w| w.pwren().set_bit());
         rcc().ahb1enr().modify(|_, w| w.bkpsramen().set_bit());
+        // STM32F40x errata (ES0182, "Delay after an RCC peripheral clock enabling"): an access right
+        // after the enable can be lost; the DSB completes the enable first.
+        cortex_m::asm::dsb();
         pwr().cr().modify(|_, w| w.dbp().set_bit());
+        cortex_m::asm::dsb();
     }
 
     /// The log's `next_seq` as `main` stored it (before any interrupt runs), for the drain.
@@ -504,6 +537,9 @@ mod board {
     #[inline(always)]
     fn early_outputs_low() {
         rcc().ahb1enr().modify(|_, w| w.gpioden().set_bit());
+        // The errata's delay after an RCC clock enable (see `backup_on`): without it the MODER write
+        // below can be lost on silicon, which would also blind the qemu-clock guard's MODER check.
+        cortex_m::asm::dsb();
         // SAFETY: BSRR takes any pattern (reset PD12..14); MODER: two-bit fields, 0b01 = output.
         gpio(GPIOD).bsrr().write(|w| unsafe { w.bits(0b111 << (12 + 16)) });
         gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) });
@@ -525,11 +561,10 @@ mod board {
             integrity_failed(SELF_FLASH, 0);
         }
         backup_on();
-        // A qemu-clock build (its tick scaled for QEMU) must never drive a machine: on silicon GPIOD's
-        // MODER reads back what `early_outputs_low` wrote; QEMU 7.2 does not model GPIO and reads 0.
+        // A qemu-clock build (its tick scaled for QEMU) must never drive a machine (`not_qemu`).
         #[cfg(feature = "qemu-clock")]
-        if gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0 {
-            integrity_failed(SELF_NOT_QEMU, 0);
+        if let Some(which) = not_qemu() {
+            integrity_failed(SELF_NOT_QEMU, which);
         }
         // The brown-out level, only with a good flash image, before the IWDG runs.
         match option_bytes::ensure_bor_level(&mut OptionRegs, &mut Bkp, BOR_BUSY_SPINS) {
@@ -545,6 +580,7 @@ mod board {
         rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioden().set_bit());
         rcc().apb1enr().modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
         rcc().apb2enr().modify(|_, w| w.syscfgen().set_bit());
+        cortex_m::asm::dsb(); // the errata's delay after an RCC clock enable (see `backup_on`)
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
         // SAFETY (the three): two-bit mode fields, 0b01 = output, 0b00 = input; pull 0b10 = down, 0b01 = up.
@@ -631,7 +667,7 @@ mod board {
         cp.SYST.enable_interrupt();
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
-        let mut drain = LogDrain { next_seq: 0, state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
+        let mut drain = LogDrain { copy: EventLog::new(), state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
         // The bench plays the world in thread mode and runs the drain on every pass.
         #[cfg(feature = "qemu-io")]
         super::bench::run_scenario(|| tim2().cnt().read().bits(), || drain.run());
@@ -652,7 +688,11 @@ mod board {
     /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
     /// truncates the message; only an attached probe-rs switches it to blocking).
     struct LogDrain {
-        next_seq: u16,
+        /// The drain's own copy of the firmware's log, brought up to date from a snapshot of the new
+        /// events only (`EventLog::snapshot`/`follow`; its cursor is `None` until the first one, so
+        /// the whole restored log is new then; sequence numbers compare wrap-safely and continue
+        /// across resets). The backup SRAM store is made from this copy, with interrupts enabled.
+        copy: EventLog<16>,
         state: Option<flinch_firmware::State>,
         /// The log's `next_seq` when it was last written to the backup SRAM.
         saved_seq: Option<u16>,
@@ -660,32 +700,33 @@ mod board {
 
     impl LogDrain {
         fn run(&mut self) {
-            let mut batch: heapless::Vec<flinch_firmware::TripEvent, 16> = heapless::Vec::new();
-            let mut to_save: Option<EventLog<16>> = None;
             // SAFETY: BASEPRI = PRIO_TICK masks SysTick and the bookkeeping, FW's only other users
             // (the edge, at priority 0, never touches FW), so this is the one reference meanwhile.
-            let state = unsafe {
+            // Masked: at most DRAIN_BATCH new events (usually none), two counters and the state; this
+            // section is measured as `drain_masked` (`src/bin/qemu.rs`, README). A burst of events is
+            // taken over a few runs (one per interrupt), so it reaches the backup SRAM a few ticks
+            // later (the latch is stored at once by the tick and the bookkeeping).
+            let (snap, state) = unsafe {
                 cortex_m::register::basepri::write(PRIO_TICK);
                 let fw = FW.get();
-                for e in fw.log().iter().filter(|e| e.seq.wrapping_sub(self.next_seq) < 0x8000) {
-                    let _ = batch.push(*e);
-                }
-                if self.saved_seq != Some(fw.log().next_seq()) {
-                    to_save = Some(fw.log().clone());
-                }
+                let snap = fw.log().snapshot(self.copy.cursor(), flinch_firmware::event_log::DRAIN_BATCH);
                 let state = fw.state();
                 cortex_m::register::basepri::write(0);
-                state
+                (snap, state)
             };
+            self.copy.follow(&snap);
             // The log into the backup SRAM, with every interrupt enabled (the latch is stored by the
             // tick and the bookkeeping themselves, 4 words, at once). The drain runs after every
-            // interrupt (`wfi`), so an event reaches the backup SRAM within a tick; a reset in the
+            // interrupt (`wfi`), so an event reaches the backup SRAM within a few ticks; a reset in the
             // middle of the store loses the log (its CRC), never the latch (`backup.rs`).
-            if let Some(log) = to_save {
-                backup::store_log(&mut Bkp, &log);
-                self.saved_seq = Some(log.next_seq());
+            // Only a copy that has caught up is stored: a partial one (a burst taken one event a
+            // run) would replace a whole record with a prefix of it.
+            if snap.complete && self.saved_seq != Some(self.copy.next_seq()) {
+                backup::store_log(&mut Bkp, &self.copy);
+                self.saved_seq = Some(self.copy.next_seq());
             }
-            for e in &batch {
+            let batch = &snap.new;
+            for e in batch {
                 defmt::warn!(
                     "event {=u16}: {=str} flags {=u8:#x} at {=u32} us (first seen {=u32} us), travel {=i32} um",
                     e.seq,
@@ -695,7 +736,6 @@ mod board {
                     e.first_seen.0,
                     e.travel_um
                 );
-                self.next_seq = e.seq.wrapping_add(1);
             }
             if self.state != Some(state) {
                 self.state = Some(state);

@@ -168,6 +168,7 @@ pub fn init(nvic: &mut NVIC) {
     // RCC APB2ENR USART1EN (bit 4); GPIOA MODER 10 = alternate function
     // for PA9/PA10; AFRH AF7 = USART1 for both.
     wr(RCC_APB2ENR, rd(RCC_APB2ENR) | (1 << 4));
+    cortex_m::asm::dsb(); // STM32F40x errata: the delay after an RCC clock enable
     wr(GPIOA_AFRH, (rd(GPIOA_AFRH) & !(0xFF << 4)) | (0x77 << 4));
     wr(GPIOA_MODER, (rd(GPIOA_MODER) & !(0b1111 << 18)) | (0b1010 << 18));
     wr(USART_BRR, BRR_115200_AT_16MHZ);
