@@ -61,7 +61,8 @@ fn honest(name: &str, scene: &Avoid, r: &PathResult) {
     // The SSM verdict, recomputed here from the true geometry with the ISO/TS 15066 formula.
     let mut violations = 0;
     for (k, row) in r.rows.iter().enumerate() {
-        let bound = ssm_bound(scene, r.signed_distance_m[k]);
+        let v_obs = flinch_harness::avoid::path::obstacle_speed_mps(scene, row.t_s - scene.dt_s, row.t_s);
+        let bound = ssm_bound_at(scene, r.signed_distance_m[k], v_obs);
         assert!((row.ssm_bound_mps - bound).abs() < 1e-9, "{name}: step {k}: bound {} != {bound}", row.ssm_bound_mps);
         if row.v_mps[0].hypot(row.v_mps[1]) > bound + 1e-6 {
             violations += 1;
@@ -145,9 +146,11 @@ fn step_motion(scene: &Avoid, r: &PathResult, k: usize) -> f64 {
 
 /// The speed limit of ISO/TS 15066 5.5.4 at a true separation `s` (the bound the monitor must stay
 /// under, whatever it sensed), m/s.
-fn ssm_bound(scene: &Avoid, s: f64) -> f64 {
+/// With the obstacles truly moving at `v_obs` (m/s): `v_h` is the faster of the scene's and that.
+fn ssm_bound_at(scene: &Avoid, s: f64, v_obs: f64) -> f64 {
     let f = &scene.safety;
-    let free = s - f.human_speed_mps * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_used_m(scene.camera.m_per_px) - f.sensor_uncertainty_m - f.robot_uncertainty_m - scene.clearance_m;
+    let v_h = f.human_speed_mps.max(v_obs);
+    let free = s - v_h * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_used_m(scene.camera.m_per_px) - f.sensor_uncertainty_m - f.robot_uncertainty_m - scene.clearance_m;
     (free / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps)
 }
 
@@ -176,7 +179,8 @@ fn safe(name: &str, scene: &Avoid, r: &PathResult) {
     for (k, row) in r.rows.iter().enumerate() {
         let s_true = r.signed_distance_m[k];
         let v = row.v_mps[0].hypot(row.v_mps[1]);
-        assert!(v <= ssm_bound(scene, s_true) + 1e-6, "{name}: t = {} s: {v} m/s at {s_true} m (bound {})", row.t_s, ssm_bound(scene, s_true));
+        let b = ssm_bound_at(scene, s_true, flinch_harness::avoid::path::obstacle_speed_mps(scene, row.t_s - scene.dt_s, row.t_s));
+        assert!(v <= b + 1e-6, "{name}: t = {} s: {v} m/s at {s_true} m (bound {b})", row.t_s);
     }
 }
 
@@ -556,6 +560,7 @@ fn ssm_verdict_uses_the_true_separation() {
     s.operator.keyframes[2].t_s = s.operator.keyframes[1].t_s + 0.125;
     let (scene, r) = run_scene(s.clone());
     honest("hand at 3.2 m/s", &scene, &r);
+    println!("hand at 3.2 m/s: {:?}, {} steps over the bound by up to {:.3} m/s, closest {:.3} m", r.status, r.ssm_violations, r.max_speed_over_ssm_mps, r.min_signed_distance_m);
     assert!(r.ssm_violations > 0, "the true separation fell below S_p while the tool moved: {:?}, {} m", r.status, r.min_signed_distance_m);
     assert!(r.max_speed_over_ssm_mps > 0.0);
     // Never inside: without the verdict this run read "stopped, blocked", a clean stop (measured:

@@ -174,3 +174,27 @@ fn an_accepted_corner_runs_with_thesis_calibration() {
     assert!(r.min_signed_distance_m.is_finite());
     assert!(t0.elapsed().as_secs_f64() < 60.0, "{:?}", t0.elapsed());
 }
+
+/// Review finding: the verdict and the monitor take v_h, T_r and T_s from the scene, so a scene with
+/// `human_speed_mps = 0` reached the goal at cruise speed 75 mm from a moving hand and called it
+/// safe. A person is at least 1.6 m/s (ISO 13855:2010 6.2), and T_r holds at least one control
+/// period (a command stands for a whole step): both are refused by name.
+#[test]
+fn a_human_slower_than_iso_13855_or_a_reaction_shorter_than_a_step_is_refused() {
+    let with = |dt: &str, safety: &str| {
+        let text = shipped().replacen("dt_s = 0.01", dt, 1) + "\n[avoid.safety]\n" + safety + "\n";
+        let path = std::env::temp_dir().join(format!("flinch-avoid-ssm-{}-{}.toml", std::process::id(), text.len()));
+        std::fs::write(&path, &text).unwrap();
+        let r = Avoid::load(&path);
+        let _ = std::fs::remove_file(&path);
+        r.map_err(|e| e.replace(&path.display().to_string(), "scene.toml"))
+    };
+    let lines = shipped().lines().count();
+    let e = with("dt_s = 0.01", "human_speed_mps = 0.0").unwrap_err();
+    assert!(e.starts_with(&format!("scene.toml:{}: avoid.safety.human_speed_mps: ", lines + 3)), "{e}");
+    assert!(e.contains("allowed range [1.6, 10] m/s") && e.contains("ISO 13855"), "{e}");
+    let e = with("dt_s = 0.05", "reaction_time_s = 0.02").unwrap_err();
+    assert!(e.contains("avoid.safety.reaction_time_s: T_r must cover at least one control period (dt_s = 0.05 s"), "{e}");
+    // At the edges: accepted.
+    with("dt_s = 0.02", "reaction_time_s = 0.02\nhuman_speed_mps = 1.6").unwrap();
+}

@@ -1446,17 +1446,20 @@ mod tests {
     #[test]
     fn icount_asserts_best_and_worst() {
         let line = |b: u32, w: u32| {
-            format!("icount: best_pend_to_stop={b} worst_pend_to_stop={w} entry_overhead=5 trip_tick=698 edge_handler=40 edge_and_book=400 tick_to_output_worst=1138\n")
+            format!("icount: best_pend_to_stop={b} worst_pend_to_stop={w} entry_overhead=5 trip_tick=698 edge_handler=40 edge_and_book=400 drain_masked=86 tick_to_output_worst=1224\n")
         };
         assert_eq!(check_icount(&line(25, 26)), Ok((25, 26)));
         // Tick to output: every part measured, the sum as stated, within the limit.
-        let tick = |t: u32, e: u32, b: u32, sum: u32| {
-            format!("icount: best_pend_to_stop=25 worst_pend_to_stop=26 trip_tick={t} edge_handler={e} edge_and_book={b} tick_to_output_worst={sum}\n")
+        let tick = |t: u32, e: u32, b: u32, d: u32, sum: u32| {
+            format!("icount: best_pend_to_stop=25 worst_pend_to_stop=26 trip_tick={t} edge_handler={e} edge_and_book={b} drain_masked={d} tick_to_output_worst={sum}\n")
         };
-        assert!(check_icount(&tick(698, 40, 400, 1138)).is_ok());
-        assert!(check_icount(&tick(698, 40, 400, 698)).unwrap_err().contains("!="), "the same-priority work left out");
-        assert!(check_icount(&tick(698, 40, 0, 738)).is_err(), "bookkeeping not measured");
-        assert!(check_icount(&tick(1400, 40, 400, 1840)).unwrap_err().contains("tick-to-output"));
+        assert!(check_icount(&tick(698, 40, 400, 86, 1224)).is_ok());
+        assert!(check_icount(&tick(698, 40, 400, 86, 698)).unwrap_err().contains("!="), "the same-priority work left out");
+        assert!(check_icount(&tick(698, 40, 400, 86, 1138)).unwrap_err().contains("!="), "the drain's masked section left out");
+        assert!(check_icount(&tick(698, 40, 0, 86, 824)).is_err(), "bookkeeping not measured");
+        assert!(check_icount(&tick(698, 40, 400, 0, 1138)).is_err(), "the drain not measured");
+        assert!(check_icount(&tick(1400, 40, 400, 86, 1926)).unwrap_err().contains("tick-to-output"));
+        assert!(check_icount("icount: best_pend_to_stop=25 worst_pend_to_stop=26 trip_tick=698 edge_handler=40 edge_and_book=400 tick_to_output_worst=1138\n").is_err(), "a line without the drain");
         assert!(check_icount("icount: best_pend_to_stop=25 worst_pend_to_stop=26 trip_tick=698\n").is_err(), "the old line");
         // Today's main before the priorities: the edge waited behind the trip tick.
         assert!(check_icount(&line(36, 700)).unwrap_err().contains("worst-case"));

@@ -85,16 +85,29 @@ pub fn ssm_params<R: Real>(scene: &Avoid) -> SsmParams<R> {
 /// age not counted) shows. The sensing latency is not added to `T_r`: the verdict uses the true
 /// separation at the instant the command is given, so no sensing delay stands between the person's
 /// position and the check (the monitor counts it in the frame's age).
-pub struct SsmVerdict(SafeController<f64>);
+///
+/// `v_h` is never less than how fast the scene's obstacles truly move ([`SsmVerdict::bound_at_mps`]):
+/// the monitor must assume a speed, the verdict knows it.
+pub struct SsmVerdict(SafeController<f64>, SsmParams<f64>);
 
 impl SsmVerdict {
     /// For a scene.
     pub fn new(scene: &Avoid) -> Self {
-        SsmVerdict(SafeController::new(ssm_params(scene)))
+        let p = ssm_params(scene);
+        SsmVerdict(SafeController::new(p), p)
     }
     /// The bound at true separation `s_m`, m/s (0: only standing still is allowed).
     pub fn bound_mps(&self, s_m: f64) -> f64 {
         self.0.speed_limit(s_m)
+    }
+    /// The bound at true separation `s_m` with the obstacles truly approaching at up to
+    /// `obstacle_mps` (taken as `v_h` when faster than the scene's), m/s.
+    pub fn bound_at_mps(&self, s_m: f64, obstacle_mps: f64) -> f64 {
+        if obstacle_mps.is_finite() && obstacle_mps > self.1.human_speed_mps {
+            SafeController::new(SsmParams { human_speed_mps: obstacle_mps, ..self.1 }).speed_limit(s_m)
+        } else {
+            self.0.speed_limit(s_m)
+        }
     }
 }
 
@@ -889,7 +902,8 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         let hand = scene.hand_at(t);
         let sd = scene.signed_distance_m(t, p);
         let s_start = *signed.last().unwrap_or(&sd);
-        let swept = swept_min_m(scene, obstacle_speed_mps(scene, t_prev, t), (t_prev, points[points.len() - 1]), (t, p));
+        let v_obstacle = obstacle_speed_mps(scene, t_prev, t);
+        let swept = swept_min_m(scene, v_obstacle, (t_prev, points[points.len() - 1]), (t, p));
         vmax = vmax.max(speed);
         if swept < NEAR_OPERATOR_M {
             vmax_near = vmax_near.max(speed);
@@ -898,7 +912,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
             time_inside += dt;
         }
         // The verdict on the command: the SSM bound at the true separation when it was given.
-        let bound = verdict.bound_mps(s_start);
+        let bound = verdict.bound_at_mps(s_start, v_obstacle);
         if speed > bound + SSM_TOL_MPS {
             ssm_violations += 1;
             over_max = over_max.max(speed - bound);

@@ -161,7 +161,7 @@ pub const KEYS: &[Key] = &[
 
 /// `[avoid.safety]` (ISO/TS 15066 5.5.4): the ranges the loader already enforced.
 pub const SAFETY_KEYS: &[Key] = &[
-    Key::number("human_speed_mps", "m/s", Incl(0.0), Incl(10.0), "v_h: ISO 13855 6.2 uses 1.6 and 2.0 m/s; 10 m/s bounds a swing", "v_h, the human's approach speed").default(1.6),
+    Key::number("human_speed_mps", "m/s", Incl(1.6), Incl(10.0), "v_h: ISO 13855:2010 6.2 and ISO/TS 15066 5.5.4.2.3: 1.6 m/s (walking, arm beyond 0.5 m) or 2.0 m/s (reach within 0.5 m); slower is not a person; 10 m/s bounds a swing", "v_h, the human's approach speed").default(1.6),
     Key::number("reaction_time_s", "s", Incl(0.0), Incl(10.0), "T_r: a control period plus the drive's delay, milliseconds; 10 s bounds it", "T_r").default(0.02),
     Key::number("stopping_time_s", "s", Incl(0.0), Incl(10.0), "T_s: a robot stops from cruise within a second; 10 s bounds it", "T_s").default(0.1),
     Key::number("intrusion_m", "m", Incl(0.0), Incl(1.0), "C of ISO 13855 5.3: up to 0.85 m (a reach over a barrier); the monitor never uses less than the sensor's detection capability requires", "C, intrusion distance").default(0.0),
@@ -347,9 +347,8 @@ fn get(keys: &[Key], vals: &[Option<f64>], name: &str) -> Option<f64> {
 
 fn scene(cx: &mut Ctx, avoid: &Tab) {
     let top = read(cx, avoid, KEYS);
-    if let Some(Some(t)) = cx.maybe_table(avoid, &SAFETY) {
-        read(cx, &t, SAFETY_KEYS);
-    }
+    let safety_t = cx.maybe_table(avoid, &SAFETY).flatten();
+    let safety = safety_t.as_ref().map(|t| read(cx, t, SAFETY_KEYS));
     let camera = cx.maybe_table(avoid, &CAMERA).flatten();
     let cam = camera.as_ref().map(|t| read(cx, t, CAMERA_KEYS));
     let fit_t = cx.maybe_table(avoid, &FIT).flatten();
@@ -393,6 +392,16 @@ fn scene(cx: &mut Ctx, avoid: &Tab) {
         }
     }
     let (Some(dt), Some(max_time), Some(frame)) = (get(KEYS, &top, "dt_s"), get(KEYS, &top, "max_time_s"), get(KEYS, &top, "frame_period_s")) else { return };
+    // T_r holds at least the control period: a command stands for a whole step before the next one
+    // can stop the robot (ISO/TS 15066 5.5.4.2.3: T_r includes the detection and the control's cycle).
+    let t_r = safety.as_ref().and_then(|v| get(SAFETY_KEYS, v, "reaction_time_s")).unwrap_or(0.02);
+    if t_r < dt {
+        let tab = safety_t.as_ref().unwrap_or(avoid);
+        cx.bad(tab, "reaction_time_s", format!(
+            "T_r must cover at least one control period (dt_s = {} s: a command stands for a whole step; ISO/TS 15066 5.5.4.2.3), got {}",
+            num(dt), num(t_r)
+        ));
+    }
     if max_time / dt > MAX_STEPS {
         cx.bad(avoid, DT.name, format!(
             "max_time_s / dt_s = {} control steps; allowed at most {} (bounds the run time), got dt_s = {}",
