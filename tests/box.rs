@@ -367,3 +367,87 @@ fn a_plant_still_moving_after_the_robot_stopped_is_not_held() {
     assert!(s.object_final_velocity.is_some_and(|v| v > 1e-3), "{:?}", s.object_final_velocity);
     assert_eq!(s.at_rest_from_s, None);
 }
+
+/// Issue 18 (the box contract): `estimated_steps` must bound the steps a run takes, so that the
+/// wall-time bound above (derived from it) and the budget `scene::MAX_STEPS` mean something. The
+/// corners where the estimate is weakest: a tool pressed into its back stop and the target by a
+/// slow brake, held at the explicit method's stability limit until the rest check holds (stiff
+/// stops, low damping, heavy tool, slow decel). Prints `actual / estimated` for each corner
+/// (`cargo test -p flinch-tests --test box settling_corners -- --ignored --nocapture`).
+///
+/// Measured on branch settle (debug test profile, 2026-11-26), 24 corners of table11 (decel 0.159,
+/// 0.05, 0.02 m/s^2; back stop (k, e) = (2.25e6, 0.3), (1e8, 0.3), (2.25e6, 0.9), (1e10, 1.0); tool
+/// 0.23 or 5 kg; duration = contact + stop + 4 s): actual / estimated sorted = 1.46, 3.58, 4.92,
+/// 6.60, 9.53, 12.1, 16.8, 37.2, 46.9, 54.1, 57.8, 69.4, 69.5, 97.7, 230, 251, 307, 413, 633, 819;
+/// worst: decel 0.05, back stop 1e8, 0.23 kg: 11,648,726 steps against 14,231 estimated (over
+/// `scene::MAX_STEPS` = 1e7, yet accepted). The four 0.23 kg corners at decel 0.02 are accepted and
+/// end in the solver's step limit (t = 5.9-11.2 s of 16.3 s). The light tool is the worst: the
+/// stop's damping rate chi d^1.5 / m_t and stiffness rate grow as the tool gets lighter.
+fn settling_corners() -> Vec<(String, String)> {
+    let base = std::fs::read_to_string(flinch_tests::scene_path("table11_z_prototype.toml")).unwrap();
+    let mut out = Vec::new();
+    for decel in [0.159f64, 0.05, 0.02] {
+        for (bs_k, bs_e) in [("2.25e6", "0.3"), ("1e8", "0.3"), ("2.25e6", "0.9"), ("1e10", "1.0")] {
+            for tool in ["0.230", "5.0"] {
+                let dur = (0.3 + 0.24 / decel + 4.0).min(60.0);
+                let t = base
+                    .replacen("decel = 2.0 ", &format!("decel = {decel} "), 1)
+                    .replacen("duration = 0.8 ", &format!("duration = {dur} "), 1)
+                    .replacen("back_stop = { stiffness = 2.25e6, restitution = 0.3 }", &format!("back_stop = {{ stiffness = {bs_k}, restitution = {bs_e} }}"), 1)
+                    .replacen("mass = 0.230 ", &format!("mass = {tool} "), 1);
+                out.push((format!("table11 decel={decel} back_stop=({bs_k}, e={bs_e}) tool={tool} duration={dur:.2}"), t));
+            }
+        }
+    }
+    out
+}
+
+/// The measurement, one line per corner: (name, actual steps, estimated steps, wall s), or the
+/// refusal / solver error.
+fn measure_settling() -> Vec<(String, Result<(u64, f64, f64), String>)> {
+    settling_corners()
+        .into_iter()
+        .map(|(name, text)| {
+            let r = match scene::parse(&text, "corner.toml") {
+                Err(e) => Err(format!("refused: {e}")),
+                Ok(sc) => {
+                    let est = estimated_steps(&sc);
+                    let t0 = Instant::now();
+                    match sim::run(&sc, false) {
+                        Ok((s, _)) => Ok((s.steps, est, t0.elapsed().as_secs_f64())),
+                        Err(e) => Err(format!("accepted, solver failed: {e}")),
+                    }
+                }
+            };
+            match &r {
+                Ok((a, e, w)) => eprintln!("ratio {:>9.3}  actual {a:>9}  estimated {e:>9.0}  wall {w:>6.2} s  {name}", *a as f64 / e),
+                Err(e) => eprintln!("{name}: {}", e.lines().next().unwrap_or("")),
+            }
+            (name, r)
+        })
+        .collect()
+}
+
+/// Every settling corner the validator accepts runs to its end within its estimated steps.
+/// Known gap, measured (debug build, see the doc of `settling_corners` for the command): the
+/// estimate misses the settling phase by up to three orders of magnitude, and four accepted
+/// corners (decel = 0.02 m/s^2, 0.23 kg tool) end in the solver's step limit, which the validator
+/// should have refused. Ignored until `estimated_steps` bounds the settling phase (issue 18);
+/// run it with `--ignored`.
+#[test]
+#[ignore = "issue 18: estimated_steps omits the settling phase (actual/estimated up to ~800, step-limit failures on accepted scenes)"]
+fn settling_corners_stay_within_the_estimated_steps() {
+    let rows = measure_settling();
+    let mut ratios: Vec<f64> = rows.iter().filter_map(|(_, r)| r.as_ref().ok().map(|(a, e, _)| *a as f64 / e)).collect();
+    ratios.sort_by(f64::total_cmp);
+    eprintln!("ratios actual/estimated (sorted): {ratios:.3?}");
+    let bad: Vec<_> = rows
+        .iter()
+        .filter(|(_, r)| match r {
+            Ok((a, e, _)) => *a as f64 > *e,
+            Err(e) => !e.starts_with("refused"),
+        })
+        .map(|(n, r)| format!("{n}: {r:?}"))
+        .collect();
+    assert!(bad.is_empty(), "{} corners over their estimate or failing:\n{}", bad.len(), bad.join("\n"));
+}
