@@ -414,7 +414,25 @@ fn measure_settling() -> Vec<(String, Result<(u64, f64, f64), String>)> {
                     let est = estimated_steps(&sc);
                     let t0 = Instant::now();
                     match sim::run(&sc, false) {
-                        Ok((s, _)) => Ok((s.steps, est, t0.elapsed().as_secs_f64())),
+                        Ok((s, _)) => {
+                            let wall = t0.elapsed().as_secs_f64();
+                            // Where the steps go: up to the robot's stop (the tool being pressed
+                            // in) and after it (settling until the rest check holds).
+                            if let (Some(tc), Some(ts)) = (s.t_contact, s.t_stop) {
+                                let cut = text.replacen(&format!("duration = {} ", sc.duration_s), &format!("duration = {ts} "), 1);
+                                let before = scene::parse(&cut, "cut.toml").ok().and_then(|c| sim::run(&c, false).ok()).map(|(c, _)| c.steps);
+                                if let Some(b) = before {
+                                    let rest = s.at_rest_from_s.unwrap_or(sc.duration_s);
+                                    eprintln!(
+                                        "  phases: contact {tc:.3} s, stop {ts:.3} s, rest {rest:.3} s; steps to stop {b} ({:.3e}/s after contact), stop to rest {} ({:.3e}/s)",
+                                        b as f64 / (ts - tc),
+                                        s.steps - b,
+                                        (s.steps - b) as f64 / (rest - ts)
+                                    );
+                                }
+                            }
+                            Ok((s.steps, est, wall))
+                        }
                         Err(e) => Err(format!("accepted, solver failed: {e}")),
                     }
                 }
