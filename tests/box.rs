@@ -402,6 +402,43 @@ fn settling_corners() -> Vec<(String, String)> {
     out
 }
 
+/// A candidate a-priori bound of the steps spent with the tool pressed into its back stop and an
+/// obstacle (bi-stable decoupler, obstacle target, `decel`, no `[robot]`: the corners above), not
+/// yet in `estimated_steps`: the flange's travel past contact, `D = V dead_time + V^2 / (2 decel)
+/// - (front_stroke + back_stroke)`, is shared by the two Hertz contacts in series (equal force:
+/// `k_b d_b^1.5 = k_c d_c^1.5`); at that penetration the tool sees a stiffness `1.5 (k_b d_b^0.5 +
+/// k_c d_c^0.5)` and a damping `chi_b d_b^1.5 + chi_c d_c^1.5` (chi at v_in = V), and the explicit
+/// method is held at half the faster of sqrt(K / m_t) and C / m_t for the whole run.
+///
+/// Measured against the corners (same command): actual / (estimate + candidate) = 0.17-0.99 on 16
+/// of the 22 corners it was run on, but 1.43 (back stop 1e10, e = 1, 0.23 kg, decel 0.05), 1.58
+/// and 2.18 (back stop e = 0.9, 0.23 kg, decel 0.159 and 0.05), and the two 0.23 kg corners at
+/// decel 0.02 with back stop e = 0.9 and e = 1.0 hit the solver's 2e7-step limit where it predicts
+/// 9.1e5 and 7.8e5 steps: at low damping the cost is set by accuracy on the stiff oscillation, not
+/// by stability, and this candidate misses it by more than 20x. Not a bound, so not in
+/// `estimated_steps`; kept here as the measured starting point.
+fn pressed_steps_candidate(sc: &scene::Scene) -> Option<f64> {
+    use flinch_harness::plant::contact::Contact;
+    let scene::Decoupler::Bistable(b) = &sc.decoupler else { return None };
+    if sc.robot.is_some() || sc.motion.stopping.is_some() || !matches!(sc.target.kind, scene::TargetKind::Obstacle) {
+        return None;
+    }
+    let v = sc.motion.speed;
+    let d = v * sc.motion.dead_time + v * v / (2.0 * sc.motion.decel) - (b.front_stroke + b.back_stroke);
+    if d <= 0.0 {
+        return Some(0.0);
+    }
+    let (kb, kc) = (b.back_stop.stiffness, sc.target.stiffness);
+    let db = d / (1.0 + (kb / kc).powf(2.0 / 3.0));
+    let dc = d - db;
+    let chib = Contact::new(kb, &b.back_stop.damping).chi(v);
+    let chic = Contact::new(kc, &sc.target.damping).chi(v);
+    let m = sc.tool.mass;
+    let k = 1.5 * (kb * db.sqrt() + kc * dc.sqrt());
+    let c = chib * db.powf(1.5) + chic * dc.powf(1.5);
+    Some(0.5 * (k / m).sqrt().max(c / m) * sc.duration_s)
+}
+
 /// The measurement, one line per corner: (name, actual steps, estimated steps, wall s), or the
 /// refusal / solver error.
 fn measure_settling() -> Vec<(String, Result<(u64, f64, f64), String>)> {
@@ -410,6 +447,10 @@ fn measure_settling() -> Vec<(String, Result<(u64, f64, f64), String>)> {
         .map(|(name, text)| {
             let r = match scene::parse(&text, "corner.toml") {
                 Err(e) => Err(format!("refused: {e}")),
+                Ok(sc) if pressed_steps_candidate(&sc).is_some_and(|p| p > 2.0 * scene::MAX_STEPS) => {
+                    eprintln!("  candidate: estimate + pressed = {:.3e} (not run: the candidate would refuse it)", estimated_steps(&sc) + pressed_steps_candidate(&sc).unwrap());
+                    Err("accepted, solver not run: the candidate bound is over twice the budget".into())
+                }
                 Ok(sc) => {
                     let est = estimated_steps(&sc);
                     let t0 = Instant::now();
@@ -430,6 +471,9 @@ fn measure_settling() -> Vec<(String, Result<(u64, f64, f64), String>)> {
                                         (s.steps - b) as f64 / (rest - ts)
                                     );
                                 }
+                            }
+                            if let Some(p) = pressed_steps_candidate(&sc) {
+                                eprintln!("  candidate: estimate + pressed = {:.0}, actual / that = {:.3}", est + p, s.steps as f64 / (est + p));
                             }
                             Ok((s.steps, est, wall))
                         }
