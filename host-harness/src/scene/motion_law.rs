@@ -14,7 +14,7 @@ pub const SPEED: Key = Key::number("speed", "m/s", Incl(1e-4), Incl(5.0), "0.1 m
 /// a_c.
 pub const ACCEL: Key = Key::number("accel", "m/s^2", Incl(1e-3), Incl(500.0), "up to about 50 g, beyond what the drives of arms in the Table 7 class reach (a few 10 m/s^2)", "a_c, the commanded acceleration up to V_c");
 /// d_c.
-pub const DECEL: Key = Key::number("decel", "m/s^2", Incl(1e-3), Incl(500.0), "up to about 50 g, beyond any robot stop (the thesis brakes at 2-9 m/s^2); also refused when a slow brake would press a bi-stable tool past its stroke into the back stop and an obstacle for more than the step budget (scene/budget.rs pressed_steps; table11 with its 0.23 kg tool and duration = stop + 4 s: refused at 0.05 m/s^2 with the back stop at e = 0.3, accepted at 0.1; tests/box.rs settling_corners)", "d_c, the braking deceleration once the robot reacts")
+pub const DECEL: Key = Key::number("decel", "m/s^2", Incl(1e-3), Incl(500.0), "up to about 50 g, beyond any robot stop (the thesis brakes at 2-9 m/s^2)", "d_c, the braking deceleration once the robot reacts")
     .optional("required unless stopping is given");
 /// DT.
 pub const DEAD_TIME: Key = Key::number("dead_time", "s", Incl(0.0), Incl(1.0), "controller reaction times: 10-70 ms in the thesis, well under 1 s for any stop category 0/1 robot (ISO 13855 stopping performance)", "DT, from detection to the start of braking; with stopping, from detection to the stop signal at the robot (the table's times include the robot's reaction)")
