@@ -93,7 +93,7 @@ mod target;
 mod tests;
 mod tool;
 
-pub use budget::{estimated_steps, fastest_rate, hydraulic_rest_travel, MAX_SAMPLES, MAX_STEPS};
+pub use budget::{estimated_steps, fastest_rate, hydraulic_rest_travel, pressed_steps, MAX_SAMPLES, MAX_STEPS, PRESSED_FACTOR};
 pub use check::{Bound, Key, KeyTable, Need, SceneError, SceneIssue, Span, Ty};
 pub use decoupler::end_stop::DEFAULT_BACK_STOP_LAW;
 pub use decoupler::hydraulic::{DEFAULT_ADIABATIC_EXPONENT, DEFAULT_HYDRAULIC_FRICTION_V0};
