@@ -194,6 +194,37 @@ fn every_adversarial_scene_is_safe_with_the_monitor() {
     }
 }
 
+/// The `--mcu` engine is the board's step (its number type `avoidance::BoardReal`, the lookup-table
+/// Gaussian, the weights sent as serial frames, the weights-age watchdog): every shipped scene run
+/// through it must be as safe as the reference, and end the same way (a number type that turned a
+/// `stopped` into a `reached`, or the reverse, is a difference the host has to show, not hide).
+#[test]
+fn every_scene_is_safe_on_the_board_engine() {
+    let scenes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let mut names: Vec<String> = std::fs::read_dir(&scenes)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("avoid_") && n.ends_with(".toml"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 10, "{names:?}");
+    for name in &names {
+        let scene = Avoid::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
+        let setup = Setup::new(&scene, None).unwrap();
+        let m = simulate(&scene, &setup, Engine::Mcu).unwrap();
+        safe(name, &scene, &m);
+        let rx = m.rx.expect("the board engine has a receiver");
+        // A scene with no room at the start ends before the first frame; any run that moved took
+        // its weights from frames, none refused on a clean line.
+        if m.path_length_m > 0.0 {
+            assert!(rx.good > 0, "{name}: moved without a frame applied");
+        }
+        assert_eq!((rx.bad_crc, rx.bad_header, rx.short, rx.stale), (0, 0, 0, 0), "{name}: frames refused on a clean line");
+        let r = simulate(&scene, &setup, Engine::Reference).unwrap();
+        assert_eq!(m.status, r.status, "{name}: board engine ({}) against the f64 reference", flinch_harness::avoid::path::board_real_name());
+    }
+}
+
 /// An empty workspace is flat once the raised plane's own weights are removed before eq 71: a
 /// diagonal move from 50 mm off one corner to 50 mm off the other arrives, at the cap speed. As the
 /// thesis wrote it (`--thesis`), the border walls stop it short.

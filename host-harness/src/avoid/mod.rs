@@ -31,7 +31,8 @@ pub struct AvoidArgs {
     /// Print the metrics as JSON instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Run the firmware step (I16F16, lookup-table Gaussian, serial frames) instead of the f64 reference.
+    /// Run the firmware step as the board builds it (its number type `BoardReal`: f32, or I16F16 with
+    /// the feature avoid-fixed; lookup-table Gaussian, serial frames) instead of the f64 reference.
     #[arg(long)]
     pub mcu: bool,
     /// Use this robot calibration file instead of running the calibration pass.
@@ -98,7 +99,8 @@ pub struct RxCounts {
 pub struct AvoidMetrics {
     /// Version of this document's schema.
     pub schema_version: u32,
-    /// "reference-f64" or "mcu-i16f16".
+    /// "reference-f64", or "mcu-" and the board's number type (`avoidance::BoardReal`): "mcu-f32"
+    /// (default build) or "mcu-i16f16" (built with the feature `avoid-fixed`).
     pub engine: &'static str,
     /// The speed and separation monitor: "ssm" or "off".
     pub monitor: &'static str,
@@ -170,7 +172,11 @@ impl AvoidMetrics {
             schema_version: crate::report::SCHEMA_VERSION,
             engine: match engine {
                 Engine::Reference => "reference-f64",
-                Engine::Mcu => "mcu-i16f16",
+                Engine::Mcu => match path::board_real_name() {
+                    "f32" => "mcu-f32",
+                    "I16F16" => "mcu-i16f16",
+                    _ => "mcu-unknown",
+                },
             },
             monitor: if monitor { "ssm" } else { "off" },
             status: res.status.name(),
@@ -295,7 +301,11 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
         print!("{}", crate::report::to_json(&AvoidMetrics::new(&res, engine, scene.safety.on())));
     } else {
         let name = args.scene.display();
-        println!("avoid {name}: engine {}", if args.mcu { "mcu (I16F16, LUT, serial frames)" } else { "reference (f64)" });
+        if args.mcu {
+            println!("avoid {name}: engine mcu ({}, LUT, serial frames)", path::board_real_name());
+        } else {
+            println!("avoid {name}: engine reference (f64)");
+        }
         let sf = &scene.safety;
         if sf.on() {
             println!(

@@ -4,11 +4,12 @@
 //!
 //! Two engines share the firmware's [`Controller`]: [`Engine::Reference`] samples the field in `f64`
 //! with the full (untruncated) sum; [`Engine::Mcu`] runs the firmware exactly as on the target: each
-//! fit is encoded into a serial frame, fed to a [`Receiver`] in `I16F16`, and the step uses the
-//! lookup-table Gaussian over the truncated window plus the weights-age watchdog.
+//! fit is encoded into a serial frame, fed to a [`Receiver`] in the board's number type
+//! ([`BoardReal`]: `f32`, or `I16F16` when the firmware is built with the feature `avoid-fixed`), and
+//! the step uses the lookup-table Gaussian over the truncated window plus the weights-age watchdog.
 
 use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Steer, Watchdog};
-use flinch_firmware::avoidance::num::I16F16;
+use flinch_firmware::avoidance::{num::I16F16, BoardReal};
 use flinch_hal_sim::serial::SimSerial;
 
 use super::calib::{preprocess, zigzag, Calibration};
@@ -21,8 +22,28 @@ use super::scene::Avoid;
 pub enum Engine {
     /// `f64`, full sum.
     Reference,
-    /// The firmware step in `I16F16` behind the serial frame protocol.
+    /// The firmware step in the board's number type ([`BoardReal`]) behind the serial frame protocol.
     Mcu,
+}
+
+/// The name of the board's number type ([`BoardReal`], which the `--mcu` engine runs): `"f32"` (the
+/// M4F default), or `"I16F16"` when the firmware is built with the feature `avoid-fixed`
+/// (`cargo build -p flinch-harness --features avoid-fixed` forwards it).
+pub fn board_real_name() -> &'static str {
+    use core::any::TypeId;
+    if TypeId::of::<BoardReal>() == TypeId::of::<f32>() {
+        "f32"
+    } else if TypeId::of::<BoardReal>() == TypeId::of::<I16F16>() {
+        "I16F16"
+    } else {
+        "unknown"
+    }
+}
+
+/// The `--mcu` engine for a scene: the firmware as the board runs it, in [`BoardReal`] with the
+/// lookup-table Gaussian.
+pub fn mcu_engine(scene: &Avoid) -> Result<FwEngine<BoardReal, fw::GaussLut<BoardReal>>, String> {
+    FwEngine::new(scene, fw::GaussLut::new())
 }
 
 /// A command source for [`simulate_with`]: gets every new field, answers every control step.
@@ -290,17 +311,22 @@ pub struct FwEngine<R, G> {
 impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
     /// For a scene.
     pub fn new(scene: &Avoid, gauss: G) -> Result<Self, String> {
+        let watchdog = Watchdog {
+            slow_after_ms: (3.0 * scene.frame_period_s * 1e3) as u32,
+            stop_after_ms: (10.0 * scene.frame_period_s * 1e3) as u32,
+        };
+        let mut rx = Box::new(Receiver::new(200, 20));
+        // As the board's `Link::new`: a restarted host's new session is taken once the weights
+        // watchdog has stopped the robot, not before.
+        rx.new_session_after_ms = watchdog.stop_after_ms;
         Ok(FwEngine {
             ctl: Controller::new(gains(scene)?),
             safe: safe_controller(scene)?,
             cap: scene.speed_mps,
-            rx: Box::new(Receiver::new(200, 20)),
+            rx,
             line: SimSerial::pair(),
             gauss,
-            watchdog: Watchdog {
-                slow_after_ms: (3.0 * scene.frame_period_s * 1e3) as u32,
-                stop_after_ms: (10.0 * scene.frame_period_s * 1e3) as u32,
-            },
+            watchdog,
         })
     }
 }
@@ -757,11 +783,11 @@ pub fn count_stalls(points: &[[f64; 2]], goal: [f64; 2], window: usize, move_m: 
     stalls
 }
 
-/// Simulate the scene with the reference or the on-target (I16F16, lookup table) engine.
+/// Simulate the scene with the reference or the on-target ([`BoardReal`], lookup table) engine.
 pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResult, String> {
     match engine {
         Engine::Reference => simulate_with(scene, setup, &mut RefEngine::new(scene)?),
-        Engine::Mcu => simulate_with(scene, setup, &mut FwEngine::<I16F16, _>::new(scene, fw::GaussLut::new())?),
+        Engine::Mcu => simulate_with(scene, setup, &mut mcu_engine(scene)?),
     }
 }
 
@@ -1054,12 +1080,12 @@ mod tests {
         assert_eq!(straight.status, Status::Collision(None));
         assert!(!straight.status.ok());
 
-        // The firmware step (I16F16, table, frames) follows the same path closely.
+        // The firmware step (the board's number type, table, frames) follows the same path closely.
         let mcu = simulate(&scene, &setup, Engine::Mcu).unwrap();
         assert!(mcu.time_to_goal_s.is_some());
         assert_eq!(mcu.rx.map(|s| s.good), Some(mcu.frames as u32));
         let dev = res.points.iter().zip(&mcu.points).map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()).fold(0.0, f64::max);
-        assert!(dev < 0.01, "I16F16 path within 10 mm of f64: {dev}");
+        assert!(dev < 0.01, "{} path within 10 mm of f64: {dev}", board_real_name());
     }
 
     #[test]

@@ -401,13 +401,12 @@ pub fn render_recording(scene: &Avoid, outs: &[(&Path, f64)], width: usize, heig
 /// `flinch avoid --depth`: the scene's loop on the recorded frames, with the reference or the
 /// on-target engine.
 pub fn simulate(scene: &Avoid, setup: &Setup, engine: super::path::Engine, depth: &Path, poses: Option<&Path>) -> Result<(super::path::PathResult, RecordedStats), String> {
-    use super::path::{simulate_from, Engine, FwEngine, RefEngine};
-    use flinch_firmware::avoidance::{num::I16F16, GaussLut};
+    use super::path::{mcu_engine, simulate_from, Engine, RefEngine};
     let rec = Recording::open(depth, poses)?;
     let mut src = RecordedSource::new(scene, rec)?;
     let res = match engine {
         Engine::Reference => simulate_from(scene, setup, &mut RefEngine::new(scene)?, &mut src)?,
-        Engine::Mcu => simulate_from(scene, setup, &mut FwEngine::<I16F16, _>::new(scene, GaussLut::new())?, &mut src)?,
+        Engine::Mcu => simulate_from(scene, setup, &mut mcu_engine(scene)?, &mut src)?,
     };
     Ok((res, src.stats))
 }
