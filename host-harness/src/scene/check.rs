@@ -51,6 +51,17 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
+/// The TOML document of a scene, or the syntax error as a [`SceneError`] with its line.
+pub(super) fn parse_toml<'t>(text: &'t str, file: &str) -> Result<toml_edit::ImDocument<&'t str>, SceneError> {
+    toml_edit::ImDocument::parse(text).map_err(|e| {
+        let line = Some(line_at(text, e.span().map_or(0, |s| s.start)));
+        // One line: every line of a refusal starts with the file (toml_edit's message can run
+        // over two lines, the second then lacking it; found by tests/fuzz.rs).
+        let message = format!("not valid TOML: {}", e.message().trim().replace('\n', "; "));
+        SceneError { file: file.to_string(), issues: vec![SceneIssue { line, key: String::new(), message }] }
+    })
+}
+
 /// 1-based line of the byte `offset` in `text`.
 pub(super) fn line_at(text: &str, offset: usize) -> usize {
     let end = offset.min(text.len());
