@@ -9,7 +9,7 @@ use super::check::{approx, line_at, num, Bound::*, Ctx, Key, Need, SceneError, S
 use crate::avoid::camera::DepthCameraCfg;
 use crate::avoid::depth::{Obstacle, ObstacleKeyframe};
 use crate::avoid::scene::{Avoid, CameraCfg, FitCfg, Keyframe, OperatorCfg, RobotCfg, SafetyCfg};
-use toml_edit::{ImDocument, TableLike, Value};
+use toml_edit::{TableLike, Value};
 
 /// Where points may lie: the plane one camera sees.
 const PLANE: &str = "a point on the work plane one ceiling camera sees, at most 10 m across (the thesis's plane: 1.05 m)";
@@ -296,8 +296,10 @@ const OB_KIND: Key = Key::of("kind", Ty::Choice(OBSTACLE_KINDS), "footprint: a d
 const OB_CENTER: Key = point("center_m", "[x, y] centre of a standing obstacle, inside the image").optional("a moving obstacle: keyframes instead");
 const OB_KEYFRAMES: Key = Key::of("keyframes", Ty::Table("a list of key frames { t_s, x_m, y_m }, t_s increasing"), "centre over time: linear between key frames, held before the first and after the last").optional("a standing obstacle at center_m");
 const OB_HEIGHT: Key = Key::number("height_m", "m", Incl(0.001), Incl(2.0), "an obstacle's top above the plane, from a 1 mm plate to 2 m (a person standing)", "top above the plane");
-const OB_RADIUS: Key = Key::number("radius_m", "m", Excl(0.0), Incl(10.0), PLANE, "disc radius");
-const OB_SIZE: Key = Key::number("size_m", "m", Excl(0.0), Incl(10.0), PLANE, "[x, y] box size along x and y");
+/// Sizes of obstacles.
+const OBSTACLE_SIZE: &str = "an obstacle on the plane one camera sees: at most 10 m across (shipped: 0.05-1.05 m)";
+const OB_RADIUS: Key = Key::number("radius_m", "m", Excl(0.0), Incl(10.0), OBSTACLE_SIZE, "disc radius");
+const OB_SIZE: Key = Key::number("size_m", "m", Excl(0.0), Incl(10.0), OBSTACLE_SIZE, "[x, y] box size along x and y");
 
 /// `[[avoid.operator.obstacles]]` with `kind = "disc"`.
 pub const DISC_KEYS: &[Key] = &[OB_KIND, OB_CENTER, OB_KEYFRAMES, OB_RADIUS, OB_HEIGHT];
@@ -481,7 +483,7 @@ fn read_avoid(cx: &mut Ctx, t: &Tab) -> Option<Avoid> {
     let baud = whole(cx, t, &BAUD).map(|b| b.map(|b| b as u32));
     let safety = match cx.maybe_table(t, &SAFETY) {
         Some(Some(s)) => safety(cx, &s),
-        Some(None) => Some(SafetyCfg::default()),
+        Some(None) => Some(default_safety()),
         None => None,
     };
     let camera_t = cx.table(t, &CAMERA);
@@ -530,6 +532,17 @@ fn read_avoid(cx: &mut Ctx, t: &Tab) -> Option<Avoid> {
         cross_checks(cx, &scene, &tabs);
     }
     Some(scene)
+}
+
+/// `[avoid.safety]` with every key at its default (`SafetyCfg::default()`): the defaults of
+/// [`SAFETY_KEYS`], the one source.
+pub fn default_safety() -> SafetyCfg {
+    let empty = toml_edit::Table::new();
+    let mut cx = Ctx { text: "", file: "", issues: Vec::new() };
+    let t = Tab { path: "avoid.safety".into(), t: &empty, line: None };
+    let s = safety(&mut cx, &t);
+    debug_assert!(cx.issues.is_empty(), "{:?}", cx.issues);
+    s.expect("the defaults of SAFETY_KEYS are in their ranges")
 }
 
 fn safety(cx: &mut Ctx, t: &Tab) -> Option<SafetyCfg> {
@@ -659,7 +672,7 @@ fn increasing(cx: &mut Ctx, frames: &[Tab], times: &[f64]) -> bool {
     let mut ok = true;
     for (i, w) in times.windows(2).enumerate() {
         if w[1] <= w[0] {
-            cx.bad(&frames[i + 1], "t_s", format!("key frames' t_s must increase: must be after the key frame before ({}.t_s = {} s), got {}", frames[i].path, num(w[0]), num(w[1])));
+            cx.bad(&frames[i + 1], "t_s", format!("must be after the key frame before it ({}.t_s = {} s): key frames' t_s must increase, got {}", frames[i].path, num(w[0]), num(w[1])));
             ok = false;
         }
     }
@@ -858,42 +871,6 @@ fn cross_checks(cx: &mut Ctx, s: &Avoid, tabs: &Tabs) {
     }
 }
 
-/// Checks every number of an avoidance scene; `file` names it in the messages (empty: `line N:`).
-/// A text that is not TOML or has no `[avoid]` table passes: the deserialiser reports it.
-pub fn check(text: &str, file: &str) -> Result<(), String> {
-    let Ok(doc) = ImDocument::parse(text) else { return Ok(()) };
-    let mut cx = Ctx { text, file, issues: Vec::new() };
-    let root = Tab { path: String::new(), t: doc.as_table(), line: Some(1) };
-    const AVOID: Key = Key::of("avoid", Ty::Table("the avoidance scene"), "");
-    if let Some(Some(avoid)) = cx.maybe_table(&root, &AVOID) {
-        scene(&mut cx, &avoid);
-    }
-    if cx.issues.is_empty() {
-        return Ok(());
-    }
-    cx.issues.sort_by_key(|i| i.line);
-    if file.is_empty() {
-        let line = |i: &SceneIssue| i.line.map_or(String::new(), |l| format!("line {l}: "));
-        Err(cx.issues.iter().map(|i| format!("{}{}: {}", line(i), i.key, i.message)).collect::<Vec<_>>().join("\n"))
-    } else {
-        Err(SceneError { file: file.to_string(), issues: cx.issues }.to_string())
-    }
-}
-
-/// Reads every key of `keys` in `tab`: numbers, integers and points. `None` for a key absent or
-/// refused (reported).
-fn read(cx: &mut Ctx, tab: &Tab, keys: &[Key]) -> Vec<Option<f64>> {
-    keys.iter()
-        .map(|k| match k.ty {
-            Ty::Integer { .. } if k.name == "seed" => None,
-            Ty::Integer { .. } => cx.integer(tab, k).map(f64::from),
-            Ty::Number(_) if POINTS.contains(&k.name) => xy(cx, tab, k).map(|p| p[0]),
-            Ty::Number(_) => cx.number(tab, k),
-            _ => None,
-        })
-        .collect()
-}
-
 /// A point `[x, y]`: exactly two finite numbers in the key's range.
 fn xy(cx: &mut Ctx, tab: &Tab, key: &Key) -> Option<[f64; 2]> {
     let span = key.span()?;
@@ -929,119 +906,6 @@ fn xy(cx: &mut Ctx, tab: &Tab, key: &Key) -> Option<[f64; 2]> {
     Some(p)
 }
 
-fn get(keys: &[Key], vals: &[Option<f64>], name: &str) -> Option<f64> {
-    keys.iter().position(|k| k.name == name).and_then(|i| vals[i])
-}
-
-fn scene(cx: &mut Ctx, avoid: &Tab) {
-    let top = read(cx, avoid, KEYS);
-    if let Some(Some(t)) = cx.maybe_table(avoid, &SAFETY) {
-        read(cx, &t, SAFETY_KEYS);
-    }
-    let camera = cx.maybe_table(avoid, &CAMERA).flatten();
-    let cam = camera.as_ref().map(|t| read(cx, t, CAMERA_KEYS));
-    let fit_t = cx.maybe_table(avoid, &FIT).flatten();
-    let fit = fit_t.as_ref().map(|t| read(cx, t, FIT_KEYS));
-    let robot_t = cx.maybe_table(avoid, &ROBOT).flatten();
-    let robot = robot_t.as_ref().map(|t| read(cx, t, ROBOT_KEYS));
-    if let Some(Some(t)) = cx.maybe_table(avoid, &DEPTH_CAMERA) {
-        read(cx, &t, DEPTH_CAMERA_KEYS);
-    }
-    let op_t = cx.maybe_table(avoid, &OPERATOR).flatten();
-    let op = op_t.as_ref().map(|t| read(cx, t, OPERATOR_KEYS));
-    if let Some(t) = &op_t {
-        keyframes(cx, t);
-    }
-    if !cx.issues.is_empty() {
-        return;
-    }
-    // Cross-key checks: every value is in its range here.
-    let (Some(cam), Some(camera), Some(fit), Some(robot), Some(robot_t)) = (cam, camera, fit, robot, robot_t) else { return };
-    let c = |n| get(CAMERA_KEYS, &cam, n);
-    let (Some(w), Some(h), Some(px), Some(cam_h)) = (c("width_px"), c("height_px"), c("m_per_px"), c("camera_height_m")) else { return };
-    let pixels = w * h;
-    if w.max(h) * px > MAX_EXTENT_M {
-        cx.bad(&camera, M_PER_PX.name, format!(
-            "the image covers {} m x {} m on the plane (width_px x m_per_px); allowed at most {MAX_EXTENT_M} m across ({PLANE}), got m_per_px = {}",
-            approx(w * px), approx(h * px), num(px)
-        ));
-    }
-    // Every height below the camera.
-    let empty = Vec::new();
-    let op_vals = op.as_ref().unwrap_or(&empty);
-    let op_tab = op_t.as_ref().unwrap_or(avoid);
-    for (tab, keys, vals) in [(&robot_t, ROBOT_KEYS, &robot), (avoid, KEYS, &top), (op_tab, OPERATOR_KEYS, op_vals)] {
-        for (k, v) in keys.iter().zip(vals.iter()) {
-            // `vals` is empty when the table is absent (reported by the deserialiser).
-            if let (Some(v), Ty::Number(s)) = (v, k.ty) {
-                if s.source == HEIGHT && *v >= cam_h {
-                    cx.bad(tab, k.name, format!("must be below the camera (camera.camera_height_m = {} m): a height above the work plane, got {}", num(cam_h), num(*v)));
-                }
-            }
-        }
-    }
-    let (Some(dt), Some(max_time), Some(frame)) = (get(KEYS, &top, "dt_s"), get(KEYS, &top, "max_time_s"), get(KEYS, &top, "frame_period_s")) else { return };
-    if max_time / dt > MAX_STEPS {
-        cx.bad(avoid, DT.name, format!(
-            "max_time_s / dt_s = {} control steps; allowed at most {} (bounds the run time), got dt_s = {}",
-            approx(max_time / dt), num(MAX_STEPS), num(dt)
-        ));
-    }
-    let frames = (max_time / frame).ceil() + 1.0;
-    if frames * pixels > MAX_FRAME_PIXELS {
-        cx.bad(avoid, FRAME.name, format!(
-            "{} frames (max_time_s / frame_period_s) of {} px each: {} pixels rendered and fitted; allowed at most {} (bounds the run time: the shipped scene does 1.6e7), got frame_period_s = {}",
-            approx(frames), num(pixels), approx(frames * pixels), num(MAX_FRAME_PIXELS), num(frame)
-        ));
-    }
-    if let (Some(fit_t), Some(sf), Some(ef)) = (&fit_t, get(FIT_KEYS, &fit, "sigma_factor"), get(FIT_KEYS, &fit, "eval_sigma_factor")) {
-        sigma_within_window(cx, fit_t, sf, ef);
-    }
-    let r = |n| get(ROBOT_KEYS, &robot, n);
-    let (Some(step), Some(threshold)) = (r("calibration_step_m"), r("calibration_threshold_m")) else { return };
-    let dilate = r("calibration_dilate_m").unwrap_or(0.0);
-    if let Some(offset) = get(FIT_KEYS, &fit, "offset_m") {
-        if threshold <= offset {
-            cx.bad(&robot_t, THRESHOLD.name, format!(
-                "must be above fit.offset_m = {} m: the image is raised by it before the fit, so a lower cut marks the whole plane as robot; got {}",
-                num(offset), num(threshold)
-            ));
-        }
-    }
-    if dilate > step {
-        cx.bad(&robot_t, DILATE.name, format!(
-            "must be at most calibration_step_m = {} m: the nearest stored position is within d / sqrt 2 of the robot, so a larger growth only clears more of what is near it; got {}",
-            num(step), num(dilate)
-        ));
-    }
-    if step < px {
-        cx.bad(&robot_t, STEP.name, format!("must be at least one pixel (camera.m_per_px = {} m), got {}", num(px), num(step)));
-    }
-    if !cx.issues.is_empty() {
-        return;
-    }
-    // The zig-zag of `avoid::calib::zigzag` from d/2 to extent - d/2: this is the work of the
-    // calibration pass, which runs with robot.removal = "calibration" and with `--thesis`.
-    let count = |extent: f64| ((extent - step) / step).floor().max(0.0) + 1.0;
-    let positions = count(w * px) * count(h * px);
-    let why = "the calibration pass runs with robot.removal = \"calibration\" and with --thesis";
-    if positions * pixels > MAX_CALIBRATION_PIXELS {
-        cx.bad(&robot_t, STEP.name, format!(
-            "the calibration zig-zag has {} positions of {} px each ({} pixels rendered and fitted); allowed at most {} ({why}; the shipped scene does 1.9e7), got calibration_step_m = {}",
-            num(positions), num(pixels), approx(positions * pixels), num(MAX_CALIBRATION_PIXELS), num(step)
-        ));
-        return;
-    }
-    let rad = (dilate / px).round();
-    let disc = std::f64::consts::PI * rad * rad + 1.0;
-    if positions * pixels * disc > MAX_DILATION_WORK {
-        cx.bad(&robot_t, DILATE.name, format!(
-            "growing {} masks of {} px by {} px ({} m) is up to {} pixel writes; allowed at most {} ({why}; the shipped scene: 2.9e9), got calibration_dilate_m = {}",
-            num(positions), num(pixels), num(rad), num(dilate), approx(positions * pixels * disc), num(MAX_DILATION_WORK), num(dilate)
-        ));
-    }
-}
-
 /// Largest evaluation sigma the MCU accepts, in units of the spacing: the firmware visits the centres
 /// within 4 sigma' (`TRUNC_SIGMAS`) and holds at most `MAX_WINDOW` = 10 per axis, so
 /// `2 * 4 * sigma' / s + 2 <= 10` (`Grid::set_geometry`), i.e. sigma' <= s.
@@ -1060,29 +924,16 @@ fn sigma_within_window(cx: &mut Ctx, fit: &Tab, sigma_factor: f64, eval_factor: 
     }
 }
 
-/// `avoid.operator.keyframes`: each `{ t_s, hand_m }` in range.
-fn keyframes(cx: &mut Ctx, op: &Tab) {
-    let Some(item) = op.t.get("keyframes") else { return };
-    let path = op.key("keyframes");
-    let tables: Vec<&dyn toml_edit::TableLike> = if let Some(a) = item.as_array_of_tables() {
-        a.iter().map(|t| t as &dyn toml_edit::TableLike).collect()
-    } else if let Some(a) = item.as_value().and_then(Value::as_array) {
-        a.iter().filter_map(|v| v.as_inline_table().map(|t| t as &dyn toml_edit::TableLike)).collect()
-    } else {
-        return;
-    };
-    for (i, t) in tables.into_iter().enumerate() {
-        let line = t.iter().next().and_then(|(k, _)| t.get_key_value(k)).and_then(|(k, _)| k.span()).map(|s| super::check::line_at(cx.text, s.start));
-        let tab = Tab { path: format!("{path}[{i}]"), t, line: line.or(op.line) };
-        read(cx, &tab, KEYFRAME_KEYS);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     const SHIPPED: &str = include_str!("../../../scenes/avoid_thesis_reach.toml");
+
+    /// The scene's problems as `flinch avoid` prints them (`line N:` without a file name).
+    fn check(text: &str, file: &str) -> Result<(), String> {
+        parse(text, file).map(|_| ()).map_err(|e| if file.is_empty() { without_file(&e) } else { e.to_string() })
+    }
 
     fn refused(from: &str, to: &str) -> String {
         let mut text = SHIPPED.to_string();
