@@ -29,6 +29,7 @@
 //! | `[sensor]` | `sensor.rs` | `plant/sensor.rs` |
 //! | `[solver]` | `solver.rs` | `solver/` |
 //! | `[controller]` | `controller.rs` | `hil.rs` |
+//! | `[avoid]` (an avoidance scene, `flinch avoid`) | `avoid.rs` ([`avoid::parse`]) | `avoid/` |
 //!
 //! # Adding a decoupler
 //!
