@@ -571,9 +571,9 @@ fn obstacles_trap_and_wall() {
     }
     let text = std::fs::read_to_string(scene_path("avoid_u_trap.toml")).unwrap();
     let e = Avoid::parse(&text.replacen("kind = \"box\"", "kind = \"cone\"", 1)).unwrap_err();
-    assert!(e.contains("avoid.operator.obstacles[0].kind = \"cone\""), "{e}");
+    assert!(e.contains("avoid.operator.obstacles[0].kind: must be one of \"disc\" | \"box\", got \"cone\""), "{e}");
     let e = Avoid::parse(&text.replacen("size_m = [0.05, 0.45]", "size_m = [0.05, -1]", 1)).unwrap_err();
-    assert!(e.contains("avoid.operator.obstacles[0].size_m[1] = -1: must be > 0"), "{e}");
+    assert!(e.contains("avoid.operator.obstacles[0].size_m: y: allowed range (0, 10] m") && e.ends_with("got -1"), "{e}");
     let e = Avoid::parse(&text.replacen("height_m = 0.20", "height_m = 0.20\nradius = 1", 1)).unwrap_err();
     assert!(e.contains("radius"), "{e}");
 }

@@ -198,3 +198,59 @@ fn a_human_slower_than_iso_13855_or_a_reaction_shorter_than_a_step_is_refused() 
     // At the edges: accepted.
     with("dt_s = 0.02", "reaction_time_s = 0.02\nhuman_speed_mps = 1.6").unwrap();
 }
+
+/// One loader for impact and avoidance scenes (issue 18): the structure of an avoidance scene is
+/// checked by the same key tables as its numbers, so an unknown key, a wrong type and key frames
+/// out of order are refused as the impact loader refuses them, `file:line: key: what is allowed,
+/// got what`, every problem at once and in line order.
+#[test]
+fn structure_errors_name_file_line_key_and_what_is_allowed() {
+    // An unknown key, with the list of the allowed ones.
+    let e = load("k_rep = 0.6 ", "k_rep = 0.6\nk_repp = 0.6 ").unwrap_err();
+    assert!(e.starts_with("scene.toml:13: avoid.k_repp: unknown key; allowed keys: start_m, goal_m, speed_mps, k_rep, repulsion,"), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+    let e = load("noise_mm = 3.0", "noise_mm = 3.0\nnoise = 3.0").unwrap_err();
+    assert!(e.starts_with("scene.toml:31: avoid.camera.noise: unknown key; allowed keys: width_px, height_px, m_per_px, camera_height_m, noise_mm, null_fraction, seed"), "{e}");
+    let e = refused("{ t_s = 1.2, hand_m = [0.50, 0.42] }", "{ t_s = 1.2, hand = [0.50, 0.42] }", "avoid.operator.keyframes[1].hand");
+    assert!(e.contains("unknown key; allowed keys: t_s, hand_m"), "{e}");
+    // The top level holds only [avoid].
+    let e = load("[avoid]\n", "name = \"x\"\n[avoid]\n").unwrap_err();
+    assert!(e.starts_with("scene.toml:8: name: unknown key; an avoidance scene holds only the table [avoid]"), "{e}");
+    // Wrong types.
+    let e = refused("seed = 7", "seed = 7.5", "avoid.camera.seed");
+    assert!(e.contains("must be an integer >= 0, a whole number (write it without a decimal point), got 7.5"), "{e}");
+    let e = refused("seed = 7", "seed = -7", "avoid.camera.seed");
+    assert!(e.ends_with("must be an integer >= 0, got -7"), "{e}");
+    let e = refused("repulsion = \"vortex\"", "repulsion = 1", "avoid.repulsion");
+    assert!(e.contains("must be one of \"vortex\" | \"vortex_cw\" | \"vortex_ccw\" | \"gradient\", got integer"), "{e}");
+    let e = refused("speed_mps = 0.25 ", "speed_mps = \"fast\" ", "avoid.speed_mps");
+    assert!(e.contains("must be a number in (0, 3] m/s, got string"), "{e}");
+    let e = refused("grid = 15 ", "grid = 15.0 ", "avoid.fit.grid");
+    assert!(e.contains("write it without a decimal point"), "{e}");
+    let e = load("offset_m = 0.065 ", "offset_m = 0.065\nremove_plane = \"yes\" ").unwrap_err();
+    assert_eq!(e, "scene.toml:39: avoid.fit.remove_plane: must be true or false, got string");
+    let e = load("stall_move_m = 0.005", "stall_move_m = 0.005\nbaud = 9600.0").unwrap_err();
+    assert_eq!(e, "scene.toml:24: avoid.baud: must be a number in [300, 2e7] bit/s, a whole number (write it without a decimal point), got 9600.0");
+    const FRAMES: &str = "keyframes = [\n  { t_s = 0.0, hand_m = [0.48, 0.10] },\n  { t_s = 1.2, hand_m = [0.50, 0.42] },\n  { t_s = 5.0, hand_m = [0.53, 0.44] },\n]";
+    let e = load(FRAMES, "keyframes = 3").unwrap_err();
+    assert_eq!(e, "scene.toml:56: avoid.operator.keyframes: must be a list of at least one key frame { t_s, hand_m }, t_s increasing, got integer");
+    let e = load(FRAMES, "keyframes = [1, { t_s = 0.0, hand_m = [0.48, 0.10] }]").unwrap_err();
+    assert!(e.starts_with("scene.toml:56: avoid.operator.keyframes: must be a list of at least one key frame") && e.ends_with("got integer at position 1"), "{e}");
+    // Key frames out of order, each refusal at its own line.
+    let e = refused("{ t_s = 5.0, hand_m = [0.53, 0.44] }", "{ t_s = 1.0, hand_m = [0.53, 0.44] }", "avoid.operator.keyframes[2].t_s");
+    assert!(e.contains("must be after the key frame before it (avoid.operator.keyframes[1].t_s = 1.2 s): key frames' t_s must increase, got 1"), "{e}");
+    let e = load(FRAMES, "keyframes = []").unwrap_err();
+    assert_eq!(e, "scene.toml:56: avoid.operator.keyframes: must hold at least one key frame { t_s, hand_m }, got none");
+    // Everything at once, in line order: an unknown key, a wrong type, a range, an order.
+    let text = shipped()
+        .replacen("k_rep = 0.6 ", "k_repp = 0.6 ", 1)
+        .replacen("seed = 7", "seed = \"seven\"", 1)
+        .replacen("grid = 15 ", "grid = 40 ", 1)
+        .replacen("{ t_s = 5.0,", "{ t_s = 0.5,", 1);
+    let e = Avoid::parse(&text).unwrap_err();
+    let lines: Vec<&str> = e.lines().collect();
+    assert_eq!(lines.len(), 5, "{e}");
+    for (l, want) in lines.iter().zip(["line 8: avoid.k_rep: missing required key: a number in [0, 100] m/s", "line 12: avoid.k_repp: unknown key", "line 32: avoid.camera.seed: must be an integer >= 0, got string", "line 35: avoid.fit.grid: must be an integer in [1, 30], got 40", "line 59: avoid.operator.keyframes[2].t_s: must be after"]) {
+        assert!(l.starts_with(want), "{l}\n{e}");
+    }
+}

@@ -465,3 +465,36 @@ fn settling_corners_stay_within_the_estimated_steps() {
         .collect();
     assert!(bad.is_empty(), "{} corners over their estimate or failing:\n{}", bad.len(), bad.join("\n"));
 }
+
+/// Issue 18 follow-up: a 60 s `flinch hil --csv` wrote one row fewer than announced. The recorder
+/// summed the output interval (6e5 additions of 1e-4 s drift 1e-9 s past 60 s, so the row at the
+/// end was never due); rows are now due at `k dt`. The streamed hil run of the report, its rows
+/// counted as the CSV receives them, against the count `report::stream` announces; the last row is
+/// the end of the run.
+#[test]
+fn a_60_s_hil_run_writes_every_row_it_announces() {
+    use flinch_harness::hil::{self, HilOptions};
+    use flinch_harness::scene::Controller;
+    assert_eq!(sim::recorded_rows(60.0, 1e-4), 600_001);
+    assert_eq!(sim::recorded_rows(0.8, 3e-4), 2_667, "0.8 s is not a multiple of 0.3 ms: rows at 0 .. 2666 x 0.3 ms");
+    assert_eq!(sim::recorded_rows(1.0, 0.1), 11);
+    let text = std::fs::read_to_string(flinch_tests::scene_path("table13_bistable_object_dt10.toml")).unwrap().replacen("duration = 0.8 ", "duration = 60.0", 1);
+    let sc = scene::parse(&text, "s60.toml").unwrap();
+    assert_eq!(sc.duration_s, 60.0);
+    let announced = flinch_harness::report::stream::expected_rows(&sc);
+    assert_eq!(announced, sim::recorded_rows(60.0, sc.solver.output_interval));
+    let (mut rows, mut last, mut monotone) = (0u64, f64::NAN, true);
+    let mut sink = |s: &sim::Sample, _: &hil::RowSignals<'_>| {
+        monotone &= !(s.t <= last);
+        rows += 1;
+        last = s.t;
+    };
+    hil::run_recording(&sc, &Controller::new(0.001, 0.0, 1e-4), &HilOptions::default(), hil::Record::Stream(&mut sink)).unwrap();
+    assert_eq!(rows, announced, "rows written vs announced");
+    assert_eq!(last, 60.0, "the last row is the end of the run");
+    assert!(monotone);
+    // The plain run records the same rows.
+    let (_, history) = sim::run(&scene::parse(&text.replacen("duration = 60.0", "duration = 6.0", 1), "s6.toml").unwrap(), true).unwrap();
+    assert_eq!(history.len() as u64, sim::recorded_rows(6.0, sc.solver.output_interval));
+    assert_eq!(history.last().unwrap().t, 6.0);
+}

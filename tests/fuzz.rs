@@ -1,4 +1,4 @@
-//! Issue 18 item 5: the loader fuzzed for a bounded time. Random mutations of the shipped scenes'
+//! Issue 18 item 5: the loader (impact and avoidance scenes, one machinery) fuzzed for a bounded time. Random mutations of the shipped scenes'
 //! TOML text (a number replaced by an edge value: 0, 1e-9, 1e9, 1e308, -1, nan, inf, 5e-324, the
 //! largest integer, a string; a line deleted or duplicated; garbage inserted) and random TOML made
 //! of the scene keys. For every case: the loader never panics; every scene it refuses is refused
@@ -9,7 +9,6 @@
 //! (default 60), and prints the number of cases run. By hand:
 //! `FLINCH_FUZZ_SECS=20 cargo test -p flinch-tests --test fuzz -- --ignored --nocapture`.
 use flinch_harness::avoid::path::{simulate, Engine, Setup};
-use flinch_harness::avoid::scene::Avoid;
 use flinch_harness::scene::{self, estimated_steps};
 use flinch_harness::sim;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -148,12 +147,14 @@ fn impact(t: &mut Tally, text: &str, path: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn avoid(t: &mut Tally, text: &str, thesis: bool) -> Result<(), String> {
-    let mut sc = match Avoid::parse(text) {
+fn avoid(t: &mut Tally, text: &str, path: &str, thesis: bool) -> Result<(), String> {
+    // The loader `flinch avoid` uses (`Avoid::load` reads the file, then this).
+    let mut sc = match scene::avoid::parse(text, path) {
         Ok(sc) => sc,
-        Err(_) => {
+        Err(e) => {
             t.refused += 1;
-            return Ok(());
+            let shown = e.to_string();
+            return if shown.lines().all(|l| l.starts_with(path)) { Ok(()) } else { Err(format!("a refusal without the file: {shown}")) };
         }
     };
     t.accepted += 1;
@@ -195,7 +196,7 @@ fn fuzz_the_loaders() {
         let thesis = rng.below(4) == 0;
         let r = catch_unwind(AssertUnwindSafe(|| {
             let mut t = Tally::default();
-            let r = if is_avoid { avoid(&mut t, &case, thesis) } else { impact(&mut t, &case, &path) };
+            let r = if is_avoid { avoid(&mut t, &case, &path, thesis) } else { impact(&mut t, &case, &path) };
             (t, r)
         }));
         match r {

@@ -2,29 +2,15 @@
 //! when standard output cannot be written, a FIFO or directory refused as a scene, shipped scenes
 //! from any directory, bounded memory on long runs, a clean Ctrl-C, and `--measured`.
 
+mod common;
 use std::io::Read;
+use common::{flinch, peak_rss_kb, repo, text};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn flinch() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_flinch"));
-    c.current_dir(repo());
-    c
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("flinch-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(o: &[u8]) -> String {
-    String::from_utf8_lossy(o).into_owned()
+    common::tmp_in("cli", name)
 }
 
 fn no_panic(o: &Output) {
@@ -169,32 +155,6 @@ fn shipped_scenes_run_from_any_directory() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// Largest resident set of a child while it runs, kB (polled from /proc).
-fn peak_rss_kb(mut cmd: Command) -> (u64, Output) {
-    let child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
-    let pid = child.id();
-    let mut peak = 0;
-    let start = Instant::now();
-    let child = std::sync::Arc::new(std::sync::Mutex::new(Some(child)));
-    loop {
-        if let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
-            if let Some(kb) = s.lines().find_map(|l| l.strip_prefix("VmHWM:")).and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok()) {
-                peak = peak.max(kb);
-            }
-        }
-        let mut g = child.lock().unwrap();
-        if let Some(c) = g.as_mut() {
-            if c.try_wait().unwrap().is_some() {
-                let o = g.take().unwrap().wait_with_output().unwrap();
-                return (peak, o);
-            }
-        }
-        assert!(start.elapsed() < Duration::from_secs(120), "too slow");
-        drop(g);
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
 #[test]
 fn a_long_run_streams_its_csv_and_decimates_its_plot_in_bounded_memory() {
     let d = tmp("long");
@@ -202,7 +162,7 @@ fn a_long_run_streams_its_csv_and_decimates_its_plot_in_bounded_memory() {
     let scene = long_scene(&d, 20.0, 1e-5);
     let mut c = flinch();
     c.args(["run"]).arg(&scene).args(["--csv"]).arg(d.join("h.csv")).args(["--plot"]).arg(d.join("h.png"));
-    let (kb, o) = peak_rss_kb(c);
+    let (kb, o) = peak_rss_kb(c, Duration::from_secs(120));
     assert!(o.status.success(), "{}", text(&o.stderr));
     let rows = std::io::BufRead::lines(std::io::BufReader::new(std::fs::File::open(d.join("h.csv")).unwrap())).count();
     assert_eq!(rows, 2_000_002, "header and every row");

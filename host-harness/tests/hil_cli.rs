@@ -2,29 +2,15 @@
 //! on Ctrl-C with the file flagged partial; `[controller]` values are refused with file, line and
 //! key; a module hil cannot run is refused (exit 2) for its real reason.
 
+mod common;
 use std::io::Read;
+use common::{flinch, peak_rss_kb, repo, text};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn flinch() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_flinch"));
-    c.current_dir(repo());
-    c
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("flinch-hil-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(o: &[u8]) -> String {
-    String::from_utf8_lossy(o).into_owned()
+    common::tmp_in("hil-cli", name)
 }
 
 /// Tables 5-7 with `extra` appended and `duration` replaced, written to `dir`.
@@ -36,31 +22,6 @@ fn scene(dir: &Path, duration: f64, extra: &str) -> PathBuf {
     p
 }
 
-fn peak_rss_kb(mut cmd: Command) -> (u64, Output) {
-    let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
-    let pid = child.id();
-    let mut peak = 0;
-    let start = Instant::now();
-    let mut err = child.stderr.take().unwrap();
-    let reader = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        err.read_to_end(&mut s).unwrap();
-        s
-    });
-    loop {
-        if let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
-            if let Some(kb) = s.lines().find_map(|l| l.strip_prefix("VmHWM:")).and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok()) {
-                peak = peak.max(kb);
-            }
-        }
-        if let Some(status) = child.try_wait().unwrap() {
-            return (peak, Output { status, stdout: Vec::new(), stderr: reader.join().unwrap() });
-        }
-        assert!(start.elapsed() < Duration::from_secs(300), "too slow");
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
 #[test]
 fn a_long_hil_run_streams_its_csv_and_decimates_its_plot_in_bounded_memory() {
     let d = tmp("long");
@@ -69,7 +30,7 @@ fn a_long_hil_run_streams_its_csv_and_decimates_its_plot_in_bounded_memory() {
     let sc = scene(&d, 20.0, "[solver]\noutput_interval = 1e-5\n");
     let mut c = flinch();
     c.args(["hil"]).arg(&sc).args(["--scan-cycle", "0.016", "--csv"]).arg(d.join("h.csv")).args(["--plot"]).arg(d.join("h.png"));
-    let (kb, o) = peak_rss_kb(c);
+    let (kb, o) = peak_rss_kb(c, Duration::from_secs(300));
     assert!(o.status.success(), "{}", text(&o.stderr));
     let err = text(&o.stderr);
     assert!(err.contains("will receive about 2000001 rows"), "says up front what it will write: {err}");

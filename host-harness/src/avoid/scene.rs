@@ -1,13 +1,13 @@
-//! The avoidance scene file (TOML, table `[avoid]`): documented key by key in `docs/avoidance.md`.
+//! The avoidance scene (TOML, table `[avoid]`): documented key by key in `docs/avoidance.md`; read
+//! and checked by the scene loader's tables (`scene/avoid.rs`: keys, units, ranges with their
+//! sources, defaults), which build these structs.
 
-use serde::Deserialize;
 use std::path::Path;
 
 use super::depth::{Camera, OperatorShape, RobotShape};
 
 /// `[avoid]`: the task, the potential field and the simulation.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct Avoid {
     /// Start of the tool, m.
     pub start_m: [f64; 2],
@@ -18,7 +18,6 @@ pub struct Avoid {
     /// `k_r` of eq 75/76, m/s per unit gradient.
     pub k_rep: f64,
     /// `"vortex"` (eq 76, sign from the motion), `"vortex_cw"`, `"vortex_ccw"` or `"gradient"` (eq 75).
-    #[serde(default = "default_repulsion")]
     pub repulsion: String,
     /// Control period `dt` of eq 79, s.
     pub dt_s: f64,
@@ -31,43 +30,34 @@ pub struct Avoid {
     /// Attraction falls off linearly inside this radius, m.
     pub capture_radius_m: f64,
     /// Vortex sign latched while `f*` is above this, m.
-    #[serde(default = "default_latch")]
     pub latch_height_m: f64,
     /// Speed scaling starts at this height of `f*`, m.
     pub slow_height_m: f64,
     /// Speed is zero at this height of `f*`, m.
     pub stop_height_m: f64,
     /// A stall: the tool moved less than `stall_move_m` in `stall_window_s` away from the goal.
-    #[serde(default = "default_stall_window")]
     pub stall_window_s: f64,
     /// See `stall_window_s`, m.
-    #[serde(default = "default_stall_move")]
     pub stall_move_m: f64,
     /// Progress monitor: the tool must get `progress_m` closer to the goal than it has ever been
     /// within every `progress_window_s` (time in a protective stop not counted), or the run stops with
     /// `stalled` (it barely moved) or `no_path` (it moved without approaching: orbiting, climbing), s.
-    #[serde(default = "default_progress_window")]
     pub progress_window_s: f64,
     /// See `progress_window_s`, m.
-    #[serde(default = "default_progress")]
     pub progress_m: f64,
     /// Capture-to-command latency: a frame taken at `t` reaches the controller at `t + latency_s`
     /// (capture, fit and transmission; the thesis measured 81 ms), s.
-    #[serde(default = "default_latency")]
     pub latency_s: f64,
     /// The clearance asked for: the tool's surface (the wrist disc, `robot.wrist_radius_m` round the
     /// tool point) must stay at least this far from the operator; a run that comes closer is not
     /// `reached`. The monitor adds it to its protective separation, m.
-    #[serde(default = "default_clearance")]
     pub clearance_m: f64,
     /// The serial line's baud rate (8N1: 10 bits a byte), if modelled: each frame then reaches the
     /// controller `latency_s` plus its transmission time after capture, and a line too slow for one
     /// frame per `frame_period_s` is refused. Absent: the transmission is taken to be inside
     /// `latency_s` (the thesis's 81 ms is capture to command).
-    #[serde(default)]
     pub baud: Option<u32>,
     /// Speed and separation monitoring.
-    #[serde(default)]
     pub safety: SafetyCfg,
     /// The camera.
     pub camera: CameraCfg,
@@ -78,32 +68,12 @@ pub struct Avoid {
     /// The operator and its motion.
     pub operator: OperatorCfg,
     /// The pinhole camera of recorded frames (`flinch avoid --depth`), if any.
-    #[serde(default)]
     pub depth_camera: Option<super::camera::DepthCameraCfg>,
 }
 
-fn default_repulsion() -> String {
-    "vortex".into()
-}
-fn default_latch() -> f64 {
-    0.02
-}
-fn default_stall_window() -> f64 {
-    0.5
-}
-fn default_stall_move() -> f64 {
-    0.005
-}
-fn default_latency() -> f64 {
-    0.081
-}
-fn default_clearance() -> f64 {
-    0.02
-}
 
 /// `[avoid.safety]`: speed and separation monitoring (ISO/TS 15066, 5.5.4) after the field.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Debug)]
 pub struct SafetyCfg {
     /// `"ssm"` (default): the monitor limits every command; `"off"`: the thesis's law alone (eq 74-79,
     /// for comparison only).
@@ -127,20 +97,11 @@ pub struct SafetyCfg {
 }
 
 impl Default for SafetyCfg {
+    /// Every key at its default: the defaults of `scene::avoid::SAFETY_KEYS` (ISO 13855's finger,
+    /// d = 14 mm, for `sense_height_m`: every part of a body is thicker, so with pixels no larger
+    /// than 10 mm no intrusion distance is needed).
     fn default() -> Self {
-        SafetyCfg {
-            mode: "ssm".into(),
-            human_speed_mps: 1.6,
-            reaction_time_s: 0.02,
-            stopping_time_s: 0.1,
-            intrusion_m: 0.0,
-            sensor_uncertainty_m: 0.01,
-            robot_uncertainty_m: 0.005,
-            // ISO 13855's finger (d = 14 mm): every part of a body, a finger lying flat included, is
-            // thicker, so with pixels no larger than 10 mm no intrusion distance is needed. With the
-            // synthetic camera's 3 mm noise it is 4.7 standard deviations above the plane.
-            sense_height_m: 0.014,
-        }
+        crate::scene::avoid::default_safety()
     }
 }
 
@@ -180,16 +141,9 @@ impl SafetyCfg {
     }
 }
 
-fn default_progress_window() -> f64 {
-    2.0
-}
-fn default_progress() -> f64 {
-    0.02
-}
 
 /// `[avoid.camera]`.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct CameraCfg {
     /// Image columns.
     pub width_px: usize,
@@ -208,8 +162,7 @@ pub struct CameraCfg {
 }
 
 /// `[avoid.fit]`.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct FitCfg {
     /// Centres across the width (15 or 30 in the thesis).
     pub grid: usize,
@@ -221,17 +174,12 @@ pub struct FitCfg {
     pub offset_m: f64,
     /// Subtract the raised empty plane's own weights before eq 71 (default true): without it the
     /// plane's larger border weights survive the threshold as walls up to ~0.1 m high.
-    #[serde(default = "yes")]
     pub remove_plane: bool,
 }
 
-fn yes() -> bool {
-    true
-}
 
 /// `[avoid.robot]`.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct RobotCfg {
     /// Base position, m.
     pub base_m: [f64; 2],
@@ -248,28 +196,18 @@ pub struct RobotCfg {
     /// Cut height of the interpolated robot (Fig. 85), m.
     pub calibration_threshold_m: f64,
     /// Growth of each mask, m (0 = the thesis's plain cut).
-    #[serde(default)]
     pub calibration_dilate_m: f64,
     /// `"model"` (default): clear only the pixels the robot's own height model explains;
     /// `"calibration"`: the thesis's masks (5.2.1), which also clear whatever is near the robot.
-    #[serde(default = "default_removal")]
     pub removal: String,
     /// With `removal = "model"`: a pixel on the robot is cleared when it is no higher than the
     /// robot there plus this, m.
-    #[serde(default = "default_removal_margin")]
     pub removal_margin_m: f64,
 }
 
-fn default_removal() -> String {
-    "model".into()
-}
-fn default_removal_margin() -> f64 {
-    0.02
-}
 
 /// `[avoid.operator]`.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct OperatorCfg {
     /// Where the forearm enters the image, m.
     pub entry_m: [f64; 2],
@@ -286,13 +224,11 @@ pub struct OperatorCfg {
     /// Further obstacles, `[[avoid.operator.obstacles]]`: `kind = "disc"` (`radius_m`) or
     /// `"box"` (`size_m`), `height_m`, and `center_m` (standing) or `keyframes = [{ t_s, x_m, y_m
     /// }, ...]` (moving).
-    #[serde(default)]
     pub obstacles: Vec<super::depth::Obstacle>,
 }
 
 /// One key frame of the hand.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct Keyframe {
     /// Time, s.
     pub t_s: f64,
@@ -300,183 +236,18 @@ pub struct Keyframe {
     pub hand_m: [f64; 2],
 }
 
-/// Prefix `err` (which starts with `avoid.[table.]key`) with `line N: ` where that key is written.
-fn locate(text: &str, err: String) -> String {
-    let Some(path) = err.strip_prefix("avoid.").and_then(|r| r.split([' ', ':', '/']).next()) else { return err };
-    if let Some(n) = obstacle_line(text, path) {
-        return format!("line {}: {err}", n + 1);
-    }
-    let key = path.rsplit('.').next().unwrap_or(path);
-    let found = text.lines().position(|l| {
-        let t = l.trim_start();
-        t.strip_prefix(key).is_some_and(|r| r.trim_start().starts_with('='))
-    });
-    match found {
-        Some(n) => format!("line {}: {err}", n + 1),
-        None => err,
-    }
-}
-
-/// The line (from 0) of `operator.obstacles[k].key` or `operator.obstacles[k].keyframes[j].key`:
-/// in the k-th `[[avoid.operator.obstacles]]` table, the key's line or the j-th key frame's.
-fn obstacle_line(text: &str, path: &str) -> Option<usize> {
-    let rest = path.strip_prefix("operator.obstacles[")?;
-    let (k, rest) = rest.split_once(']')?;
-    let k: usize = k.parse().ok()?;
-    let lines: Vec<&str> = text.lines().collect();
-    let start = lines.iter().enumerate().filter(|(_, l)| l.trim_start().starts_with("[[avoid.operator.obstacles]]")).nth(k)?.0;
-    let end = (start + 1..lines.len()).find(|&n| lines[n].trim_start().starts_with('[')).unwrap_or(lines.len());
-    if let Some(kf) = rest.strip_prefix(".keyframes[") {
-        let j: usize = kf.split_once(']')?.0.parse().ok()?;
-        return (start + 1..end).filter(|&n| lines[n].contains("t_s")).nth(j);
-    }
-    let key = rest.trim_start_matches('.').split(['.', '[']).next()?;
-    (start + 1..end).find(|&n| lines[n].trim_start().strip_prefix(key).is_some_and(|r| r.trim_start().starts_with('=')))
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct File {
-    avoid: Avoid,
-}
-
 impl Avoid {
-    /// Read and validate a scene: a file, `-`, or a shipped scene's name (`avoid_wall`); errors
-    /// name the file, the line (when the key is written in the file) and the key:
-    /// `file:line: avoid.key = value: what is allowed`.
+    /// Read and validate a scene: a file, `-`, or a shipped scene's name (`avoid_wall`); every
+    /// problem on its own line, `file:line: avoid.key: what is allowed, got value`.
     pub fn load(path: &Path) -> Result<Self, String> {
         let (file, text) = crate::shipped::read(path).map_err(|e| e.0)?;
-        crate::scene::avoid::check(&text, &file)?; // ranges: scene/avoid.rs
-        Self::parse(&text).map_err(|e| match e.strip_prefix("line ") {
-            Some(rest) => format!("{file}:{rest}"),
-            None => format!("{file}: {e}"),
-        })
+        crate::scene::avoid::parse(&text, &file).map_err(|e| e.to_string())
     }
 
-    /// Parse and validate scene text. A validation error starts with `line N: ` when the key it
-    /// names is written in the text.
+    /// Parse and validate scene text: every problem on its own line, `line N: avoid.key: what is
+    /// allowed, got value`.
     pub fn parse(text: &str) -> Result<Self, String> {
-        crate::scene::avoid::check(text, "")?; // every number's range and the work caps: scene/avoid.rs
-        let f: File = toml::from_str(text).map_err(|e| e.to_string().trim_end().to_string())?;
-        f.avoid.validate().map_err(|e| locate(text, e))?;
-        Ok(f.avoid)
-    }
-
-    fn validate(&self) -> Result<(), String> {
-        let pos = |k: &str, v: f64| if v > 0.0 && v.is_finite() { Ok(()) } else { Err(format!("avoid.{k} = {v}: must be > 0")) };
-        pos("speed_mps", self.speed_mps)?;
-        pos("dt_s", self.dt_s)?;
-        pos("frame_period_s", self.frame_period_s)?;
-        pos("max_time_s", self.max_time_s)?;
-        pos("goal_tolerance_m", self.goal_tolerance_m)?;
-        pos("capture_radius_m", self.capture_radius_m)?;
-        pos("stall_window_s", self.stall_window_s)?;
-        pos("progress_window_s", self.progress_window_s)?;
-        pos("progress_m", self.progress_m)?;
-        let range = |k: &str, v: f64, lo: f64, hi: f64| {
-            if v.is_finite() && (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err(format!("avoid.{k} = {v}: must be a number in [{lo}, {hi}]"))
-            }
-        };
-        range("latency_s", self.latency_s, 0.0, 10.0)?;
-        range("clearance_m", self.clearance_m, 0.0, 1.0)?;
-        if let Some(b) = self.baud {
-            if !(300..=20_000_000).contains(&b) {
-                return Err(format!("avoid.baud = {b}: must be 300..=20000000"));
-            }
-        }
-        if !matches!(self.robot.removal.as_str(), "model" | "calibration") {
-            return Err(format!("avoid.robot.removal = {:?}: expected \"model\" or \"calibration\"", self.robot.removal));
-        }
-        range("robot.removal_margin_m", self.robot.removal_margin_m, 0.0, 1.0)?;
-        let sf = &self.safety;
-        if !matches!(sf.mode.as_str(), "ssm" | "off") {
-            return Err(format!("avoid.safety.mode = {:?}: expected \"ssm\" or \"off\"", sf.mode));
-        }
-        range("safety.human_speed_mps", sf.human_speed_mps, 0.0, 10.0)?;
-        range("safety.reaction_time_s", sf.reaction_time_s, 0.0, 10.0)?;
-        range("safety.stopping_time_s", sf.stopping_time_s, 0.0, 10.0)?;
-        range("safety.intrusion_m", sf.intrusion_m, 0.0, 1.0)?;
-        range("safety.sensor_uncertainty_m", sf.sensor_uncertainty_m, 0.0, 1.0)?;
-        range("safety.robot_uncertainty_m", sf.robot_uncertainty_m, 0.0, 1.0)?;
-        range("safety.sense_height_m", sf.sense_height_m, 0.001, 1.0)?;
-        if self.progress_window_s > self.max_time_s.max(1.0) * 100.0 {
-            return Err(format!("avoid.progress_window_s = {}: must be at most 100 x max_time_s", self.progress_window_s));
-        }
-        pos("camera.m_per_px", self.camera.m_per_px)?;
-        pos("camera.camera_height_m", self.camera.camera_height_m)?;
-        pos("fit.sigma_factor", self.fit.sigma_factor)?;
-        pos("fit.eval_sigma_factor", self.fit.eval_sigma_factor)?;
-        pos("robot.calibration_step_m", self.robot.calibration_step_m)?;
-        if self.k_rep < 0.0 {
-            return Err(format!("avoid.k_rep = {}: must be >= 0", self.k_rep));
-        }
-        if self.stop_height_m <= self.slow_height_m {
-            return Err(format!(
-                "avoid.stop_height_m = {} must be above avoid.slow_height_m = {}",
-                self.stop_height_m, self.slow_height_m
-            ));
-        }
-        if self.max_time_s / self.dt_s > 1e6 {
-            return Err("avoid.max_time_s / avoid.dt_s: more than 1e6 steps".into());
-        }
-        if !(1..=30).contains(&self.fit.grid) {
-            return Err(format!("avoid.fit.grid = {}: must be 1..=30", self.fit.grid));
-        }
-        if !(8..=2000).contains(&self.camera.width_px) || !(8..=2000).contains(&self.camera.height_px) {
-            return Err("avoid.camera.width_px / height_px: must be 8..=2000".into());
-        }
-        if !(0.0..1.0).contains(&self.camera.null_fraction) {
-            return Err(format!("avoid.camera.null_fraction = {}: must be in [0, 1)", self.camera.null_fraction));
-        }
-        let (w, h) = self.extent_m();
-        for (k, p) in [("start_m", self.start_m), ("goal_m", self.goal_m)] {
-            if !(0.0..=w).contains(&p[0]) || !(0.0..=h).contains(&p[1]) {
-                return Err(format!("avoid.{k} = {p:?}: outside the image (0..{w} x 0..{h} m)"));
-            }
-        }
-        self.repulsion_law()?;
-        if self.operator.keyframes.is_empty() {
-            return Err("avoid.operator.keyframes: at least one key frame".into());
-        }
-        for (k, o) in self.operator.obstacles.iter().enumerate() {
-            let key = format!("operator.obstacles[{k}]");
-            match o.kind.as_str() {
-                "disc" => pos(&format!("{key}.radius_m"), o.radius_m)?,
-                "box" => {
-                    pos(&format!("{key}.size_m[0]"), o.size_m[0])?;
-                    pos(&format!("{key}.size_m[1]"), o.size_m[1])?;
-                }
-                other => return Err(format!("avoid.{key}.kind = {other:?}: expected \"disc\" or \"box\"")),
-            }
-            range(&format!("{key}.height_m"), o.height_m, 0.001, 2.0)?;
-            let written = !o.center_m.iter().all(|v| v.is_nan());
-            if o.keyframes.is_empty() {
-                if !o.center_m.iter().all(|v| v.is_finite()) {
-                    return Err(format!("avoid.{key}.center_m = {:?}: must be finite (a standing obstacle needs center_m, a moving one keyframes)", o.center_m));
-                }
-                if !(0.0..=w).contains(&o.center_m[0]) || !(0.0..=h).contains(&o.center_m[1]) {
-                    return Err(format!("avoid.{key}.center_m = {:?}: outside the image (0..{w} x 0..{h} m)", o.center_m));
-                }
-            } else if written {
-                return Err(format!("avoid.{key}.center_m = {:?}: give center_m (standing) or keyframes (moving), not both", o.center_m));
-            }
-            for (j, f) in o.keyframes.iter().enumerate() {
-                let fk = format!("{key}.keyframes[{j}]");
-                range(&format!("{fk}.t_s"), f.t_s, 0.0, 600.0)?;
-                range(&format!("{fk}.x_m"), f.x_m, 0.0, w)?;
-                range(&format!("{fk}.y_m"), f.y_m, 0.0, h)?;
-            }
-            if let Some(j) = o.keyframes.windows(2).position(|k| k[1].t_s <= k[0].t_s) {
-                return Err(format!("avoid.{key}.keyframes[{}].t_s = {}: t_s must increase (the key frame before is at {} s)", j + 1, o.keyframes[j + 1].t_s, o.keyframes[j].t_s));
-            }
-        }
-        if self.operator.keyframes.windows(2).any(|k| k[1].t_s <= k[0].t_s) {
-            return Err("avoid.operator.keyframes: t_s must increase".into());
-        }
-        Ok(())
+        crate::scene::avoid::parse(text, "").map_err(|e| crate::scene::avoid::without_file(&e))
     }
 
     /// Everything as the thesis wrote it, for comparison: no monitor, calibration masks, no plane
@@ -640,15 +411,15 @@ mod tests {
         assert_eq!(s.operator_shape_at(0.0).height_at(s.hand_at(0.0), p), 0.0);
         let bad = |from: &str, to: &str| Avoid::parse(&MOVING.replacen(from, to, 1)).unwrap_err();
         let e = bad("{ t_s = 6.0, x_m = 1.05", "{ t_s = 0.0, x_m = 1.05");
-        assert!(e.contains("avoid.operator.obstacles[0].keyframes[1].t_s = 0: t_s must increase"), "{e}");
+        assert!(e.contains("avoid.operator.obstacles[0].keyframes[1].t_s: must be after the key frame before it (avoid.operator.obstacles[0].keyframes[0].t_s = 0 s): key frames' t_s must increase, got 0"), "{e}");
         assert!(e.starts_with("line 63: "), "the key frame's line: {e}");
         let e = bad("x_m = 1.40", "x_m = 3.0");
         assert!(e.starts_with("line 64: "), "{e}");
-        assert!(e.contains("avoid.operator.obstacles[0].keyframes[2].x_m = 3: must be a number in [0, 2.1"), "{e}");
+        assert!(e.contains("avoid.operator.obstacles[0].keyframes[2].x_m: must be inside the image, [0, 2.1] m, got 3"), "{e}");
         let e = bad("y_m = 1.90", "y_m = nan");
-        assert!(e.contains("avoid.operator.obstacles[0].keyframes[0].y_m = NaN"), "{e}");
+        assert!(e.starts_with("line 62: avoid.operator.obstacles[0].keyframes[0].y_m: must be a finite number; allowed range [-10, 10] m") && e.ends_with("got NaN"), "{e}");
         let e = bad("radius_m = 0.10", "radius_m = 0.10\ncenter_m = [1.0, 1.0]");
-        assert!(e.contains("avoid.operator.obstacles[0].center_m = [1.0, 1.0]: give center_m (standing) or keyframes (moving), not both"), "{e}");
+        assert!(e.contains("avoid.operator.obstacles[0].center_m: give center_m (standing) or keyframes (moving), not both"), "{e}");
     }
 
     const MOVING: &str = include_str!("../../../scenes/avoid_moving_disc_wide.toml");

@@ -147,10 +147,14 @@ pub struct Streamed {
     pub resampled: Option<Resampler>,
 }
 
-/// Rows a run of `scene` records: one per output interval (a step's end each when it is 0).
+/// Rows a run of `scene` records: one per output interval, both ends included (exact:
+/// `sim::recorded_rows`); an estimate of a step's end each when it is 0.
 pub fn expected_rows(scene: &Scene) -> u64 {
     let dt = scene.solver.output_interval;
-    let n = if dt > 0.0 { scene.duration_s / dt } else { scene.duration_s / scene.solver.max_step.max(1e-9) * 4.0 };
+    if dt > 0.0 {
+        return crate::sim::recorded_rows(scene.duration_s, dt);
+    }
+    let n = scene.duration_s / scene.solver.max_step.max(1e-9) * 4.0;
     if n.is_finite() { n.ceil().min(1e18) as u64 + 1 } else { u64::MAX }
 }
 

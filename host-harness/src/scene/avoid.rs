@@ -1,14 +1,15 @@
-//! The numbers of an avoidance scene (`[avoid]`, thesis Ch. 5, docs/avoidance.md): every numeric
-//! key's physical range with its source, fixed-length points, and the caps on the work a scene can
-//! ask for (image size, calibration grid, mask growth, frames), checked with the impact loader's
-//! machinery before `avoid::scene` deserialises the file: `file:line: key: allowed range (source),
-//! got value`, every problem at once.
-//!
-//! `avoid::scene` (serde) still owns the structure (unknown keys, strings, booleans, the seed) and
-//! the checks that need the whole scene (a start inside the image, increasing key frames). A key this
-//! table does not list is left to it.
-use super::check::{approx, num, Bound::*, Ctx, Key, SceneError, SceneIssue, Tab, Ty};
-use toml_edit::{ImDocument, Value};
+//! The avoidance scene (`[avoid]`, thesis Ch. 5, docs/avoidance.md), read by the impact scenes'
+//! loader machinery (`check.rs`): every key declared once in a [`Key`] table (type, unit, physical
+//! range with its source, default, doc line), unknown keys refused with the list of the allowed
+//! ones, wrong types, ranges, fixed-length points, increasing key frames, and the caps on the work
+//! a scene can ask for (image size, calibration grid, mask growth, frames). Every problem at once,
+//! each as `file:line: key: message`. [`parse`] builds `avoid::scene::Avoid`; nothing else parses
+//! an avoidance scene file.
+use super::check::{approx, line_at, num, Bound::*, Ctx, Key, Need, SceneError, SceneIssue, Tab, Ty};
+use crate::avoid::camera::DepthCameraCfg;
+use crate::avoid::depth::{Obstacle, ObstacleKeyframe};
+use crate::avoid::scene::{Avoid, CameraCfg, FitCfg, Keyframe, OperatorCfg, RobotCfg, SafetyCfg};
+use toml_edit::{TableLike, Value};
 
 /// Where points may lie: the plane one camera sees.
 const PLANE: &str = "a point on the work plane one ceiling camera sees, at most 10 m across (the thesis's plane: 1.05 m)";
@@ -30,7 +31,7 @@ const fn part(name: &'static str, doc: &'static str) -> Key {
 }
 
 /// Keys holding `[x, y]` (two numbers, each in the key's range), not one number.
-pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m", "position_m"];
+pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m", "position_m", "center_m", "size_m"];
 
 const START: Key = point("start_m", "[x, y] start of the tool");
 const GOAL: Key = point("goal_m", "[x, y] goal of the tool");
@@ -156,11 +157,31 @@ pub const DEPTH_CAMERA_KEYS: &[Key] = &[
 
 /// `[avoid]`'s numbers.
 pub const KEYS: &[Key] = &[
-    START, GOAL, SPEED, K_REP, DT, FRAME, MAX_TIME, GOAL_TOL, CAPTURE, LATCH, SLOW, STOP, STALL_WINDOW, STALL_MOVE, PROGRESS_WINDOW, PROGRESS, LATENCY, CLEARANCE, BAUD,
+    START, GOAL, SPEED, K_REP, REPULSION, DT, FRAME, MAX_TIME, GOAL_TOL, CAPTURE, LATCH, SLOW, STOP, STALL_WINDOW, STALL_MOVE, PROGRESS_WINDOW, PROGRESS, LATENCY, CLEARANCE, BAUD, SAFETY, CAMERA, FIT, ROBOT, OPERATOR, DEPTH_CAMERA,
 ];
 
-/// `[avoid.safety]` (ISO/TS 15066 5.5.4): the ranges the loader already enforced.
+/// The repulsion laws, as `avoid::scene::Avoid::repulsion_law` reads them.
+pub const REPULSIONS: &[&str] = &["vortex", "vortex_cw", "vortex_ccw", "gradient"];
+const REPULSION: Key = Key::of(
+    "repulsion",
+    Ty::Choice(REPULSIONS),
+    "eq 76's vortex (sign from the motion, or fixed clockwise / counter-clockwise), or eq 75's gradient",
+)
+.optional("\"vortex\"");
+
+/// The top level of an avoidance scene: only `[avoid]`.
+const AVOID: Key = Key::of("avoid", Ty::Table("the avoidance scene"), "[avoid]");
+
+const MODE: Key = Key::of(
+    "mode",
+    Ty::Choice(&["ssm", "off"]),
+    "\"ssm\": the monitor limits every command (ISO/TS 15066 5.5.4); \"off\": the thesis's law alone (eq 74-79), for comparison only",
+)
+.optional("\"ssm\"");
+
+/// `[avoid.safety]` (ISO/TS 15066 5.5.4), every key optional: `avoid::scene::SafetyCfg::default()`.
 pub const SAFETY_KEYS: &[Key] = &[
+    MODE,
     Key::number("human_speed_mps", "m/s", Incl(1.6), Incl(10.0), "v_h: ISO 13855:2010 6.2 and ISO/TS 15066 5.5.4.2.3: 1.6 m/s (walking, arm beyond 0.5 m) or 2.0 m/s (reach within 0.5 m); slower is not a person; 10 m/s bounds a swing", "v_h, the human's approach speed").default(1.6),
     Key::number("reaction_time_s", "s", Incl(0.0), Incl(10.0), "T_r: a control period plus the drive's delay, milliseconds; 10 s bounds it", "T_r").default(0.02),
     Key::number("stopping_time_s", "s", Incl(0.0), Incl(10.0), "T_s: a robot stops from cruise within a second; 10 s bounds it", "T_s").default(0.1),
@@ -189,7 +210,9 @@ const CAMERA_HEIGHT: Key = Key::number(
     "camera above the plane",
 );
 
-/// `[avoid.camera]`'s numbers (`seed` is any integer).
+const SEED: Key = Key::integer("seed", 0, u32::MAX, "any whole number >= 0 (up to 2^63 - 1): it only picks the noise", "RNG seed of the synthetic noise and null pixels");
+
+/// `[avoid.camera]`.
 pub const CAMERA_KEYS: &[Key] = &[
     WIDTH,
     HEIGHT_PX,
@@ -197,16 +220,20 @@ pub const CAMERA_KEYS: &[Key] = &[
     CAMERA_HEIGHT,
     Key::number("noise_mm", "mm", Incl(0.0), Incl(100.0), "depth noise of Kinect-class cameras: about 1 mm at 0.5 m to 40 mm at 4 m", "depth noise standard deviation"),
     Key::number("null_fraction", "", Incl(0.0), Incl(0.9), "a fraction of the pixels; a frame with more than 90 % null carries nothing", "fraction of null pixels"),
+    SEED,
 ];
 
 const OFFSET: Key = Key::number("offset_m", "m", Incl(0.0), Incl(0.5), "the thesis raises the image by about 0.065 m (5.2)", "raise before fitting");
 
-/// `[avoid.fit]`'s numbers.
+const REMOVE_PLANE: Key = Key::of("remove_plane", Ty::Bool, "subtract the raised empty plane's own weights before eq 71 (without it the plane's border weights survive the threshold as walls up to 0.1 m high)").optional("true");
+
+/// `[avoid.fit]`.
 pub const FIT_KEYS: &[Key] = &[
     Key::integer("grid", 1, 30, "the thesis's 15 x 15 and 30 x 30 grids; the firmware holds at most 30 per axis (MAX_AXIS)", "centres across the width"),
     Key::number("sigma_factor", "", Incl(0.1), Incl(10.0), "1 is eq 70 (sigma = spacing / 2); a tenth to ten times that", "fit sigma in units of eq 70"),
     Key::number("eval_sigma_factor", "", Incl(0.1), Incl(10.0), "Fig. 90 widens by 1.5; a tenth to ten times the fit's", "evaluation sigma in units of the fit sigma"),
     OFFSET,
+    REMOVE_PLANE,
 ];
 
 const STEP: Key = Key::number(
@@ -228,7 +255,14 @@ const DILATE: Key = Key::number(
 )
 .default(0.0);
 
-/// `[avoid.robot]`'s numbers.
+const REMOVAL: Key = Key::of(
+    "removal",
+    Ty::Choice(&["model", "calibration"]),
+    "\"model\": clear only the pixels the robot's own height model explains; \"calibration\": the thesis's masks (5.2.1), which also clear whatever is near the robot",
+)
+.optional("\"model\"");
+
+/// `[avoid.robot]`.
 pub const ROBOT_KEYS: &[Key] = &[
     point("base_m", "[x, y] robot base"),
     part("wrist_radius_m", "wrist/tool radius"),
@@ -238,16 +272,44 @@ pub const ROBOT_KEYS: &[Key] = &[
     STEP,
     THRESHOLD,
     DILATE,
+    REMOVAL,
     Key::number("removal_margin_m", "m", Incl(0.0), Incl(1.0), "a height margin over the robot's model, up to 1 m (default 2 cm)", "model removal margin").default(0.02),
 ];
 
-/// `[avoid.operator]`'s numbers.
+const HAND_KEYFRAMES: Key = Key::of("keyframes", Ty::Table("a list of at least one key frame { t_s, hand_m }, t_s increasing"), "hand position over time: linear between key frames, held after the last");
+const OBSTACLES: Key = Key::of("obstacles", Ty::Table("a list of [[avoid.operator.obstacles]] tables"), "further obstacles, standing or moving").optional("none");
+
+/// `[avoid.operator]`.
 pub const OPERATOR_KEYS: &[Key] = &[
     point("entry_m", "[x, y] where the forearm enters the image"),
     part("hand_radius_m", "hand radius"),
     height("hand_height_m", "hand top"),
     part("forearm_width_m", "forearm width"),
     height("forearm_height_m", "forearm top"),
+    HAND_KEYFRAMES,
+    OBSTACLES,
+];
+
+/// The footprints of `[[avoid.operator.obstacles]]`.
+pub const OBSTACLE_KINDS: &[&str] = &["disc", "box"];
+const OB_KIND: Key = Key::of("kind", Ty::Choice(OBSTACLE_KINDS), "footprint: a disc (radius_m) or an axis-aligned box (size_m)");
+const OB_CENTER: Key = point("center_m", "[x, y] centre of a standing obstacle, inside the image").optional("a moving obstacle: keyframes instead");
+const OB_KEYFRAMES: Key = Key::of("keyframes", Ty::Table("a list of key frames { t_s, x_m, y_m }, t_s increasing"), "centre over time: linear between key frames, held before the first and after the last").optional("a standing obstacle at center_m");
+const OB_HEIGHT: Key = Key::number("height_m", "m", Incl(0.001), Incl(2.0), "an obstacle's top above the plane, from a 1 mm plate to 2 m (a person standing)", "top above the plane");
+/// Sizes of obstacles.
+const OBSTACLE_SIZE: &str = "an obstacle on the plane one camera sees: at most 10 m across (shipped: 0.05-1.05 m)";
+const OB_RADIUS: Key = Key::number("radius_m", "m", Excl(0.0), Incl(10.0), OBSTACLE_SIZE, "disc radius");
+const OB_SIZE: Key = Key::number("size_m", "m", Excl(0.0), Incl(10.0), OBSTACLE_SIZE, "[x, y] box size along x and y");
+
+/// `[[avoid.operator.obstacles]]` with `kind = "disc"`.
+pub const DISC_KEYS: &[Key] = &[OB_KIND, OB_CENTER, OB_KEYFRAMES, OB_RADIUS, OB_HEIGHT];
+/// `[[avoid.operator.obstacles]]` with `kind = "box"`.
+pub const BOX_KEYS: &[Key] = &[OB_KIND, OB_CENTER, OB_KEYFRAMES, OB_SIZE, OB_HEIGHT];
+/// One key frame of a moving obstacle (each coordinate also inside the image).
+pub const OBSTACLE_KEYFRAME_KEYS: &[Key] = &[
+    Key::number("t_s", "s", Incl(0.0), Incl(600.0), "within max_time_s's bound", "time of the key frame"),
+    Key::number("x_m", "m", Incl(-10.0), Incl(10.0), PLANE, "centre along x, inside the image"),
+    Key::number("y_m", "m", Incl(-10.0), Incl(10.0), PLANE, "centre along y, inside the image"),
 ];
 
 /// One key frame of `avoid.operator.keyframes`.
@@ -271,39 +333,555 @@ pub const MAX_FRAME_PIXELS: f64 = 2e8;
 /// Most control steps of a run, max_time_s / dt_s (the loader's previous bound).
 pub const MAX_STEPS: f64 = 1e6;
 
-/// Checks every number of an avoidance scene; `file` names it in the messages (empty: `line N:`).
-/// A text that is not TOML or has no `[avoid]` table passes: the deserialiser reports it.
-pub fn check(text: &str, file: &str) -> Result<(), String> {
-    let Ok(doc) = ImDocument::parse(text) else { return Ok(()) };
+/// Reads and checks an avoidance scene given as text; `file` names it in the messages.
+pub fn parse(text: &str, file: &str) -> Result<Avoid, SceneError> {
+    let doc = super::check::parse_toml(text, file)?;
     let mut cx = Ctx { text, file, issues: Vec::new() };
     let root = Tab { path: String::new(), t: doc.as_table(), line: Some(1) };
-    const AVOID: Key = Key::of("avoid", Ty::Table("the avoidance scene"), "");
-    if let Some(Some(avoid)) = cx.maybe_table(&root, &AVOID) {
-        scene(&mut cx, &avoid);
+    // The top level holds only `[avoid]` (`check_keys` wants a listed table: this one is not
+    // listed, so that the impact scene's schema does not grow an `avoid` key).
+    for (key, _) in root.t.iter() {
+        if key != AVOID.name {
+            cx.bad(&root, key, "unknown key; an avoidance scene holds only the table [avoid] (allowed keys: avoid)".into());
+        }
     }
-    if cx.issues.is_empty() {
-        return Ok(());
-    }
-    cx.issues.sort_by_key(|i| i.line);
-    if file.is_empty() {
-        let line = |i: &SceneIssue| i.line.map_or(String::new(), |l| format!("line {l}: "));
-        Err(cx.issues.iter().map(|i| format!("{}{}: {}", line(i), i.key, i.message)).collect::<Vec<_>>().join("\n"))
-    } else {
-        Err(SceneError { file: file.to_string(), issues: cx.issues }.to_string())
+    let avoid = cx.table(&root, &AVOID).and_then(|t| read_avoid(&mut cx, &t));
+    match avoid {
+        Some(a) if cx.issues.is_empty() => Ok(a),
+        _ => {
+            debug_assert!(!cx.issues.is_empty(), "an avoidance scene failed without saying why");
+            cx.issues.sort_by_key(|i| i.line);
+            Err(SceneError { file: file.to_string(), issues: cx.issues })
+        }
     }
 }
 
-/// Reads every key of `keys` in `tab`: numbers, integers and points. `None` for a key absent or
-/// refused (reported).
-fn read(cx: &mut Ctx, tab: &Tab, keys: &[Key]) -> Vec<Option<f64>> {
-    keys.iter()
-        .map(|k| match k.ty {
-            Ty::Integer { .. } => cx.integer(tab, k).map(f64::from),
-            Ty::Number(_) if POINTS.contains(&k.name) => xy(cx, tab, k).map(|p| p[0]),
-            Ty::Number(_) => cx.number(tab, k),
-            _ => None,
-        })
-        .collect()
+/// The problems of `e` one a line as `line N: key: message`, for a text without a file name
+/// (`avoid::scene::Avoid::parse`).
+pub fn without_file(e: &SceneError) -> String {
+    let line = |i: &SceneIssue| i.line.map_or(String::new(), |l| format!("line {l}: "));
+    let key = |i: &SceneIssue| if i.key.is_empty() { String::new() } else { format!("{}: ", i.key) };
+    e.issues.iter().map(|i| format!("{}{}{}", line(i), key(i), i.message)).collect::<Vec<_>>().join("\n")
+}
+
+/// An optional choice key: the chosen name, `default` when absent, `None` (reported) when invalid.
+fn choice_or(cx: &mut Ctx, tab: &Tab, key: &Key, default: &'static str) -> Option<String> {
+    let Ty::Choice(options) = key.ty else { return None };
+    cx.maybe_choice(tab, key, options).map(|c| c.unwrap_or(default).to_string())
+}
+
+/// A whole number written without a decimal point: `Some(None)` when absent (and optional),
+/// `None` (reported) when missing, of another type, or out of the key's range.
+fn whole(cx: &mut Ctx, tab: &Tab, key: &Key) -> Option<Option<i64>> {
+    let what = key.what();
+    let Some(item) = tab.t.get(key.name) else {
+        if key.need == Need::Required {
+            cx.missing(tab, key.name, &what);
+            return None;
+        }
+        return Some(None);
+    };
+    let n = match item.as_value() {
+        Some(Value::Integer(i)) => *i.value(),
+        Some(Value::Float(f)) => {
+            cx.bad(tab, key.name, format!("must be {what}, a whole number (write it without a decimal point), got {:?}", f.value()));
+            return None;
+        }
+        _ => {
+            cx.bad(tab, key.name, format!("must be {what}, got {}", item.type_name()));
+            return None;
+        }
+    };
+    let ok = match key.ty {
+        Ty::Number(span) => span.contains(n as f64),
+        Ty::Integer { lo, .. } => n >= i64::from(lo),
+        _ => false,
+    };
+    if !ok {
+        let msg = match key.span() {
+            Some(span) => span.refuse(n as f64),
+            None => format!("must be {what}, got {n}"),
+        };
+        cx.bad(tab, key.name, msg);
+        return None;
+    }
+    Some(Some(n))
+}
+
+/// An integer key as a count.
+fn count(cx: &mut Ctx, tab: &Tab, key: &Key) -> Option<usize> {
+    cx.integer(tab, key).map(|n| n as usize)
+}
+
+/// The tables of a list key (`[[a.b]]` or `b = [{ ... }, ...]`), each with its path `a.b[i]` and
+/// line; empty when an optional key is absent, `None` (reported) when missing or not a list of
+/// tables.
+fn tables<'d>(cx: &mut Ctx, tab: &Tab<'d>, key: &Key) -> Option<Vec<Tab<'d>>> {
+    let Ty::Table(what) = key.ty else { return None };
+    let Some(item) = tab.t.get(key.name) else {
+        if key.need == Need::Required {
+            cx.missing(tab, key.name, what);
+            return None;
+        }
+        return Some(Vec::new());
+    };
+    let path = tab.key(key.name);
+    let line_of = |cx: &Ctx, t: &dyn TableLike, span: Option<std::ops::Range<usize>>| {
+        let first = t.iter().next().and_then(|(k, _)| t.get_key_value(k)).and_then(|(k, _)| k.span());
+        first.or(span).map(|s| line_at(cx.text, s.start))
+    };
+    let mut out = Vec::new();
+    if let Some(a) = item.as_array_of_tables() {
+        for (i, t) in a.iter().enumerate() {
+            let line = line_of(cx, t, t.span()).or(tab.line);
+            out.push(Tab { path: format!("{path}[{i}]"), t, line });
+        }
+        return Some(out);
+    }
+    let Some(a) = item.as_value().and_then(Value::as_array) else {
+        cx.bad(tab, key.name, format!("must be {what}, got {}", item.type_name()));
+        return None;
+    };
+    let mut ok = true;
+    for (i, v) in a.iter().enumerate() {
+        match v.as_inline_table() {
+            Some(t) => {
+                let line = line_of(cx, t, t.span()).or(tab.line);
+                out.push(Tab { path: format!("{path}[{i}]"), t, line });
+            }
+            None => {
+                cx.bad(tab, key.name, format!("must be {what}, got {} at position {}", v.type_name(), i + 1));
+                ok = false;
+            }
+        }
+    }
+    ok.then_some(out)
+}
+
+/// `[avoid]` and everything in it.
+fn read_avoid(cx: &mut Ctx, t: &Tab) -> Option<Avoid> {
+    cx.check_keys(t, KEYS, "");
+    let start_m = xy(cx, t, &START);
+    let goal_m = xy(cx, t, &GOAL);
+    let speed_mps = cx.number(t, &SPEED);
+    let k_rep = cx.number(t, &K_REP);
+    let repulsion = choice_or(cx, t, &REPULSION, REPULSIONS[0]);
+    let dt_s = cx.number(t, &DT);
+    let frame_period_s = cx.number(t, &FRAME);
+    let max_time_s = cx.number(t, &MAX_TIME);
+    let goal_tolerance_m = cx.number(t, &GOAL_TOL);
+    let capture_radius_m = cx.number(t, &CAPTURE);
+    let latch_height_m = cx.number(t, &LATCH);
+    let slow_height_m = cx.number(t, &SLOW);
+    let stop_height_m = cx.number(t, &STOP);
+    let stall_window_s = cx.number(t, &STALL_WINDOW);
+    let stall_move_m = cx.number(t, &STALL_MOVE);
+    let progress_window_s = cx.number(t, &PROGRESS_WINDOW);
+    let progress_m = cx.number(t, &PROGRESS);
+    let latency_s = cx.number(t, &LATENCY);
+    let clearance_m = cx.number(t, &CLEARANCE);
+    let baud = whole(cx, t, &BAUD).map(|b| b.map(|b| b as u32));
+    let safety = match cx.maybe_table(t, &SAFETY) {
+        Some(Some(s)) => safety(cx, &s),
+        Some(None) => Some(default_safety()),
+        None => None,
+    };
+    let camera_t = cx.table(t, &CAMERA);
+    let camera = camera_t.as_ref().and_then(|c| camera(cx, c));
+    let fit_t = cx.table(t, &FIT);
+    let fit = fit_t.as_ref().and_then(|f| fit(cx, f));
+    let robot_t = cx.table(t, &ROBOT);
+    let robot = robot_t.as_ref().and_then(|r| robot(cx, r));
+    let operator_t = cx.table(t, &OPERATOR);
+    let operator = operator_t.as_ref().and_then(|o| operator(cx, o));
+    let depth_camera = match cx.maybe_table(t, &DEPTH_CAMERA) {
+        Some(Some(d)) => depth_camera(cx, &d).map(Some),
+        Some(None) => Some(None),
+        None => None,
+    };
+    let scene = Avoid {
+        start_m: start_m?,
+        goal_m: goal_m?,
+        speed_mps: speed_mps?,
+        k_rep: k_rep?,
+        repulsion: repulsion?,
+        dt_s: dt_s?,
+        frame_period_s: frame_period_s?,
+        max_time_s: max_time_s?,
+        goal_tolerance_m: goal_tolerance_m?,
+        capture_radius_m: capture_radius_m?,
+        latch_height_m: latch_height_m?,
+        slow_height_m: slow_height_m?,
+        stop_height_m: stop_height_m?,
+        stall_window_s: stall_window_s?,
+        stall_move_m: stall_move_m?,
+        progress_window_s: progress_window_s?,
+        progress_m: progress_m?,
+        latency_s: latency_s?,
+        clearance_m: clearance_m?,
+        baud: baud?,
+        safety: safety?,
+        camera: camera?,
+        fit: fit?,
+        robot: robot?,
+        operator: operator?,
+        depth_camera: depth_camera?,
+    };
+    let tabs = Tabs { avoid: t, camera: camera_t.as_ref()?, fit: fit_t.as_ref()?, robot: robot_t.as_ref()?, operator: operator_t.as_ref()? };
+    if cx.issues.is_empty() {
+        cross_checks(cx, &scene, &tabs);
+    }
+    Some(scene)
+}
+
+/// `[avoid.safety]` with every key at its default (`SafetyCfg::default()`): the defaults of
+/// [`SAFETY_KEYS`], the one source.
+pub fn default_safety() -> SafetyCfg {
+    let empty = toml_edit::Table::new();
+    let mut cx = Ctx { text: "", file: "", issues: Vec::new() };
+    let t = Tab { path: "avoid.safety".into(), t: &empty, line: None };
+    let s = safety(&mut cx, &t);
+    debug_assert!(cx.issues.is_empty(), "{:?}", cx.issues);
+    s.expect("the defaults of SAFETY_KEYS are in their ranges")
+}
+
+fn safety(cx: &mut Ctx, t: &Tab) -> Option<SafetyCfg> {
+    cx.check_keys(t, SAFETY_KEYS, "");
+    let mode = choice_or(cx, t, &MODE, "ssm");
+    let v: Vec<Option<f64>> = SAFETY_KEYS[1..].iter().map(|k| cx.number(t, k)).collect();
+    let g = |name: &str| SAFETY_KEYS[1..].iter().position(|k| k.name == name).and_then(|i| v[i]);
+    Some(SafetyCfg {
+        mode: mode?,
+        human_speed_mps: g("human_speed_mps")?,
+        reaction_time_s: g("reaction_time_s")?,
+        stopping_time_s: g("stopping_time_s")?,
+        intrusion_m: g("intrusion_m")?,
+        sensor_uncertainty_m: g("sensor_uncertainty_m")?,
+        robot_uncertainty_m: g("robot_uncertainty_m")?,
+        sense_height_m: g("sense_height_m")?,
+    })
+}
+
+/// The value of the number key `name` of `keys` in `t` (its default when absent).
+fn number_of(cx: &mut Ctx, t: &Tab, keys: &[Key], name: &str) -> Option<f64> {
+    let key = keys.iter().find(|k| k.name == name)?;
+    cx.number(t, key)
+}
+
+fn camera(cx: &mut Ctx, t: &Tab) -> Option<CameraCfg> {
+    cx.check_keys(t, CAMERA_KEYS, "");
+    let width_px = count(cx, t, &WIDTH);
+    let height_px = count(cx, t, &HEIGHT_PX);
+    let m_per_px = cx.number(t, &M_PER_PX);
+    let camera_height_m = cx.number(t, &CAMERA_HEIGHT);
+    let noise_mm = number_of(cx, t, CAMERA_KEYS, "noise_mm");
+    let null_fraction = number_of(cx, t, CAMERA_KEYS, "null_fraction");
+    let seed = whole(cx, t, &SEED).flatten();
+    Some(CameraCfg {
+        width_px: width_px?,
+        height_px: height_px?,
+        m_per_px: m_per_px?,
+        camera_height_m: camera_height_m?,
+        noise_mm: noise_mm?,
+        null_fraction: null_fraction?,
+        seed: seed? as u64,
+    })
+}
+
+fn fit(cx: &mut Ctx, t: &Tab) -> Option<FitCfg> {
+    cx.check_keys(t, FIT_KEYS, "");
+    let grid = count(cx, t, &FIT_KEYS[0]);
+    let sigma_factor = number_of(cx, t, FIT_KEYS, "sigma_factor");
+    let eval_sigma_factor = number_of(cx, t, FIT_KEYS, "eval_sigma_factor");
+    let offset_m = cx.number(t, &OFFSET);
+    let remove_plane = cx.boolean(t, &REMOVE_PLANE);
+    Some(FitCfg {
+        grid: grid?,
+        sigma_factor: sigma_factor?,
+        eval_sigma_factor: eval_sigma_factor?,
+        offset_m: offset_m?,
+        remove_plane: remove_plane?.unwrap_or(true),
+    })
+}
+
+fn robot(cx: &mut Ctx, t: &Tab) -> Option<RobotCfg> {
+    cx.check_keys(t, ROBOT_KEYS, "");
+    let base_m = xy(cx, t, &ROBOT_KEYS[0]);
+    let wrist_radius_m = number_of(cx, t, ROBOT_KEYS, "wrist_radius_m");
+    let wrist_height_m = number_of(cx, t, ROBOT_KEYS, "wrist_height_m");
+    let link_width_m = number_of(cx, t, ROBOT_KEYS, "link_width_m");
+    let link_height_m = number_of(cx, t, ROBOT_KEYS, "link_height_m");
+    let calibration_step_m = cx.number(t, &STEP);
+    let calibration_threshold_m = cx.number(t, &THRESHOLD);
+    let calibration_dilate_m = cx.number(t, &DILATE);
+    let removal = choice_or(cx, t, &REMOVAL, "model");
+    let removal_margin_m = number_of(cx, t, ROBOT_KEYS, "removal_margin_m");
+    Some(RobotCfg {
+        base_m: base_m?,
+        wrist_radius_m: wrist_radius_m?,
+        wrist_height_m: wrist_height_m?,
+        link_width_m: link_width_m?,
+        link_height_m: link_height_m?,
+        calibration_step_m: calibration_step_m?,
+        calibration_threshold_m: calibration_threshold_m?,
+        calibration_dilate_m: calibration_dilate_m?,
+        removal: removal?,
+        removal_margin_m: removal_margin_m?,
+    })
+}
+
+fn operator(cx: &mut Ctx, t: &Tab) -> Option<OperatorCfg> {
+    cx.check_keys(t, OPERATOR_KEYS, "");
+    let entry_m = xy(cx, t, &OPERATOR_KEYS[0]);
+    let hand_radius_m = number_of(cx, t, OPERATOR_KEYS, "hand_radius_m");
+    let hand_height_m = number_of(cx, t, OPERATOR_KEYS, "hand_height_m");
+    let forearm_width_m = number_of(cx, t, OPERATOR_KEYS, "forearm_width_m");
+    let forearm_height_m = number_of(cx, t, OPERATOR_KEYS, "forearm_height_m");
+    let keyframes = tables(cx, t, &HAND_KEYFRAMES).and_then(|frames| {
+        if frames.is_empty() {
+            cx.bad(t, HAND_KEYFRAMES.name, "must hold at least one key frame { t_s, hand_m }, got none".into());
+            return None;
+        }
+        let read: Vec<Option<Keyframe>> = frames
+            .iter()
+            .map(|f| {
+                cx.check_keys(f, KEYFRAME_KEYS, "");
+                let t_s = cx.number(f, &KEYFRAME_KEYS[0]);
+                let hand_m = xy(cx, f, &KEYFRAME_KEYS[1]);
+                Some(Keyframe { t_s: t_s?, hand_m: hand_m? })
+            })
+            .collect();
+        let read: Vec<Keyframe> = read.into_iter().collect::<Option<_>>()?;
+        let times: Vec<f64> = read.iter().map(|k| k.t_s).collect();
+        increasing(cx, &frames, &times).then_some(read)
+    });
+    let obstacles = tables(cx, t, &OBSTACLES).and_then(|obs| obs.iter().map(|o| obstacle(cx, o)).collect::<Vec<_>>().into_iter().collect::<Option<Vec<_>>>());
+    Some(OperatorCfg {
+        entry_m: entry_m?,
+        hand_radius_m: hand_radius_m?,
+        hand_height_m: hand_height_m?,
+        forearm_width_m: forearm_width_m?,
+        forearm_height_m: forearm_height_m?,
+        keyframes: keyframes?,
+        obstacles: obstacles?,
+    })
+}
+
+/// Key frames' `t_s` must increase: each later one refused naming the one before.
+fn increasing(cx: &mut Ctx, frames: &[Tab], times: &[f64]) -> bool {
+    let mut ok = true;
+    for (i, w) in times.windows(2).enumerate() {
+        if w[1] <= w[0] {
+            cx.bad(&frames[i + 1], "t_s", format!("must be after the key frame before it ({}.t_s = {} s): key frames' t_s must increase, got {}", frames[i].path, num(w[0]), num(w[1])));
+            ok = false;
+        }
+    }
+    ok
+}
+
+/// One `[[avoid.operator.obstacles]]`: its kind's keys.
+fn obstacle(cx: &mut Ctx, t: &Tab) -> Option<Obstacle> {
+    let kind = cx.choice(t, &OB_KIND, OBSTACLE_KINDS)?;
+    let disc = kind == "disc";
+    let keys = if disc { DISC_KEYS } else { BOX_KEYS };
+    cx.check_keys(t, keys, &format!(" for kind = \"{kind}\""));
+    let center_m = if t.has(OB_CENTER.name) { xy(cx, t, &OB_CENTER).map(Some) } else { Some(None) };
+    let frames = tables(cx, t, &OB_KEYFRAMES);
+    let keyframes = frames.as_ref().and_then(|frames| {
+        let read: Vec<Option<ObstacleKeyframe>> = frames
+            .iter()
+            .map(|f| {
+                cx.check_keys(f, OBSTACLE_KEYFRAME_KEYS, "");
+                let v: Vec<Option<f64>> = OBSTACLE_KEYFRAME_KEYS.iter().map(|k| cx.number(f, k)).collect();
+                Some(ObstacleKeyframe { t_s: v[0]?, x_m: v[1]?, y_m: v[2]? })
+            })
+            .collect();
+        let read: Vec<ObstacleKeyframe> = read.into_iter().collect::<Option<_>>()?;
+        let times: Vec<f64> = read.iter().map(|k| k.t_s).collect();
+        increasing(cx, frames, &times).then_some(read)
+    });
+    let radius_m = if disc { cx.number(t, &OB_RADIUS) } else { Some(0.0) };
+    let size_m = if disc { Some([0.0; 2]) } else { xy(cx, t, &OB_SIZE) };
+    let height_m = cx.number(t, &OB_HEIGHT);
+    let (center_m, keyframes) = (center_m?, keyframes?);
+    match (center_m, keyframes.is_empty()) {
+        (None, true) => {
+            cx.bad(t, OB_KIND.name, "needs center_m (a standing obstacle) or keyframes (a moving one), got neither".into());
+            return None;
+        }
+        (Some(_), false) => {
+            cx.bad(t, OB_CENTER.name, "give center_m (standing) or keyframes (moving), not both".into());
+            return None;
+        }
+        _ => {}
+    }
+    Some(Obstacle {
+        kind: kind.to_string(),
+        center_m: center_m.unwrap_or([f64::NAN; 2]),
+        keyframes,
+        radius_m: radius_m?,
+        size_m: size_m?,
+        height_m: height_m?,
+    })
+}
+
+fn depth_camera(cx: &mut Ctx, t: &Tab) -> Option<DepthCameraCfg> {
+    cx.check_keys(t, DEPTH_CAMERA_KEYS, "");
+    let k = DEPTH_CAMERA_KEYS;
+    let v: Vec<Option<f64>> = k.iter().map(|key| if key.name == "position_m" { None } else { cx.number(t, key) }).collect();
+    let g = |name: &str| k.iter().position(|key| key.name == name).and_then(|i| v[i]);
+    let position_m = xy(cx, t, &k[5]);
+    Some(DepthCameraCfg {
+        fx_px: g("fx_px")?,
+        fy_px: g("fy_px")?,
+        cx_px: g("cx_px")?,
+        cy_px: g("cy_px")?,
+        depth_scale_m: g("depth_scale_m")?,
+        position_m: position_m?,
+        height_m: g("height_m")?,
+        roll_deg: g("roll_deg")?,
+        pitch_deg: g("pitch_deg")?,
+        yaw_deg: g("yaw_deg")?,
+    })
+}
+
+/// The tables cross-checks name.
+struct Tabs<'a, 'd> {
+    avoid: &'a Tab<'d>,
+    camera: &'a Tab<'d>,
+    fit: &'a Tab<'d>,
+    robot: &'a Tab<'d>,
+    operator: &'a Tab<'d>,
+}
+
+/// The checks that need several keys; every value is in its range here.
+fn tables_one<'d>(cx: &mut Ctx, tab: &Tab<'d>, key: &Key) -> Option<Tab<'d>> {
+    cx.maybe_table(tab, key).flatten()
+}
+
+fn cross_checks(cx: &mut Ctx, s: &Avoid, tabs: &Tabs) {
+    let (w, h, px, cam_h) = (s.camera.width_px as f64, s.camera.height_px as f64, s.camera.m_per_px, s.camera.camera_height_m);
+    let pixels = w * h;
+    if w.max(h) * px > MAX_EXTENT_M {
+        cx.bad(tabs.camera, M_PER_PX.name, format!(
+            "the image covers {} m x {} m on the plane (width_px x m_per_px); allowed at most {MAX_EXTENT_M} m across ({PLANE}), got m_per_px = {}",
+            approx(w * px), approx(h * px), num(px)
+        ));
+        return;
+    }
+    // Every height below the camera.
+    let r = &s.robot;
+    let o = &s.operator;
+    for (tab, key, v) in [
+        (tabs.avoid, &LATCH, s.latch_height_m),
+        (tabs.avoid, &SLOW, s.slow_height_m),
+        (tabs.avoid, &STOP, s.stop_height_m),
+        (tabs.robot, &ROBOT_KEYS[2], r.wrist_height_m),
+        (tabs.robot, &ROBOT_KEYS[4], r.link_height_m),
+        (tabs.robot, &THRESHOLD, r.calibration_threshold_m),
+        (tabs.operator, &OPERATOR_KEYS[2], o.hand_height_m),
+        (tabs.operator, &OPERATOR_KEYS[4], o.forearm_height_m),
+    ] {
+        debug_assert!(key.span().is_some_and(|sp| sp.source == HEIGHT), "{}", key.name);
+        if v >= cam_h {
+            cx.bad(tab, key.name, format!("must be below the camera (camera.camera_height_m = {} m): a height above the work plane, got {}", num(cam_h), num(v)));
+        }
+    }
+    if s.stop_height_m <= s.slow_height_m {
+        cx.bad(tabs.avoid, STOP.name, format!("must be above slow_height_m = {} m (the speed falls from 1 at slow_height_m to 0 at stop_height_m), got {}", num(s.slow_height_m), num(s.stop_height_m)));
+    }
+    // Start and goal inside the image.
+    let (ew, eh) = s.extent_m();
+    for (key, p) in [(&START, s.start_m), (&GOAL, s.goal_m)] {
+        if !(0.0..=ew).contains(&p[0]) || !(0.0..=eh).contains(&p[1]) {
+            cx.bad(tabs.avoid, key.name, format!("must be inside the image, [0, {}] x [0, {}] m (width_px x m_per_px, height_px x m_per_px), got [{}, {}]", approx(ew), approx(eh), num(p[0]), num(p[1])));
+        }
+    }
+    // Obstacles inside the image (a moving one's every key frame).
+    if let Some(obs) = tables(cx, tabs.operator, &OBSTACLES) {
+        for (ob, ot) in s.operator.obstacles.iter().zip(obs.iter()) {
+            if ob.keyframes.is_empty() {
+                let c = ob.center_m;
+                if !(0.0..=ew).contains(&c[0]) || !(0.0..=eh).contains(&c[1]) {
+                    cx.bad(ot, OB_CENTER.name, format!("must be inside the image, [0, {}] x [0, {}] m, got [{}, {}]", approx(ew), approx(eh), num(c[0]), num(c[1])));
+                }
+            }
+            let frames = tables(cx, ot, &OB_KEYFRAMES).unwrap_or_default();
+            for (k, ft) in ob.keyframes.iter().zip(frames.iter()) {
+                for (name, v, extent) in [("x_m", k.x_m, ew), ("y_m", k.y_m, eh)] {
+                    if !(0.0..=extent).contains(&v) {
+                        cx.bad(ft, name, format!("must be inside the image, [0, {}] m, got {}", approx(extent), num(v)));
+                    }
+                }
+            }
+        }
+    }
+    if s.progress_window_s > s.max_time_s.max(1.0) * 100.0 {
+        cx.bad(tabs.avoid, PROGRESS_WINDOW.name, format!("must be at most 100 x max_time_s (at least 100 s), here {} s, got {}", num(s.max_time_s.max(1.0) * 100.0), num(s.progress_window_s)));
+    }
+    let (dt, max_time, frame) = (s.dt_s, s.max_time_s, s.frame_period_s);
+    // T_r holds at least the control period: a command stands for a whole step before the next one
+    // can stop the robot (ISO/TS 15066 5.5.4.2.3: T_r includes the detection and the control's cycle).
+    if s.safety.reaction_time_s < dt {
+        let safety = tables_one(cx, tabs.avoid, &SAFETY);
+        cx.bad(safety.as_ref().unwrap_or(tabs.avoid), "reaction_time_s", format!(
+            "T_r must cover at least one control period (dt_s = {} s: a command stands for a whole step; ISO/TS 15066 5.5.4.2.3), got {}",
+            num(dt), num(s.safety.reaction_time_s)
+        ));
+    }
+    if max_time / dt > MAX_STEPS {
+        cx.bad(tabs.avoid, DT.name, format!(
+            "max_time_s / dt_s = {} control steps; allowed at most {} (bounds the run time), got dt_s = {}",
+            approx(max_time / dt), num(MAX_STEPS), num(dt)
+        ));
+    }
+    let frames = (max_time / frame).ceil() + 1.0;
+    if frames * pixels > MAX_FRAME_PIXELS {
+        cx.bad(tabs.avoid, FRAME.name, format!(
+            "{} frames (max_time_s / frame_period_s) of {} px each: {} pixels rendered and fitted; allowed at most {} (bounds the run time: the shipped scene does 1.6e7), got frame_period_s = {}",
+            approx(frames), num(pixels), approx(frames * pixels), num(MAX_FRAME_PIXELS), num(frame)
+        ));
+    }
+    sigma_within_window(cx, tabs.fit, s.fit.sigma_factor, s.fit.eval_sigma_factor);
+    let (step, threshold, dilate) = (r.calibration_step_m, r.calibration_threshold_m, r.calibration_dilate_m);
+    if threshold <= s.fit.offset_m {
+        cx.bad(tabs.robot, THRESHOLD.name, format!(
+            "must be above fit.offset_m = {} m: the image is raised by it before the fit, so a lower cut marks the whole plane as robot; got {}",
+            num(s.fit.offset_m), num(threshold)
+        ));
+    }
+    if dilate > step {
+        cx.bad(tabs.robot, DILATE.name, format!(
+            "must be at most calibration_step_m = {} m: the nearest stored position is within d / sqrt 2 of the robot, so a larger growth only clears more of what is near it; got {}",
+            num(step), num(dilate)
+        ));
+    }
+    if step < px {
+        cx.bad(tabs.robot, STEP.name, format!("must be at least one pixel (camera.m_per_px = {} m), got {}", num(px), num(step)));
+    }
+    if !cx.issues.is_empty() {
+        return;
+    }
+    // The zig-zag of `avoid::calib::zigzag` from d/2 to extent - d/2: this is the work of the
+    // calibration pass, which runs with robot.removal = "calibration" and with `--thesis`.
+    let count = |extent: f64| ((extent - step) / step).floor().max(0.0) + 1.0;
+    let positions = count(w * px) * count(h * px);
+    let why = "the calibration pass runs with robot.removal = \"calibration\" and with --thesis";
+    if positions * pixels > MAX_CALIBRATION_PIXELS {
+        cx.bad(tabs.robot, STEP.name, format!(
+            "the calibration zig-zag has {} positions of {} px each ({} pixels rendered and fitted); allowed at most {} ({why}; the shipped scene does 1.9e7), got calibration_step_m = {}",
+            num(positions), num(pixels), approx(positions * pixels), num(MAX_CALIBRATION_PIXELS), num(step)
+        ));
+        return;
+    }
+    let rad = (dilate / px).round();
+    let disc = std::f64::consts::PI * rad * rad + 1.0;
+    if positions * pixels * disc > MAX_DILATION_WORK {
+        cx.bad(tabs.robot, DILATE.name, format!(
+            "growing {} masks of {} px by {} px ({} m) is up to {} pixel writes; allowed at most {} ({why}; the shipped scene: 2.9e9), got calibration_dilate_m = {}",
+            num(positions), num(pixels), num(rad), num(dilate), approx(positions * pixels * disc), num(MAX_DILATION_WORK), num(dilate)
+        ));
+    }
 }
 
 /// A point `[x, y]`: exactly two finite numbers in the key's range.
@@ -341,128 +919,6 @@ fn xy(cx: &mut Ctx, tab: &Tab, key: &Key) -> Option<[f64; 2]> {
     Some(p)
 }
 
-fn get(keys: &[Key], vals: &[Option<f64>], name: &str) -> Option<f64> {
-    keys.iter().position(|k| k.name == name).and_then(|i| vals[i])
-}
-
-fn scene(cx: &mut Ctx, avoid: &Tab) {
-    let top = read(cx, avoid, KEYS);
-    let safety_t = cx.maybe_table(avoid, &SAFETY).flatten();
-    let safety = safety_t.as_ref().map(|t| read(cx, t, SAFETY_KEYS));
-    let camera = cx.maybe_table(avoid, &CAMERA).flatten();
-    let cam = camera.as_ref().map(|t| read(cx, t, CAMERA_KEYS));
-    let fit_t = cx.maybe_table(avoid, &FIT).flatten();
-    let fit = fit_t.as_ref().map(|t| read(cx, t, FIT_KEYS));
-    let robot_t = cx.maybe_table(avoid, &ROBOT).flatten();
-    let robot = robot_t.as_ref().map(|t| read(cx, t, ROBOT_KEYS));
-    if let Some(Some(t)) = cx.maybe_table(avoid, &DEPTH_CAMERA) {
-        read(cx, &t, DEPTH_CAMERA_KEYS);
-    }
-    let op_t = cx.maybe_table(avoid, &OPERATOR).flatten();
-    let op = op_t.as_ref().map(|t| read(cx, t, OPERATOR_KEYS));
-    if let Some(t) = &op_t {
-        keyframes(cx, t);
-    }
-    if !cx.issues.is_empty() {
-        return;
-    }
-    // Cross-key checks: every value is in its range here.
-    let (Some(cam), Some(camera), Some(fit), Some(robot), Some(robot_t)) = (cam, camera, fit, robot, robot_t) else { return };
-    let c = |n| get(CAMERA_KEYS, &cam, n);
-    let (Some(w), Some(h), Some(px), Some(cam_h)) = (c("width_px"), c("height_px"), c("m_per_px"), c("camera_height_m")) else { return };
-    let pixels = w * h;
-    if w.max(h) * px > MAX_EXTENT_M {
-        cx.bad(&camera, M_PER_PX.name, format!(
-            "the image covers {} m x {} m on the plane (width_px x m_per_px); allowed at most {MAX_EXTENT_M} m across ({PLANE}), got m_per_px = {}",
-            approx(w * px), approx(h * px), num(px)
-        ));
-    }
-    // Every height below the camera.
-    let empty = Vec::new();
-    let op_vals = op.as_ref().unwrap_or(&empty);
-    let op_tab = op_t.as_ref().unwrap_or(avoid);
-    for (tab, keys, vals) in [(&robot_t, ROBOT_KEYS, &robot), (avoid, KEYS, &top), (op_tab, OPERATOR_KEYS, op_vals)] {
-        for (k, v) in keys.iter().zip(vals.iter()) {
-            // `vals` is empty when the table is absent (reported by the deserialiser).
-            if let (Some(v), Ty::Number(s)) = (v, k.ty) {
-                if s.source == HEIGHT && *v >= cam_h {
-                    cx.bad(tab, k.name, format!("must be below the camera (camera.camera_height_m = {} m): a height above the work plane, got {}", num(cam_h), num(*v)));
-                }
-            }
-        }
-    }
-    let (Some(dt), Some(max_time), Some(frame)) = (get(KEYS, &top, "dt_s"), get(KEYS, &top, "max_time_s"), get(KEYS, &top, "frame_period_s")) else { return };
-    // T_r holds at least the control period: a command stands for a whole step before the next one
-    // can stop the robot (ISO/TS 15066 5.5.4.2.3: T_r includes the detection and the control's cycle).
-    let t_r = safety.as_ref().and_then(|v| get(SAFETY_KEYS, v, "reaction_time_s")).unwrap_or(0.02);
-    if t_r < dt {
-        let tab = safety_t.as_ref().unwrap_or(avoid);
-        cx.bad(tab, "reaction_time_s", format!(
-            "T_r must cover at least one control period (dt_s = {} s: a command stands for a whole step; ISO/TS 15066 5.5.4.2.3), got {}",
-            num(dt), num(t_r)
-        ));
-    }
-    if max_time / dt > MAX_STEPS {
-        cx.bad(avoid, DT.name, format!(
-            "max_time_s / dt_s = {} control steps; allowed at most {} (bounds the run time), got dt_s = {}",
-            approx(max_time / dt), num(MAX_STEPS), num(dt)
-        ));
-    }
-    let frames = (max_time / frame).ceil() + 1.0;
-    if frames * pixels > MAX_FRAME_PIXELS {
-        cx.bad(avoid, FRAME.name, format!(
-            "{} frames (max_time_s / frame_period_s) of {} px each: {} pixels rendered and fitted; allowed at most {} (bounds the run time: the shipped scene does 1.6e7), got frame_period_s = {}",
-            approx(frames), num(pixels), approx(frames * pixels), num(MAX_FRAME_PIXELS), num(frame)
-        ));
-    }
-    if let (Some(fit_t), Some(sf), Some(ef)) = (&fit_t, get(FIT_KEYS, &fit, "sigma_factor"), get(FIT_KEYS, &fit, "eval_sigma_factor")) {
-        sigma_within_window(cx, fit_t, sf, ef);
-    }
-    let r = |n| get(ROBOT_KEYS, &robot, n);
-    let (Some(step), Some(threshold)) = (r("calibration_step_m"), r("calibration_threshold_m")) else { return };
-    let dilate = r("calibration_dilate_m").unwrap_or(0.0);
-    if let Some(offset) = get(FIT_KEYS, &fit, "offset_m") {
-        if threshold <= offset {
-            cx.bad(&robot_t, THRESHOLD.name, format!(
-                "must be above fit.offset_m = {} m: the image is raised by it before the fit, so a lower cut marks the whole plane as robot; got {}",
-                num(offset), num(threshold)
-            ));
-        }
-    }
-    if dilate > step {
-        cx.bad(&robot_t, DILATE.name, format!(
-            "must be at most calibration_step_m = {} m: the nearest stored position is within d / sqrt 2 of the robot, so a larger growth only clears more of what is near it; got {}",
-            num(step), num(dilate)
-        ));
-    }
-    if step < px {
-        cx.bad(&robot_t, STEP.name, format!("must be at least one pixel (camera.m_per_px = {} m), got {}", num(px), num(step)));
-    }
-    if !cx.issues.is_empty() {
-        return;
-    }
-    // The zig-zag of `avoid::calib::zigzag` from d/2 to extent - d/2: this is the work of the
-    // calibration pass, which runs with robot.removal = "calibration" and with `--thesis`.
-    let count = |extent: f64| ((extent - step) / step).floor().max(0.0) + 1.0;
-    let positions = count(w * px) * count(h * px);
-    let why = "the calibration pass runs with robot.removal = \"calibration\" and with --thesis";
-    if positions * pixels > MAX_CALIBRATION_PIXELS {
-        cx.bad(&robot_t, STEP.name, format!(
-            "the calibration zig-zag has {} positions of {} px each ({} pixels rendered and fitted); allowed at most {} ({why}; the shipped scene does 1.9e7), got calibration_step_m = {}",
-            num(positions), num(pixels), approx(positions * pixels), num(MAX_CALIBRATION_PIXELS), num(step)
-        ));
-        return;
-    }
-    let rad = (dilate / px).round();
-    let disc = std::f64::consts::PI * rad * rad + 1.0;
-    if positions * pixels * disc > MAX_DILATION_WORK {
-        cx.bad(&robot_t, DILATE.name, format!(
-            "growing {} masks of {} px by {} px ({} m) is up to {} pixel writes; allowed at most {} ({why}; the shipped scene: 2.9e9), got calibration_dilate_m = {}",
-            num(positions), num(pixels), num(rad), num(dilate), approx(positions * pixels * disc), num(MAX_DILATION_WORK), num(dilate)
-        ));
-    }
-}
-
 /// Largest evaluation sigma the MCU accepts, in units of the spacing: the firmware visits the centres
 /// within 4 sigma' (`TRUNC_SIGMAS`) and holds at most `MAX_WINDOW` = 10 per axis, so
 /// `2 * 4 * sigma' / s + 2 <= 10` (`Grid::set_geometry`), i.e. sigma' <= s.
@@ -481,29 +937,16 @@ fn sigma_within_window(cx: &mut Ctx, fit: &Tab, sigma_factor: f64, eval_factor: 
     }
 }
 
-/// `avoid.operator.keyframes`: each `{ t_s, hand_m }` in range.
-fn keyframes(cx: &mut Ctx, op: &Tab) {
-    let Some(item) = op.t.get("keyframes") else { return };
-    let path = op.key("keyframes");
-    let tables: Vec<&dyn toml_edit::TableLike> = if let Some(a) = item.as_array_of_tables() {
-        a.iter().map(|t| t as &dyn toml_edit::TableLike).collect()
-    } else if let Some(a) = item.as_value().and_then(Value::as_array) {
-        a.iter().filter_map(|v| v.as_inline_table().map(|t| t as &dyn toml_edit::TableLike)).collect()
-    } else {
-        return;
-    };
-    for (i, t) in tables.into_iter().enumerate() {
-        let line = t.iter().next().and_then(|(k, _)| t.get_key_value(k)).and_then(|(k, _)| k.span()).map(|s| super::check::line_at(cx.text, s.start));
-        let tab = Tab { path: format!("{path}[{i}]"), t, line: line.or(op.line) };
-        read(cx, &tab, KEYFRAME_KEYS);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     const SHIPPED: &str = include_str!("../../../scenes/avoid_thesis_reach.toml");
+
+    /// The scene's problems as `flinch avoid` prints them (`line N:` without a file name).
+    fn check(text: &str, file: &str) -> Result<(), String> {
+        parse(text, file).map(|_| ()).map_err(|e| if file.is_empty() { without_file(&e) } else { e.to_string() })
+    }
 
     fn refused(from: &str, to: &str) -> String {
         let mut text = SHIPPED.to_string();

@@ -51,6 +51,17 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
+/// The TOML document of a scene, or the syntax error as a [`SceneError`] with its line.
+pub(super) fn parse_toml<'t>(text: &'t str, file: &str) -> Result<toml_edit::ImDocument<&'t str>, SceneError> {
+    toml_edit::ImDocument::parse(text).map_err(|e| {
+        let line = Some(line_at(text, e.span().map_or(0, |s| s.start)));
+        // One line: every line of a refusal starts with the file (toml_edit's message can run
+        // over two lines, the second then lacking it; found by tests/fuzz.rs).
+        let message = format!("not valid TOML: {}", e.message().trim().replace('\n', "; "));
+        SceneError { file: file.to_string(), issues: vec![SceneIssue { line, key: String::new(), message }] }
+    })
+}
+
 /// 1-based line of the byte `offset` in `text`.
 pub(super) fn line_at(text: &str, offset: usize) -> usize {
     let end = offset.min(text.len());
@@ -611,6 +622,42 @@ impl Ctx<'_> {
             }
         }
         ok.then_some(out)
+    }
+
+    /// A required list of at most `max_len` numbers, item `i` within `span(i)`; `what` says what
+    /// the list must be. `None` (reported) when missing or invalid.
+    pub fn numbers(&mut self, tab: &Tab, key: &Key, what: &str, max_len: usize, span: impl Fn(usize) -> Span) -> Option<Vec<f64>> {
+        let Some(item) = tab.t.get(key.name) else {
+            self.missing(tab, key.name, what);
+            return None;
+        };
+        let Some(list) = item.as_value().and_then(Value::as_array) else {
+            self.bad(tab, key.name, format!("must be {what}, got {}", item.type_name()));
+            return None;
+        };
+        if list.len() > max_len {
+            self.bad(tab, key.name, format!("must be {what}, got {} numbers", list.len()));
+            return None;
+        }
+        let mut out = Vec::new();
+        for (i, v) in list.iter().enumerate() {
+            let s = span(i);
+            let x = match v {
+                Value::Integer(n) => *n.value() as f64,
+                Value::Float(f) => *f.value(),
+                other => {
+                    let unit = if s.unit.is_empty() { String::new() } else { format!(" ({})", s.unit) };
+                    self.bad(tab, key.name, format!("item {} must be a number{unit}, got {}", i + 1, other.to_string().trim()));
+                    return None;
+                }
+            };
+            if !x.is_finite() || !s.contains(x) {
+                self.bad(tab, key.name, format!("item {}: {}", i + 1, s.refuse(x)));
+                return None;
+            }
+            out.push(x);
+        }
+        Some(out)
     }
 
     /// A required sub-table (`[a.b]`, `b = { ... }` or dotted keys).

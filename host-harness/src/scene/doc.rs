@@ -36,7 +36,7 @@ pub fn range_table() -> String {
         for k in t.keys {
             let (unit, lo, hi, source) = match k.ty {
                 Ty::Number(s) => (s.unit.to_string(), low(s.lo), high(s.hi), s.source),
-                Ty::Integer { lo, hi, source } => ("integer".into(), format!(">= {lo}"), format!("<= {hi}"), source),
+                Ty::Integer { lo, hi, source } => ("integer".into(), format!(">= {lo}"), if hi == u32::MAX { "none".into() } else { format!("<= {hi}") }, source),
                 _ => continue,
             };
             let key = if t.path.is_empty() { k.name.to_string() } else { format!("{}.{}", t.path, k.name) };

@@ -29,6 +29,7 @@
 //! | `[sensor]` | `sensor.rs` | `plant/sensor.rs` |
 //! | `[solver]` | `solver.rs` | `solver/` |
 //! | `[controller]` | `controller.rs` | `hil.rs` |
+//! | `[avoid]` (an avoidance scene, `flinch avoid`) | `avoid.rs` ([`avoid::parse`]) | `avoid/` |
 //!
 //! # Adding a decoupler
 //!
@@ -104,9 +105,8 @@ pub use solver::{
     FAST_ATOL, FAST_RTOL, REFERENCE_ATOL, REFERENCE_RTOL,
 };
 
-use check::{approx, line_at, num, Bound::*, Ctx, Tab};
+use check::{approx, num, Bound::*, Ctx, Tab};
 use std::path::Path;
-use toml_edit::ImDocument;
 
 /// `name`: echoed in every output.
 const NAME: Key = Key::of("name", Ty::Text, "a human-readable name, echoed in the summary");
@@ -160,7 +160,7 @@ pub fn key_tables() -> &'static [KeyTable] {
         KeyTable { path: "sensor", when: "kind = \"force\"", keys: sensor::FORCE_KEYS },
         KeyTable { path: "solver", when: "", keys: solver::KEYS },
         KeyTable { path: "controller", when: "", keys: controller::KEYS },
-        // Avoidance scenes (`flinch avoid`, docs/avoidance.md): checked by `avoid::check`.
+        // Avoidance scenes (`flinch avoid`, docs/avoidance.md): read by `avoid::parse`.
         KeyTable { path: "avoid", when: AVOID_SCENE, keys: avoid::KEYS },
         KeyTable { path: "avoid.safety", when: AVOID_SCENE, keys: avoid::SAFETY_KEYS },
         KeyTable { path: "avoid.camera", when: AVOID_SCENE, keys: avoid::CAMERA_KEYS },
@@ -169,6 +169,9 @@ pub fn key_tables() -> &'static [KeyTable] {
         KeyTable { path: "avoid.operator", when: AVOID_SCENE, keys: avoid::OPERATOR_KEYS },
         KeyTable { path: "avoid.operator.keyframes[]", when: AVOID_SCENE, keys: avoid::KEYFRAME_KEYS },
         KeyTable { path: "avoid.depth_camera", when: AVOID_SCENE, keys: avoid::DEPTH_CAMERA_KEYS },
+        KeyTable { path: "avoid.operator.obstacles[]", when: "avoidance scene, kind = \"disc\"", keys: avoid::DISC_KEYS },
+        KeyTable { path: "avoid.operator.obstacles[]", when: "avoidance scene, kind = \"box\"", keys: avoid::BOX_KEYS },
+        KeyTable { path: "avoid.operator.obstacles[].keyframes[]", when: AVOID_SCENE, keys: avoid::OBSTACLE_KEYFRAME_KEYS },
     ];
     TABLES
 }
@@ -191,23 +194,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// Validates a scene given as text; `file` names it in the messages.
 pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
-    let doc = match ImDocument::parse(text) {
-        Ok(doc) => doc,
-        Err(e) => {
-            let line = Some(line_at(text, e.span().map_or(0, |s| s.start)));
-            // One line: every line of a refusal starts with the file (toml_edit's message can
-            // run over two lines, the second then lacking it; found by tests/fuzz.rs).
-            let message = format!("not valid TOML: {}", e.message().trim().replace('\n', "; "));
-            return Err(SceneError {
-                file: file.to_string(),
-                issues: vec![SceneIssue {
-                    line,
-                    key: String::new(),
-                    message,
-                }],
-            });
-        }
-    };
+    let doc = check::parse_toml(text, file)?;
     let mut cx = Ctx {
         text,
         file,

@@ -151,36 +151,6 @@ fn kin_bad(cx: &mut Ctx, t: &Tab, e: &KinError) {
     cx.bad(t, key, e.to_string());
 }
 
-/// A list of numbers, each in `span`.
-fn numbers(cx: &mut Ctx, t: &Tab, key: &Key, span: impl Fn(usize) -> Span) -> Option<Vec<f64>> {
-    let Some(item) = t.t.get(key.name) else {
-        cx.missing(t, key.name, &key.what());
-        return None;
-    };
-    let Some(list) = item.as_value().and_then(Value::as_array) else {
-        cx.bad(t, key.name, format!("must be {}", key.what()));
-        return None;
-    };
-    let mut out = Vec::new();
-    for (i, v) in list.iter().enumerate() {
-        let x = match v {
-            Value::Integer(n) => *n.value() as f64,
-            Value::Float(f) => *f.value(),
-            other => {
-                cx.bad(t, key.name, format!("item {} must be a number, got {}", i + 1, other.to_string().trim()));
-                return None;
-            }
-        };
-        let s = span(i);
-        if !x.is_finite() || !s.contains(x) {
-            cx.bad(t, key.name, format!("item {}: {}", i + 1, s.refuse(x)));
-            return None;
-        }
-        out.push(x);
-    }
-    Some(out)
-}
-
 /// One number per chain joint: a list in chain order, or a table by joint name.
 fn per_joint(cx: &mut Ctx, t: &Tab, key: &Key, chain: &Chain, span: impl Fn(usize) -> Span) -> Option<Vec<f64>> {
     let n = chain.dof();
@@ -218,7 +188,7 @@ fn per_joint(cx: &mut Ctx, t: &Tab, key: &Key, chain: &Chain, span: impl Fn(usiz
         }
         return ok.then_some(out);
     }
-    let out = numbers(cx, t, key, span)?;
+    let out = cx.numbers(t, key, &key.what(), usize::MAX, span)?;
     if out.len() != n {
         cx.bad(
             t,
@@ -234,7 +204,7 @@ fn read_urdf_robot(cx: &mut Ctx, t: &Tab) -> Option<UrdfRobot> {
     let rel = cx.string(t, &URDF);
     let base = cx.string(t, &BASE_LINK);
     let tip = cx.string(t, &TIP_LINK);
-    let direction = numbers(cx, t, &DIRECTION, |_| U_SPAN);
+    let direction = cx.numbers(t, &DIRECTION, &DIRECTION.what(), usize::MAX, |_| U_SPAN);
     let direction = match direction {
         Some(d) if d.len() == 3 && d.iter().any(|x| *x != 0.0) => Some([d[0], d[1], d[2]]),
         Some(d) => {

@@ -4,7 +4,6 @@
 //! `payload`: distance and time measured from the stop signal to standstill, reaction included.
 use super::check::{num, Bound::*, Ctx, Key, Span, Tab, Ty};
 use crate::plant::stopping::{StoppingTable, TableError, MAX_POINTS};
-use toml_edit::Value;
 
 /// `motion.stopping`.
 pub const TABLE: Key = Key::of(
@@ -42,9 +41,9 @@ pub const KEYS: &[Key] = &[CATEGORY, SPEED, DISTANCE, TIME, PAYLOAD];
 pub(super) fn stopping(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<(StoppingTable, Option<f64>)> {
     cx.check_keys(t, KEYS, "");
     let category = cx.integer(t, &CATEGORY);
-    let speed = numbers(cx, t, &SPEED, SPEED_SPAN);
-    let distance = numbers(cx, t, &DISTANCE, DISTANCE_SPAN);
-    let time = numbers(cx, t, &TIME, TIME_SPAN);
+    let speed = cx.numbers(t, &SPEED, LIST, MAX_POINTS, |_| SPEED_SPAN);
+    let distance = cx.numbers(t, &DISTANCE, LIST, MAX_POINTS, |_| DISTANCE_SPAN);
+    let time = cx.numbers(t, &TIME, LIST, MAX_POINTS, |_| TIME_SPAN);
     let payload = cx.maybe_number(t, &PAYLOAD);
     let (category, speed, distance, time, payload) = (category?, speed?, distance?, time?, payload?);
     if let (Some(p), Some(m)) = (payload, tool_mass) {
@@ -65,37 +64,4 @@ pub(super) fn stopping(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<
             None
         }
     }
-}
-
-/// A list of numbers, each in `span`, 1 to MAX_POINTS of them (the lengths are checked by the table).
-fn numbers(cx: &mut Ctx, t: &Tab, key: &Key, span: Span) -> Option<Vec<f64>> {
-    let Some(item) = t.t.get(key.name) else {
-        cx.missing(t, key.name, LIST);
-        return None;
-    };
-    let Some(list) = item.as_value().and_then(Value::as_array) else {
-        cx.bad(t, key.name, format!("must be {LIST}, got {}", item.type_name()));
-        return None;
-    };
-    if list.len() > MAX_POINTS {
-        cx.bad(t, key.name, format!("must be {LIST}, got {} numbers", list.len()));
-        return None;
-    }
-    let mut out = Vec::new();
-    for (i, v) in list.iter().enumerate() {
-        let x = match v {
-            Value::Integer(n) => *n.value() as f64,
-            Value::Float(f) => *f.value(),
-            other => {
-                cx.bad(t, key.name, format!("item {} must be a number ({}), got {}", i + 1, span.unit, other.to_string().trim()));
-                return None;
-            }
-        };
-        if !x.is_finite() || !span.contains(x) {
-            cx.bad(t, key.name, format!("item {}: {}", i + 1, span.refuse(x)));
-            return None;
-        }
-        out.push(x);
-    }
-    Some(out)
 }

@@ -122,7 +122,8 @@ pub struct Simulation {
     deformation_max: Option<f64>,
     closest_min: Option<f64>,
     record_every: Option<f64>,
-    next_record: f64,
+    /// Rows recorded so far: the next is due at `records * dt` (see [`record_due`]).
+    records: u64,
     /// The recorded time history (empty unless recording).
     pub history: Vec<Sample>,
     /// Where recorded samples go as each step makes them (a streamed CSV, a decimated plot: memory
@@ -309,12 +310,11 @@ impl Hybrid<N, E> for Simulation {
                 self.history.push(sample(t1, &k, &f));
             }
             Some(dt) => {
-                while self.next_record <= t1 {
-                    let tr = self.next_record.max(t0);
+                while let Some(tr) = record_due(self.records, dt, t0, t1) {
                     let y = if tr >= t1 { *y1 } else { dense(tr) };
                     let (k, f) = self.observe(tr, &y);
                     self.history.push(sample(tr, &k, &f));
-                    self.next_record += dt;
+                    self.records += 1;
                 }
             }
             None => {}
@@ -533,7 +533,7 @@ impl Simulation {
             deformation_max: None,
             closest_min: None,
             record_every: record.then_some(scene.solver.output_interval.max(0.0)),
-            next_record: 0.0,
+            records: 0,
             history: Vec::new(),
             sink: None,
             probe: None,
@@ -976,7 +976,32 @@ impl Run {
     }
 }
 
+/// When row `k` of a history at interval `dt` falls in the step `[t0, t1]`: at `k dt`, a product,
+/// not a running sum (6e5 additions of 1e-4 drifted to 1e-9 s past the end of a 60 s run, whose
+/// last row was then lost); a row within `1e-9 dt` past the step's end is taken at its end (the
+/// rounding of `k dt` itself). [`recorded_rows`] counts them.
+pub fn record_due(k: u64, dt: f64, t0: f64, t1: f64) -> Option<f64> {
+    let tk = k as f64 * dt;
+    (tk <= t1 + 1e-9 * dt).then(|| tk.clamp(t0, t1))
+}
+
+/// Rows a run of `duration` s records at `dt` > 0: `k dt` for every `k` that [`record_due`] takes.
+pub fn recorded_rows(duration: f64, dt: f64) -> u64 {
+    let n = (duration / dt + 1e-9).floor();
+    let Some(mut k) = (n.is_finite() && n >= 0.0).then(|| n.min(1e18) as u64) else { return u64::MAX };
+    // The division's own rounding: the test `record_due` makes decides the last row.
+    for _ in 0..3 {
+        if record_due(k + 1, dt, duration, duration).is_some() {
+            k += 1;
+        } else if k > 0 && record_due(k, dt, duration, duration).is_none() {
+            k -= 1;
+        }
+    }
+    k + 1
+}
+
 /// Runs a scene to its end and returns the summary and, if `record`, the time history.
+
 pub fn run(scene: &Scene, record: bool) -> Result<(Summary, Vec<Sample>), SolveError> {
     let mut r = Run::new(scene, false, record);
     r.finish()?;
