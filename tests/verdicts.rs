@@ -28,7 +28,7 @@ fn one_definition_on_every_shipped_scene() {
         // safe <=> no failure <=> the stroke is not exhausted (and, for a body region, its
         // ISO/TS 15066 limits hold).
         assert_eq!(s.safe, s.failures.is_empty(), "{name}");
-        assert_eq!(s.safe, !s.stroke_exhausted && s.body_limits_pass != Some(false), "{name}: {:?}", s.failures);
+        assert_eq!(s.safe, s.concluded && !s.stroke_exhausted && s.body_limits_pass != Some(false), "{name}: {:?}", s.failures);
         // The stroke left while touching is negative exactly when the stroke is exhausted (0 for a
         // rigid tool, which is exhausted on contact).
         match s.stroke_left_min_m {
@@ -45,6 +45,36 @@ fn one_definition_on_every_shipped_scene() {
             assert_eq!(c.safe, c.fits && s.safe, "{name}");
             assert_eq!(c.safe, c.failures.is_empty(), "{name}");
         }
+    }
+}
+
+/// Review finding (issue 14): with a dead time longer than the run, the robot was still driving
+/// the tool into the target when the run ended, and the run said SAFE (so did every such sample of
+/// `flinch sample`). The same scene run long enough exhausts the stroke: the short run must not be
+/// called safe, and must say why.
+#[test]
+fn a_run_that_ends_before_the_robot_stops_is_not_safe() {
+    let mut sc = scene("tables5-7_bistable.toml");
+    sc.motion.dead_time = 0.6;
+    let (short, _) = sim::run(&sc, false).unwrap();
+    assert!(short.t_stop.unwrap() > sc.duration_s, "the case needs t_stop after the end: {:?}", short.t_stop);
+    assert!(!short.concluded && !short.safe, "{:?}", short.failures);
+    assert!(short.failures[0].starts_with("not concluded"), "{:?}", short.failures);
+    assert!(verdict::line(&short).contains("NOT SAFE: not concluded"), "{}", verdict::line(&short));
+    // Long enough to see the end: the robot stops, the run concludes, and the stroke ran out.
+    sc.duration_s = 3.0;
+    let (long, _) = sim::run(&sc, false).unwrap();
+    assert!(long.concluded && long.t_stop.unwrap() <= 3.0, "{:?}", long.t_stop);
+    assert!(long.stroke_exhausted && !long.safe, "{:?}", long.failures);
+    // A dead time that fits in the run: concluded, and the verdict is the stroke's.
+    sc.motion.dead_time = 0.016;
+    sc.duration_s = 0.6;
+    let (ok, _) = sim::run(&sc, false).unwrap();
+    assert!(ok.concluded && ok.safe, "{:?}", ok.failures);
+    // check and design agree with the run's verdict on the short run.
+    sc.motion.dead_time = 0.6;
+    if let Ok(c) = check(&sc) {
+        assert!(!c.safe && !c.simulated.concluded, "check called a run that never concluded safe");
     }
 }
 

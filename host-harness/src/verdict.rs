@@ -15,7 +15,9 @@
 //!   be negative while the stroke is not exhausted (a soft target squashed by more than the stroke
 //!   left); the force limits, not this length, say whether that squeeze is acceptable.
 //!
-//! **Safe** means the list of failures is empty. A failure is: the stroke exhausted, or, for a human
+//! **Safe** means the list of failures is empty. A failure is: a run that is not concluded (after
+//! a contact the robot had not stopped by the end of the run, so the rest is not simulated), the
+//! stroke exhausted, or, for a human
 //! body region target (ISO/TS 15066 Annex A, crate::body), the peak contact force or pressure over
 //! the region's limit, or a transient contact the TS does not permit. The budget of
 //! `flinch check` (`v DT + v^2/2d <= C - d_sw`) is a second, independent verdict; `check` and
@@ -49,9 +51,22 @@ pub fn ms(x: f64) -> String {
     format!("{:.1} ms", x * 1e3)
 }
 
+/// Whether a run answers the question (`Summary::concluded`): after a contact, the robot must
+/// have come to a standstill (`t_stop`, s) within the run (`duration`, s). Otherwise the flange was
+/// still driving the tool into the target when the simulation ended, and the stroke can run out
+/// after the end: a run that ends there says nothing about safety (a long dead time with a short
+/// `duration` used to be reported SAFE).
+pub fn concluded(t_contact: Option<f64>, t_stop: Option<f64>, duration: f64) -> bool {
+    t_contact.is_none() || t_stop.is_some_and(|t| t <= duration)
+}
+
 /// Every reason a run is not safe (empty: safe). The one definition; see the module docs.
 pub fn failures(s: &Summary) -> Vec<String> {
     let mut f = Vec::new();
+    if !s.concluded {
+        let when = s.t_stop.map_or_else(|| "never commanded to stop".to_string(), |t| format!("commanded to stand still at t_stop = {t} s"));
+        f.push(format!("not concluded: the robot was still moving into the target when the run ended ({when}); the stroke can still run out after the end, which is not simulated: lengthen duration"));
+    }
     if s.stroke_exhausted {
         let how = match s.stroke_left_min_m {
             Some(l) if l < 0.0 => format!("the tool was pushed {} into the back end-stop while touching the target", mm(-l)),

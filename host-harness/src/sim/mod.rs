@@ -938,6 +938,7 @@ impl Run {
             stroke_left_min_m_null_reason: left_null,
             target_deformation_max_m: s.deformation_max,
             closest_approach_m: s.closest_min,
+            concluded: crate::verdict::concluded(s.t_contact, s.plant.motion.t_stop(), self.duration),
             safe: false,
             failures: Vec::new(),
             body_region: None,

@@ -145,6 +145,11 @@ pub struct Summary {
     /// Negative when the target is compressed by more than the stroke left: the flange passes the
     /// undeformed surface without the tool bottoming. Informative; `safe` does not use it.
     pub closest_approach_m: Option<f64>,
+    /// False when the tool touched the target and the robot had not come to a standstill by the
+    /// end of the run (`t_stop` after `duration`, or never commanded): what happened after the end
+    /// is not simulated, the stroke could still run out, so the run is not safe (a failure in
+    /// `failures`; lengthen `duration`). True otherwise, and for a run without contact.
+    pub concluded: bool,
     /// The verdict (crate::verdict, one definition for every command): no entry in `failures`.
     pub safe: bool,
     /// Every reason the run is not safe, for people (empty when safe).
