@@ -71,6 +71,11 @@ fn a_run_that_ends_before_the_robot_stops_is_not_safe() {
     sc.duration_s = 0.6;
     let (ok, _) = sim::run(&sc, false).unwrap();
     assert!(ok.concluded && ok.safe, "{:?}", ok.failures);
+    // The searches of design lengthen a candidate's duration until it concludes, and say so.
+    sc.motion.dead_time = 0.6;
+    let searched = sim::run_to_conclusion(&sc).unwrap();
+    assert!(searched.concluded && searched.stroke_exhausted && !searched.safe, "{:?}", searched.failures);
+    assert!(searched.warnings.iter().any(|w| w.contains("duration lengthened from 0.6 s to 1.2 s")), "{:?}", searched.warnings);
     // check and design agree with the run's verdict on the short run.
     sc.motion.dead_time = 0.6;
     if let Ok(c) = check(&sc) {

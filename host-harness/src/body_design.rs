@@ -143,7 +143,7 @@ impl Cand<'_> {
     /// candidate is refused or fails to run.
     fn holds(&self, v: f64, whole_verdict: bool) -> Option<bool> {
         let s = self.scene(v)?;
-        let (r, _) = crate::sim::run(&s, false).ok()?;
+        let r = crate::sim::run_to_conclusion(&s).ok()?;
         // A run whose tool never reached the body confirms nothing.
         r.t_contact?;
         Some(if whole_verdict { r.safe } else { r.body_limits_pass == Some(true) })
@@ -160,14 +160,25 @@ impl Cand<'_> {
             let g = |v: f64| self.holds(v, true);
             match crate::design::boundary(&xs, &g, true, 16, mps) {
                 Ok((v, _)) => a.speed_safe_mps = Some(v),
-                Err(e) => a.safe_search_note = Some(format!("speed search over {}..{}: {e}", mps(xs[0]), mps(xs[xs.len() - 1]))),
+                Err(e) => {
+                    // Say why the slowest candidate is not safe: the run's own first failure (a
+                    // free body part bounced off below the switching force is never detected, so
+                    // the robot never stops: not concluded).
+                    let why = self.scene(xs[0]).and_then(|s| crate::sim::run_to_conclusion(&s).ok()).and_then(|r| r.failures.first().cloned());
+                    a.safe_search_note = Some(format!(
+                        "speed search over {}..{}: {e}{}",
+                        mps(xs[0]),
+                        mps(xs[xs.len() - 1]),
+                        why.map_or_else(String::new, |w| format!("; at {}: {w}", mps(xs[0])))
+                    ));
+                }
             }
         }
         let f = |v: f64| self.holds(v, false);
         match crate::design::boundary(&xs, &f, true, 16, mps) {
             Ok((v, _)) => {
                 a.speed_simulated_mps = Some(v);
-                if let Some(r) = self.scene(v).and_then(|s| crate::sim::run(&s, false).ok()).map(|r| r.0) {
+                if let Some(r) = self.scene(v).and_then(|s| crate::sim::run_to_conclusion(&s).ok()) {
                     a.peak_force_at_limit_n = r.body_peak_force_n;
                     a.stroke_held_at_limit = (!self.rigid).then_some(!r.stroke_exhausted);
                 }

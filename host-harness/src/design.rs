@@ -209,7 +209,7 @@ impl Candidates<'_> {
     }
     fn safe(&self, v: f64, c: f64) -> Option<bool> {
         let s = self.scene(v, c).ok()?;
-        crate::sim::run(&s, false).ok().map(|(r, _)| r.safe)
+        crate::sim::run_to_conclusion(&s).ok().map(|r| r.safe)
     }
 }
 
@@ -234,7 +234,7 @@ fn first_refusal(e: &str, cand: &Candidates, xs: &[f64], at: impl Fn(f64) -> (f6
 
 /// Runs a scene (its verdict is in the summary).
 fn trial_of(s: &Scene, v: f64, c: f64) -> Result<Trial, String> {
-    let (summary, _) = crate::sim::run(s, false).map_err(|e| format!("V_c = {}, C = {}: {e}", crate::verdict::mps(v), crate::verdict::mm(c)))?;
+    let summary = crate::sim::run_to_conclusion(s).map_err(|e| format!("V_c = {}, C = {}: {e}", crate::verdict::mps(v), crate::verdict::mm(c)))?;
     Ok(Trial { speed: v, stroke: c, summary })
 }
 

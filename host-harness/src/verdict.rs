@@ -64,8 +64,10 @@ pub fn concluded(t_contact: Option<f64>, t_stop: Option<f64>, duration: f64) -> 
 pub fn failures(s: &Summary) -> Vec<String> {
     let mut f = Vec::new();
     if !s.concluded {
-        let when = s.t_stop.map_or_else(|| "never commanded to stop".to_string(), |t| format!("commanded to stand still at t_stop = {t} s"));
-        f.push(format!("not concluded: the robot was still moving into the target when the run ended ({when}); the stroke can still run out after the end, which is not simulated: lengthen duration"));
+        f.push(match s.t_stop {
+            Some(t) => format!("not concluded: the robot was still moving into the target when the run ended (it stands still at t_stop = {t} s); the stroke can still run out after the end, which is not simulated: lengthen duration"),
+            None => "not concluded: the robot was never commanded to stop (the contact was not detected), so nothing stops it driving on after the run's end".to_string(),
+        });
     }
     if s.stroke_exhausted {
         let how = match s.stroke_left_min_m {
