@@ -71,8 +71,6 @@ def _plain(x: Any, key: str, issues: List[Tuple[None, str, str]]) -> Any:
     if isinstance(x, Mapping):
         out = {}
         for k, v in x.items():
-            if isinstance(k, np.str_):
-                k = str(k)
             if not isinstance(k, str):
                 issues.append((None, f"{key}.{k!r}" if key else repr(k), f"a key is a string, not {type(k).__name__}"))
                 continue

@@ -35,11 +35,12 @@ def _files_the_workers_read(file: str, text: str) -> List[str]:
     urdf = robot.get("urdf") if isinstance(robot, dict) else None
     if not isinstance(urdf, str):
         return []
-    if file.endswith(" (shipped)") and urdf.strip().removeprefix("./") in _BUILT_IN_URDFS:
+    path = urdf if os.path.isabs(urdf) or file == "<stdin>" else os.path.join(os.path.dirname(file), urdf)
+    if file.endswith(" (shipped)") and urdf.strip().removeprefix("./") in _BUILT_IN_URDFS and not os.path.exists(path):
+        # The harness reads a file at that path first, here and on a worker: only when there is none
+        # here is the built-in copy what the client checked.
         return []
-    if os.path.isabs(urdf) or file == "<stdin>":
-        return [urdf]
-    return [os.path.join(os.path.dirname(file), urdf)]
+    return [path]
 
 
 def _digest(path: str) -> str:

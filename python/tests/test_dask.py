@@ -130,3 +130,14 @@ def test_with_shared_files_a_worker_whose_copy_differs_refuses_to_run(workers_el
     monkeypatch.setattr(flinch.dask, "_digest", lambda path: "0" * 64)
     with pytest.raises(flinch.InputError, match="a Dask worker's copy differs from the client's"):
         flinch.dask.sample(str(SCENES / "robot_two_link.toml"), 16, URDF_VARY, client, seed=3, chunks=2, shared_files=True)
+
+
+def test_a_shipped_scene_by_name_with_its_urdf_path_present_here_is_refused_too(workers_elsewhere, tmp_path_factory, monkeypatch):
+    # The harness reads robots/two_link.urdf from the working directory when it exists, the built-in
+    # copy otherwise: a client that has the file would check one robot and the workers run another.
+    here = tmp_path_factory.mktemp("client")
+    (here / "robots").mkdir()
+    (here / "robots" / "two_link.urdf").write_text((SCENES / "robots" / "two_link.urdf").read_text())
+    monkeypatch.chdir(here)
+    with pytest.raises(flinch.InputError, match="robot.urdf refers to the file robots/two_link.urdf"):
+        flinch.dask.sample("robot_two_link", 16, URDF_VARY, workers_elsewhere, chunks=2)
