@@ -40,20 +40,56 @@ Scene = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 def _resolve(scene: Scene) -> Tuple[str, str]:
     """(the name messages use, the TOML text) of a scene argument."""
     if isinstance(scene, Mapping):
-        return "<dict>", _flinch.dict_to_toml(json.dumps(_plain(scene), allow_nan=True))
+        issues: List[Tuple[None, str, str]] = []
+        plain = _plain(scene, "", issues)
+        if issues:
+            raise SceneError("\n".join(f"{_DICT}: {key}: {msg}" for _, key, msg in issues), _DICT, issues)
+        return _DICT, _flinch.dict_to_toml(json.dumps(plain, allow_nan=False))
     if isinstance(scene, (str, os.PathLike)):
         return tuple(_flinch.read_scene(os.fspath(scene)))  # type: ignore[return-value]
     raise TypeError(f"a scene is a path, a shipped scene's name or a dict, not {type(scene).__name__}")
 
 
-def _plain(x: Any) -> Any:
-    """A dict with NumPy scalars and tuples made JSON-ready."""
+#: The file name a scene given as a dict has in messages.
+_DICT = "<dict>"
+
+#: TOML's integers are 64-bit signed.
+_I64 = (-(2**63), 2**63 - 1)
+
+_ALLOWED = "a scene's values are strings, finite numbers, booleans, lists and dicts (NumPy scalars and arrays of them too)"
+
+
+def _plain(x: Any, key: str, issues: List[Tuple[None, str, str]]) -> Any:
+    """A dict scene's value made JSON-ready for its TOML form: NumPy scalars as their Python values,
+    tuples and NumPy arrays as lists. A value with no TOML form (None, NaN or infinity, an integer
+    beyond 64 bits, any other type) is added to ``issues`` as (None, its dotted key, what is
+    allowed), the form of the validator's issues for a dict."""
+    if isinstance(x, np.ndarray):
+        x = x.tolist()
+    elif isinstance(x, np.generic):
+        x = x.item()
     if isinstance(x, Mapping):
-        return {str(k): _plain(v) for k, v in x.items()}
+        out = {}
+        for k, v in x.items():
+            if not isinstance(k, str):
+                issues.append((None, f"{key}.{k!r}" if key else repr(k), f"a key is a string, not {type(k).__name__}"))
+                continue
+            out[k] = _plain(v, f"{key}.{k}" if key else k, issues)
+        return out
     if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
+        return [_plain(v, f"{key}[{i}]", issues) for i, v in enumerate(x)]
+    if x is None:
+        issues.append((None, key, "is None, which TOML has no form for: leave the key out (its default applies, if it has one)"))
+    elif isinstance(x, bool) or isinstance(x, str):
+        return x
+    elif isinstance(x, int):
+        if not _I64[0] <= x <= _I64[1]:
+            issues.append((None, key, f"= {x} is beyond TOML's 64-bit integers ({_I64[0]} to {_I64[1]}); give it as a float if the key takes one"))
+    elif isinstance(x, float):
+        if not np.isfinite(x):
+            issues.append((None, key, f"= {x} is not a finite number: every number of a scene is finite (docs/SCENES.md gives each key's range)"))
+    else:
+        issues.append((None, key, f"is a {type(x).__name__}: {_ALLOWED}"))
     return x
 
 
@@ -80,19 +116,64 @@ def run(scene: Scene) -> Dict[str, Any]:
     return json.loads(_flinch.run(*_resolve(scene)))
 
 
-def _sweep_specs(vary: Union[Mapping[str, Any], Sequence[str], str]) -> List[str]:
+_SWEEP_FORM = "a (START, STOP, N) tuple or a \"START:STOP:N\" string"
+
+
+def _num(x: Any) -> str:
+    """A number of a ``vary`` tuple as the command line's text: every real number exactly (repr of
+    its float), a string as given (the harness parses it). A bool or any other type is refused."""
+    if isinstance(x, str):
+        return x
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise TypeError(type(x).__name__)
+    return repr(float(x))
+
+
+def _spec_strings(vary: Any, what: str) -> List[str]:
+    """``vary`` given as one ``KEY=...`` string or a list of them, as on the command line."""
     if isinstance(vary, str):
         return [vary]
-    if isinstance(vary, Mapping):
-        out = []
-        for key, v in vary.items():
-            if isinstance(v, str):
-                out.append(f"{key}={v}")
-            else:
-                start, stop, n = v
-                out.append(f"{key}={float(start)!r}:{float(stop)!r}:{int(n)}")
-        return out
-    return list(vary)
+    if isinstance(vary, (list, tuple)) and all(isinstance(v, str) for v in vary):
+        return list(vary)
+    raise InputError(f"vary = {vary!r}: give a dict of key to {what}, or a list of \"KEY=...\" strings as on the command line")
+
+
+def _vary_items(vary: Mapping[str, Any]):
+    for key, v in vary.items():
+        if not isinstance(key, str):
+            raise InputError(f"vary: the key {key!r} is a {type(key).__name__}; a key is a dotted string such as \"motion.speed\"")
+        yield key, v
+
+
+def _keys(keys: Any, name: str) -> List[str]:
+    """A list of dotted keys; one key may be given as a string."""
+    if isinstance(keys, str):
+        return [keys]
+    out = list(keys)
+    bad = [k for k in out if not isinstance(k, str)]
+    if bad:
+        raise InputError(f"{name} = {keys!r}: a list of dotted keys (strings such as \"motion.speed\"), not {type(bad[0]).__name__}")
+    return out
+
+
+def _sweep_specs(vary: Union[Mapping[str, Any], Sequence[str], str]) -> List[str]:
+    if not isinstance(vary, Mapping):
+        return _spec_strings(vary, _SWEEP_FORM)
+    out = []
+    for key, v in _vary_items(vary):
+        if isinstance(v, str):
+            out.append(f"{key}={v}")
+            continue
+        if not (isinstance(v, (list, tuple)) and len(v) == 3):
+            raise InputError(f"vary[{key!r}] = {v!r}: an axis is {_SWEEP_FORM}, e.g. (0.2, 0.4, 3)")
+        start, stop, n = v
+        try:
+            ends = [_num(start), _num(stop)]
+        except TypeError as e:
+            raise InputError(f"vary[{key!r}] = {v!r}: START and STOP are numbers, not {e}") from None
+        count = n if isinstance(n, str) else _whole(f"vary[{key!r}]'s N", n, 1, _U64, "the number of points")
+        out.append(f"{key}={ends[0]}:{ends[1]}:{count}")
+    return out
 
 
 def sweep(scene: Scene, vary, *, log: Iterable[str] = (), strict: bool = False, jobs: Optional[int] = None) -> pd.DataFrame:
@@ -104,7 +185,7 @@ def sweep(scene: Scene, vary, *, log: Iterable[str] = (), strict: bool = False, 
     validator refuses is a row with status "refused" (``strict=True`` refuses the sweep instead).
     Raises SolverError, with the DataFrame in ``result``, if the solver failed at any point."""
     file, text = _resolve(scene)
-    csv, points, failed, refused = _flinch.sweep(file, text, _sweep_specs(vary), list(log), strict, jobs)
+    csv, points, failed, refused = _flinch.sweep(file, text, _sweep_specs(vary), _keys(log, "log"), bool(strict), _jobs(jobs))
     import io
 
     df = pd.read_csv(io.StringIO(csv), keep_default_na=False, na_values=[""])
@@ -114,21 +195,28 @@ def sweep(scene: Scene, vary, *, log: Iterable[str] = (), strict: bool = False, 
     return df
 
 
+_DIST_FORM = "a distribution: \"normal:MEAN:SD\" or the tuple (\"normal\", MEAN, SD) (also lognormal, uniform, triangular; docs/sample.md)"
+
+
 def _sample_specs(vary: Union[Mapping[str, Any], Sequence[str], str]) -> List[str]:
     """``--vary`` specs from ``{"motion.dead_time": "uniform:0.016:0.032"}``,
     ``{"motion.dead_time": ("uniform", 0.016, 0.032)}`` or ``["motion.dead_time=uniform:0.016:0.032"]``."""
-    if isinstance(vary, str):
-        return [vary]
-    if isinstance(vary, Mapping):
-        out = []
-        for key, v in vary.items():
-            if isinstance(v, str):
-                out.append(f"{key}={v}")
-            else:
-                name, *params = v
-                out.append(f"{key}={name}:" + ":".join(repr(float(p)) for p in params))
-        return out
-    return list(vary)
+    if not isinstance(vary, Mapping):
+        return _spec_strings(vary, _DIST_FORM)
+    out = []
+    for key, v in _vary_items(vary):
+        if isinstance(v, str):
+            out.append(f"{key}={v}")
+            continue
+        if not (isinstance(v, (list, tuple)) and len(v) >= 1 and isinstance(v[0], str)):
+            fixed = " (to fix a key at one value, set it in the scene: flinch.scene(name) gives a dict to edit)" if isinstance(v, (int, float, np.number)) else ""
+            raise InputError(f"vary[{key!r}] = {v!r}: give {_DIST_FORM}{fixed}")
+        name, *params = v
+        try:
+            out.append(f"{key}={name}:" + ":".join(_num(p) for p in params))
+        except TypeError as e:
+            raise InputError(f"vary[{key!r}] = {v!r}: a distribution's parameters are numbers, not {e}") from None
+    return out
 
 
 @dataclass
@@ -217,8 +305,9 @@ def sample(
     sample, as the command line exits 2 and 3."""
     file, text = _resolve(scene)
     specs = _sample_specs(vary)
-    _notes(file, text, specs, _count(n), int(seed), bool(truncate))
-    report, cols = _flinch.sample(file, text, specs, _count(n), int(seed), bool(truncate), _chunk(chunk), jobs, bool(rows))
+    n, seed, chunk, jobs = _count(n), _seed(seed), _chunk(chunk), _jobs(jobs)
+    _notes(file, text, specs, n, seed, bool(truncate))
+    report, cols = _flinch.sample(file, text, specs, n, seed, bool(truncate), chunk, jobs, bool(rows))
     result = Sample(json.loads(report), _frame(cols) if cols is not None else None)
     return _raise_for(result)
 
@@ -233,18 +322,55 @@ def _notes(file: str, text: str, specs: List[str], n: int, seed: int, truncate: 
         warnings.warn(note, RefusalWarning, stacklevel=3)
 
 
+#: The largest u64: the harness counts samples and seeds in 64 bits.
+_U64 = 2**64 - 1
+
+#: More threads than any machine has cores; each is an OS thread.
+MAX_JOBS = 4096
+
+
+def _whole(name: str, x: Any, lo: int, hi: int, what: str) -> int:
+    """``x`` as an int in [lo, hi]: a Python or NumPy integer, or a float with no fractional part
+    (``1e6``). A bool, a fraction, a string or a number out of range is an InputError naming
+    ``name`` and what is allowed; never rounded, never wrapped."""
+    allowed = f"{name} is {what}: a whole number from {lo:,} to {hi:,}"
+    if isinstance(x, (bool, np.bool_)):
+        raise InputError(f"{name} = {x!r}: {allowed}, not a bool")
+    if isinstance(x, (int, np.integer)):
+        v = int(x)
+    elif isinstance(x, (float, np.floating)):
+        if not (np.isfinite(x) and float(x).is_integer()):
+            raise InputError(f"{name} = {x!r}: {allowed}")
+        v = int(x)
+    else:
+        raise InputError(f"{name} = {x!r}: {allowed}, not a {type(x).__name__}")
+    if not lo <= v <= hi:
+        raise InputError(f"{name} = {x!r}: {allowed}")
+    return v
+
+
 def _count(n: Any) -> int:
-    x = float(n)
-    if not (x >= 1 and x == int(x)):
-        raise InputError(f"n = {n!r}: the number of samples is a whole number of at least 1")
-    return int(x)
+    return _whole("n", n, 1, _U64, "the number of samples")
 
 
-def _chunk(chunk: Optional[Tuple[int, int]]) -> Optional[Tuple[int, int]]:
+def _seed(seed: Any) -> int:
+    return _whole("seed", seed, 0, _U64, "the seed of the draws")
+
+
+def _jobs(jobs: Any) -> Optional[int]:
+    return None if jobs is None else _whole("jobs", jobs, 1, MAX_JOBS, "the number of threads (None: all cores)")
+
+
+def _chunk(chunk: Any) -> Optional[Tuple[int, int]]:
     if chunk is None:
         return None
-    k, m = chunk
-    return int(k), int(m)
+    if isinstance(chunk, (str, bytes)) or not isinstance(chunk, Sequence) or len(chunk) != 2:
+        raise InputError(f"chunk = {chunk!r}: a chunk is (K, M), chunk K of M, with 1 <= K <= M")
+    k = _whole("chunk's K", chunk[0], 1, _U64, "the chunk's number (chunk K of M)")
+    m = _whole("chunk's M", chunk[1], 1, _U64, "the number of chunks (chunk K of M)")
+    if k > m:
+        raise InputError(f"chunk = ({k}, {m}): a chunk is (K, M), chunk K of M, with 1 <= K <= M")
+    return k, m
 
 
 def merge(reports: Sequence[Union[Dict[str, Any], Sample]]) -> Dict[str, Any]:
