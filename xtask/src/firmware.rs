@@ -7,7 +7,7 @@ use crate::Outcome;
 use flinch_firmware::integrity::Seed;
 use std::env;
 use std::fs;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 pub fn target_installed() -> bool {
@@ -58,41 +58,38 @@ pub fn firmware_clippy() -> Outcome {
 /// thread mode drives, because QEMU 7.2 does not model the F405's GPIO. Its own target directory, so
 /// the production ELF is never overwritten by it.
 pub fn build_board_qemu_io() -> Result<(), String> {
-    let status = cargo()
-        .args(["build", "--release", "--target", TARGET, "--bin", "board", "--features", "qemu-io", "--target-dir"])
-        .arg(qemu_io_dir())
-        .current_dir(repo_root().join("firmware"))
-        .status()
-        .map_err(|e| format!("could not run cargo: {e}"))?;
-    if status.success() {
-        let elf = qemu_io_dir().join(TARGET).join("release").join("board");
-        let stored = patch_flash_crc(&elf, Seed::QemuBench)?;
-        // The bench image must fail the production build's check (it must never drive a machine).
-        let b = fs::read(&elf).map_err(|e| format!("{}: {e}", elf.display()))?;
-        let (image, _, crc_at) = flash_image(&b, true)?;
-        if flinch_firmware::integrity::image_crc(&image, crc_at) == stored {
-            return Err("the qemu-io board image passes the production flash CRC check".into());
-        }
-        Ok(())
-    } else {
-        Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-io exited with {status}"))
+    let elf = build_board_with("qemu-io", &qemu_io_dir())?;
+    let stored = patch_flash_crc(&elf, Seed::QemuBench)?;
+    // The bench image must fail the production build's check (it must never drive a machine).
+    let b = fs::read(&elf).map_err(|e| format!("{}: {e}", elf.display()))?;
+    let (image, _, crc_at) = flash_image(&b, true)?;
+    if flinch_firmware::integrity::image_crc(&image, crc_at) == stored {
+        return Err("the qemu-io board image passes the production flash CRC check".into());
     }
+    Ok(())
 }
 
 /// The `qemu-clock` build of the board binary: the production board with only its clock constants
 /// as QEMU's netduinoplus2 runs them (core 168 MHz, timers 1 GHz), so that its milliseconds are
 /// QEMU's. Its own target directory.
 pub fn build_board_qemu_clock() -> Result<(), String> {
+    let elf = build_board_with("qemu-clock", &qemu_clock_dir())?;
+    patch_flash_crc(&elf, Seed::QemuBench).map(|_| ())
+}
+
+/// The board binary built with the cargo feature `feature` into its own target directory `dir`
+/// (inside firmware/, for its .cargo/config.toml); returns the ELF's path (its CRC not yet patched).
+fn build_board_with(feature: &str, dir: &Path) -> Result<PathBuf, String> {
     let status = cargo()
-        .args(["build", "--release", "--target", TARGET, "--bin", "board", "--features", "qemu-clock", "--target-dir"])
-        .arg(qemu_clock_dir())
+        .args(["build", "--release", "--target", TARGET, "--bin", "board", "--features", feature, "--target-dir"])
+        .arg(dir)
         .current_dir(repo_root().join("firmware"))
         .status()
         .map_err(|e| format!("could not run cargo: {e}"))?;
     if status.success() {
-        patch_flash_crc(&qemu_clock_dir().join(TARGET).join("release").join("board"), Seed::QemuBench).map(|_| ())
+        Ok(dir.join(TARGET).join("release").join("board"))
     } else {
-        Err(format!("cargo build --release --target {TARGET} --bin board --features qemu-clock exited with {status}"))
+        Err(format!("cargo build --release --target {TARGET} --bin board --features {feature} exited with {status}"))
     }
 }
 
