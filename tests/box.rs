@@ -97,7 +97,7 @@ fn box_keys(doc: &DocumentMut) -> Vec<(Vec<String>, Key)> {
         if !present && top != "solver" {
             continue;
         }
-        if !t.when.is_empty() && !kind_of(top).is_some_and(|kd| t.when == format!("kind = \"{kd}\"")) {
+        if !t.when.is_empty() && kind_of(top).is_none_or(|kd| t.when != format!("kind = \"{kd}\"")) {
             continue;
         }
         for key in t.keys {
@@ -162,7 +162,7 @@ fn set(doc: &mut DocumentMut, path: &[String], name: &str, v: Item) {
 }
 
 fn finite(x: Option<f64>) -> bool {
-    x.map_or(true, f64::is_finite)
+    x.is_none_or(f64::is_finite)
 }
 
 /// Every summary field within its physical range, or null with the reason.
@@ -405,7 +405,10 @@ fn settling_corners() -> Vec<(String, String)> {
 
 /// The measurement, one line per corner: (name, actual steps, estimated steps, wall s), or the
 /// refusal / solver error.
-fn measure_settling() -> Vec<(String, Result<(u64, f64, f64), String>)> {
+/// A corner's name and its (actual steps, estimated steps, wall s), or why it has none.
+type Settling = (String, Result<(u64, f64, f64), String>);
+
+fn measure_settling() -> Vec<Settling> {
     settling_corners()
         .into_iter()
         .map(|(name, text)| {
@@ -485,7 +488,7 @@ fn a_60_s_hil_run_writes_every_row_it_announces() {
     assert_eq!(announced, sim::recorded_rows(60.0, sc.solver.output_interval));
     let (mut rows, mut last, mut monotone) = (0u64, f64::NAN, true);
     let mut sink = |s: &sim::Sample, _: &hil::RowSignals<'_>| {
-        monotone &= !(s.t <= last);
+        monotone &= last.is_nan() || s.t > last;
         rows += 1;
         last = s.t;
     };

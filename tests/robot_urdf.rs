@@ -54,7 +54,7 @@ fn one_link_pendulum_matches_closed_form() {
     let inertia = m * lc * lc + i;
     for q in [0.0, 0.4, -2.0, 3.0] {
         // tangent at the tip: (-sin q, cos q, 0)
-        let r = reduce(&chain, &[q], [-(q as f64).sin(), q.cos(), 0.0], &[k], &[d]).unwrap();
+        let r = reduce(&chain, &[q], [-q.sin(), q.cos(), 0.0], &[k], &[d]).unwrap();
         assert_close!(r.mass_kg, inertia / (l * l), 1e-9);
         assert_close!(r.stiffness_npm, k / (l * l), 1e-9);
         assert_close!(r.damping_nspm, d / (l * l), 1e-9);
@@ -102,7 +102,7 @@ fn two_link_mass_matrix_and_reflected_values_match_textbook() {
                 assert_close!(mq[(a, b)], mc[a][b], 1e-8);
             }
         }
-        for u in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.6, -0.8, 0.0], [0.5, 0.5, 0.7071067811865476]] {
+        for u in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.6, -0.8, 0.0], [0.5, 0.5, std::f64::consts::FRAC_1_SQRT_2]] {
             // w = J^T u (planar: z does not move)
             let w = [j[0][0] * u[0] + j[1][0] * u[1], j[0][1] * u[0] + j[1][1] * u[1]];
             let det = mc[0][0] * mc[1][1] - mc[0][1] * mc[1][0];

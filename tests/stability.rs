@@ -142,7 +142,7 @@ fn params() -> impl Strategy<Value = Params> {
 }
 
 fn finite(x: Option<f64>) -> bool {
-    x.map_or(true, f64::is_finite)
+    x.is_none_or(f64::is_finite)
 }
 
 /// No NaN or infinity anywhere in the summary.
@@ -162,7 +162,7 @@ fn check_finite(s: &Summary) -> Result<(), String> {
 fn check_physical(s: &Summary) -> Result<(), String> {
     let bad = |what: &str| Err(format!("{what} in {s:?}"));
     for (name, t) in [("t_contact", s.t_contact), ("t_detect", s.t_detect), ("t_brake", s.t_brake), ("t_stop", s.t_stop)] {
-        if t.is_some_and(|t| !(t >= 0.0)) {
+        if t.is_some_and(|t| t.is_nan() || t < 0.0) {
             return bad(&format!("{name} < 0"));
         }
     }
@@ -172,7 +172,7 @@ fn check_physical(s: &Summary) -> Result<(), String> {
         ("achieved_restitution", s.achieved_restitution, &s.achieved_restitution_null_reason),
     ] {
         match (d, why) {
-            (Some(x), _) if !(x >= 0.0) => return bad(&format!("{name} = {x} < 0")),
+            (Some(x), _) if x.is_nan() || x < 0.0 => return bad(&format!("{name} = {x} < 0")),
             (Some(_), Some(_)) => return bad(&format!("{name} has a value and a null reason")),
             (None, None) if s.t_contact.is_some() => return bad(&format!("{name} null without a reason")),
             _ => {}

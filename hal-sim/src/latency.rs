@@ -7,7 +7,7 @@
 //! * [`WORST_EDGE_TO_STOP_INSTRUCTIONS`]: firmware/README.md, "Measured figures", row "QEMU
 //!   edge-to-stop, worst" (`cargo xtask qemu`, `worst_pend_to_stop`: the edge pended in the same
 //!   instant as the trip tick, pend to the stop write). `cargo xtask test` asserts it is at most
-//!   `ICOUNT_WORST_LIMIT` (xtask/src/main.rs); the test here asserts the constant equals the README's
+//!   `ICOUNT_WORST_LIMIT` (xtask/src/qemu.rs); the test here asserts the constant equals the README's
 //!   figure and is within that limit.
 //! * [`TICK_TO_OUTPUT_WORST_INSTRUCTIONS`]: the same table, row "QEMU tick-to-output, worst": a
 //!   tick that confirms a filtered trip (or the edge's bookkeeping, which writes the escalation)

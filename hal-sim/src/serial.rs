@@ -302,7 +302,7 @@ mod tests {
     /// s = 80.9 ms, and the weights' age counts from its first byte.
     #[test]
     fn bytes_take_their_time_at_the_baud_rate() {
-        let (mut host, mut mcu) = SimSerial::pair_at(115_200);
+        let (mut host, mcu) = SimSerial::pair_at(115_200);
         let f = frame(1, 13107);
         assert_eq!(f.len(), 932);
         host.write_all(&f).unwrap();

@@ -483,7 +483,7 @@ fn a_latch_in_force_when_the_part_reset_survives_the_reset() {
         run_untouched(&mut again, 2.0);
         let evs: Vec<_> = again.events().iter().map(|e| (e.cause, e.flags)).collect();
         assert_eq!(evs, [(Cause::Reset, cause as u8), (Cause::Trip, flinch_firmware::event_log::FLAG_RETAINED)]);
-        assert_eq!(again.fw.retained().decode().map(|(l, n)| (l, n)), Some((Some(Cause::Trip), 1)), "latch and boot count carried on");
+        assert_eq!(again.fw.retained().decode(), Some((Some(Cause::Trip), 1)), "latch and boot count carried on");
     }
     // A fault handler that ran before a watchdog reset.
     let handler = Retained::new(Some(Cause::FaultHandler), 3);

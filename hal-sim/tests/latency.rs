@@ -36,7 +36,7 @@ fn worst_edge_to_stop_is_the_readme_figure_and_within_what_xtask_asserts() {
         TRIP_TICK_INSTRUCTIONS + EDGE_HANDLER_INSTRUCTIONS + EDGE_AND_BOOK_INSTRUCTIONS + DRAIN_MASKED_INSTRUCTIONS,
         "the tick-to-output bound includes the same- and higher-priority work and the drain's masked section"
     );
-    let xtask = read("xtask/src/main.rs");
+    let xtask = read("xtask/src/qemu.rs");
     let limit = const_u32(&xtask, "ICOUNT_WORST_LIMIT");
     assert!(WORST_EDGE_TO_STOP_INSTRUCTIONS <= limit, "{WORST_EDGE_TO_STOP_INSTRUCTIONS} > xtask's {limit}");
     let tick_limit = const_u32(&xtask, "ICOUNT_TICK_OUTPUT_LIMIT");

@@ -376,8 +376,8 @@ pub fn aggregate(rows: &[Row]) -> Vec<Aggregate> {
             (Ok(sm), Some(e)) => {
                 a.ok += 1;
                 let w = [e.peak_contact, e.peak_robot, e.detect.unwrap_or(0.0), e.object_velocity.unwrap_or(0.0)];
-                for k in 0..4 {
-                    a.worst[k] = a.worst[k].max(w[k]);
+                for (worst, v) in a.worst.iter_mut().zip(w) {
+                    *worst = worst.max(v);
                 }
                 a.mode_wrong += usize::from(!e.mode_ok);
                 a.wall += r.wall_median;

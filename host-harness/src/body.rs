@@ -48,6 +48,8 @@ pub struct Preset {
     pub transient_permitted: bool,
 }
 
+// One argument per column of Tables A.2/A.3, so that each row of `PRESETS` reads as the table does.
+#[allow(clippy::too_many_arguments)]
 const fn p(name: &'static str, label: &'static str, m: f64, k_n_per_mm: f64, f: f64, p_n_per_cm2: f64, site: &'static str, transient: bool) -> Preset {
     Preset { name, label, mass_kg: m, stiffness_n_per_m: k_n_per_mm * 1e3, force_quasi_static_n: f, pressure_quasi_static_pa: p_n_per_cm2 * 1e4, pressure_site: site, transient_permitted: transient }
 }

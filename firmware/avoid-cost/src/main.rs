@@ -215,36 +215,15 @@ fn measure_rx<R: Real>(name: &str, n: usize, rate_hz: usize, overhead: u32) -> u
     }
 }
 
-/// The board's own step (`avoidance::Link<BoardReal>` as `src/bin/support/board_avoid.rs` runs it):
+/// The board's own step (`avoidance::Link<BoardReal>` with `link::board_config`, the settings
+/// `src/bin/support/board_avoid.rs` runs):
 /// one 10 ms step's bytes pushed into the receiver, then `Link::step` (receiver serviced, field,
 /// command, cap, status) and `encode_velocity` (the frame sent back), measured together; three
 /// frames' worth of steps at `rate_hz` frames a second, then 40 steps with the line silent. Prints
 /// the largest step.
 fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> u32 {
-    use flinch_firmware::avoidance::link::{encode_velocity, Link, LinkConfig};
-    use flinch_firmware::avoidance::BoardReal;
-    let r = BoardReal::from_f64;
-    let cfg = LinkConfig {
-        gains: Gains {
-            repulsion: Repulsion::Vortex { sign: 0 },
-            k_att: r(0.25),
-            k_rep: r(0.5),
-            capture_radius_m: r(0.03),
-            latch_height_m: r(0.02),
-            slow_height_m: r(0.05),
-            stop_height_m: r(0.15),
-            bounded: false,
-        },
-        watchdog: Watchdog { slow_after_ms: 100, stop_after_ms: 330 },
-        start_m: [r(0.3), r(0.4)],
-        goal_m: [r(0.95), r(0.5)],
-        speed_cap_mps: r(0.25),
-        period_ms: 10,
-        max_age_ms: 100,
-        byte_timeout_ms: 50,
-        budget_bytes: 256,
-    };
-    let mut link = Link::new(cfg);
+    use flinch_firmware::avoidance::link::{board_config, encode_velocity, Link};
+    let mut link = Link::new(board_config());
     let mut out = [0u8; frame::MAX_FRAME];
     let len = frame::frame_len(n, n).unwrap_or(0);
     let per_step = (len * rate_hz).div_ceil(100);

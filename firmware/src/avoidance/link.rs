@@ -38,7 +38,7 @@
 //! | 30 | 2 | refused frames u16: bad CRC + bad header + short + stale (saturating) |
 //! | 32 | 4 | CRC-32/ISO-HDLC of bytes 2..32 |
 
-use super::control::{Controller, Gains, Watchdog};
+use super::control::{Controller, Gains, Repulsion, Watchdog};
 use super::field::sample;
 use super::frame::CRC;
 use super::gauss::GaussLut;
@@ -111,6 +111,38 @@ pub struct LinkConfig<R> {
     pub byte_timeout_ms: u32,
     /// Bytes parsed per step (more than the line brings in one period).
     pub budget_bytes: usize,
+}
+
+/// The board's control period, ms: one avoidance step every ten 1 ms ticks.
+pub const BOARD_PERIOD_MS: u32 = 10;
+
+/// The installation's avoidance settings as the board ships them: those of the demo scene
+/// (`scenes/avoid_*.toml`: k_a 0.25 m/s, the thesis's vortex) on the 1.05 m work plane; replace
+/// with the cell's. The one copy: the board (`src/bin/support/board_avoid.rs`) runs it and the
+/// step's instruction count (`avoid-cost`, its `avoid_board` lines) measures it.
+pub fn board_config() -> LinkConfig<super::BoardReal> {
+    let r = super::BoardReal::from_f32;
+    LinkConfig {
+        gains: Gains {
+            repulsion: Repulsion::Vortex { sign: 0 },
+            k_att: r(0.25),
+            k_rep: r(0.5),
+            capture_radius_m: r(0.03),
+            latch_height_m: r(0.02),
+            slow_height_m: r(0.05),
+            stop_height_m: r(0.15),
+            bounded: false,
+        },
+        watchdog: Watchdog { slow_after_ms: 100, stop_after_ms: 330 },
+        start_m: [r(0.2), r(0.5)],
+        goal_m: [r(0.9), r(0.5)],
+        speed_cap_mps: r(0.25),
+        period_ms: BOARD_PERIOD_MS,
+        max_age_ms: 100,
+        byte_timeout_ms: 50,
+        // 115,200 baud brings 115 bytes in 10 ms.
+        budget_bytes: 256,
+    }
 }
 
 /// One step's output.

@@ -305,7 +305,7 @@ mod tests {
         }
         assert_eq!(R::from_f64(-2.5).floor_int(), -3);
         assert_eq!(R::from_f64(2.5).floor_int(), 2);
-        assert_eq!(R::from_f64(1.0).div(R::ZERO).to_f64() > 1.0, true);
+        assert!(R::from_f64(1.0).div(R::ZERO).to_f64() > 1.0);
         assert!((R::from_q16(3 << 15).to_f64() - 1.5).abs() < 1e-6);
         assert_eq!(R::from_f64(0.25).to_micro(), 250_000);
         assert_eq!(R::from_f64(-0.5).to_micro(), -500_000);
@@ -320,6 +320,6 @@ mod tests {
         // I8F24 saturates at 128: test within its range.
         let r = I8F24::from_f64(2.0).sqrt().to_f64();
         assert!((r - core::f64::consts::SQRT_2).abs() < 1e-6);
-        assert_eq!(I8F24::from_f64(500.0).to_f64() > 127.9, true);
+        assert!(I8F24::from_f64(500.0).to_f64() > 127.9);
     }
 }

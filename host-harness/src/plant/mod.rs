@@ -169,7 +169,8 @@ impl Plant {
         let net = |s: f64| self.decoupler.force(s, 0.0, 0.0, 0.0).total + w;
         match (&self.decoupler, self.decoupler.front_stop(), self.decoupler.back_stop()) {
             (Decoupler::Rigid, ..) => 0.0,
-            (Decoupler::Linear(l), ..) => if l.stiffness > 0.0 { w / l.stiffness } else { 0.0 },
+            (Decoupler::Linear(l), ..) if l.stiffness > 0.0 => w / l.stiffness,
+            (Decoupler::Linear(_), ..) => 0.0,
             (_, Some(front), Some(back)) => {
                 // Above the front stop the net force is negative (the stop pushes back) far enough in.
                 let mut hi = front.at + (w.abs() + 1.0) / front.stiffness * 10.0 + 1e-9;

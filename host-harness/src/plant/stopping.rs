@@ -119,7 +119,7 @@ impl StoppingTable {
 
     /// D(v) and T(v), m and s, interpolated (see the module docs); `None` above the table.
     pub fn at(&self, v: f64) -> Option<(f64, f64)> {
-        if !(v >= 0.0) || v > self.max_speed() {
+        if v.is_nan() || v < 0.0 || v > self.max_speed() {
             return None;
         }
         let (v1, d1, t1) = (self.speed[0], self.distance[0], self.time[0]);

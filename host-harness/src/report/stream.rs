@@ -46,8 +46,12 @@ pub struct Decimator {
     n: usize,
     whole: usize,
     all: Option<Vec<Sample>>,
-    buckets: Vec<Option<([Sample; QUANTITIES], [Sample; QUANTITIES], Sample)>>,
+    buckets: Vec<Option<Bucket>>,
 }
+
+/// One bucket: for every quantity the sample with its lowest and its highest value, and the
+/// bucket's first sample.
+type Bucket = ([Sample; QUANTITIES], [Sample; QUANTITIES], Sample);
 
 impl Decimator {
     /// For `expected` samples over [0, duration]: whole up to [`PLOT_SAMPLES`], else [`BUCKETS`]
@@ -243,7 +247,7 @@ impl Streamer {
             m.push(s);
         }
         self.count += 1;
-        if self.count % 256 == 0 {
+        if self.count.is_multiple_of(256) {
             if !self.shown && self.started.elapsed() > Duration::from_millis(800) && std::io::stderr().is_terminal() {
                 self.bar.set_draw_target(ProgressDrawTarget::stderr());
                 self.shown = true;

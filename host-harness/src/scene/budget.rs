@@ -72,12 +72,12 @@ pub const PRESSED_FACTOR: f64 = 3.0;
 pub fn pressed_steps(s: &Scene) -> Option<(f64, f64)> {
     use super::model::TargetKind;
     let Decoupler::Bistable(b) = &s.decoupler else { return None };
-    if s.robot.is_some() || s.motion.stopping.is_some() || !matches!(s.target.kind, TargetKind::Obstacle) || !(s.motion.decel > 0.0) {
+    if s.robot.is_some() || s.motion.stopping.is_some() || !matches!(s.target.kind, TargetKind::Obstacle) || s.motion.decel.is_nan() || s.motion.decel <= 0.0 {
         return None;
     }
     let v = s.motion.speed;
     let d = v * s.motion.dead_time + v * v / (2.0 * s.motion.decel) - (b.front_stroke + b.back_stroke);
-    if !(d > 0.0) {
+    if d.is_nan() || d <= 0.0 {
         return Some((0.0, 0.0));
     }
     let (kb, kc) = (b.back_stop.stiffness, s.target.stiffness);

@@ -77,6 +77,9 @@ pub fn simplified(scene: &Scene) -> (Scene, Vec<String>) {
     (s, done)
 }
 
+/// See [`Simulation::sink`].
+pub type Sink = Box<dyn FnMut(&Sample)>;
+
 /// See [`Simulation::probe`].
 pub type Probe = Box<dyn FnMut(&Plant, f64, f64, &dyn Fn(f64) -> State)>;
 
@@ -128,7 +131,7 @@ pub struct Simulation {
     pub history: Vec<Sample>,
     /// Where recorded samples go as each step makes them (a streamed CSV, a decimated plot: memory
     /// stays bounded whatever the duration); `None` keeps them in `history`.
-    pub sink: Option<Box<dyn FnMut(&Sample)>>,
+    pub sink: Option<Sink>,
     /// Called after every accepted step with the plant, the step's span [t0, t1] and its dense
     /// output: firmware in the loop reads the switch between steps from it (`hil.rs`).
     pub probe: Option<Probe>,
@@ -385,9 +388,9 @@ fn sample(t: f64, k: &Kinematics, f: &Forces) -> Sample {
 /// interior, until the gain is below `rtol` of the peak. Returns (instant, maximum).
 fn refine_max(f: impl Fn(f64) -> f64, ts: [f64; 5], fs: [f64; 5], rtol: f64) -> (f64, f64) {
     let (mut i, mut best) = (0, fs[0]);
-    for k in 1..5 {
-        if fs[k] > best {
-            (i, best) = (k, fs[k]);
+    for (k, &f) in fs.iter().enumerate().skip(1) {
+        if f > best {
+            (i, best) = (k, f);
         }
     }
     let vertex = |a: f64, fa: f64, b: f64, fb: f64, c: f64, fc: f64| {
@@ -445,7 +448,7 @@ fn spd_inverse(a: &[[f64; 3]; 3], n: usize) -> Option<[[f64; 3]; 3]> {
         for j in 0..=i {
             let s: f64 = a[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
             if i == j {
-                if !(s > 0.0) || !s.is_finite() {
+                if !s.is_finite() || s <= 0.0 {
                     return None;
                 }
                 l[i][i] = s.sqrt();
@@ -462,8 +465,12 @@ fn spd_inverse(a: &[[f64; 3]; 3], n: usize) -> Option<[[f64; 3]; 3]> {
             let e = if i == c { 1.0 } else { 0.0 };
             z[i] = (e - (0..i).map(|k| l[i][k] * z[k]).sum::<f64>()) / l[i][i];
         }
+        let mut x = [0.0; 3];
         for i in (0..n).rev() {
-            inv[i][c] = (z[i] - (i + 1..n).map(|k| l[k][i] * inv[k][c]).sum::<f64>()) / l[i][i];
+            x[i] = (z[i] - (i + 1..n).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
+        }
+        for (row, xi) in inv.iter_mut().zip(x).take(n) {
+            row[c] = xi;
         }
     }
     Some(inv)
@@ -679,7 +686,7 @@ impl Simulation {
         if let plant::target::Target::Object { mass, .. } = self.plant.target {
             dofs.push((plant::XP, plant::VP, mass));
         }
-        if dofs.iter().any(|&(_, v, _)| !(y[v].abs() <= tol_v)) {
+        if dofs.iter().any(|&(_, v, _)| y[v].is_nan() || tol_v.is_nan() || y[v].abs() > tol_v) {
             return false;
         }
         let mut still = *y;
@@ -1029,7 +1036,6 @@ pub fn run_to_conclusion(scene: &Scene) -> Result<Summary, SolveError> {
 }
 
 /// Runs a scene to its end and returns the summary and, if `record`, the time history.
-
 pub fn run(scene: &Scene, record: bool) -> Result<(Summary, Vec<Sample>), SolveError> {
     let mut r = Run::new(scene, false, record);
     r.finish()?;

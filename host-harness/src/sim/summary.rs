@@ -190,7 +190,7 @@ pub struct Summary {
 pub fn achieved_restitution(v_in: Option<f64>, v_out: Option<f64>) -> (Option<f64>, Option<String>) {
     match (v_in, v_out) {
         (None, _) => (None, Some("no tool-target contact in the run".into())),
-        (Some(vi), _) if !(vi > 0.0) => (None, Some(format!("the first contact began at a relative approach velocity of {vi} m/s, not an impact"))),
+        (Some(vi), _) if vi.is_nan() || vi <= 0.0 => (None, Some(format!("the first contact began at a relative approach velocity of {vi} m/s, not an impact"))),
         (Some(_), None) => (None, Some("the first contact had not ended at the end of the run".into())),
         (Some(vi), Some(vo)) => {
             let e = -vo / vi;

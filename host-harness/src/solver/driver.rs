@@ -224,15 +224,15 @@ impl<const N: usize, const E: usize> Driver<N, E> {
                     if finite && !self.rejected_last {
                         let g1 = sys.events(self.t + h, &y1);
                         let mut aim = f64::INFINITY;
-                        for i in 0..E {
+                        for (i, &g1_i) in g1.iter().enumerate() {
                             let Some(dir) = sys.watching(i) else { continue };
-                            if dir.new_side(self.g[i]) || !dir.new_side(g1[i]) {
+                            if dir.new_side(self.g[i]) || !dir.new_side(g1_i) {
                                 continue;
                             }
                             let tangent = |tau: f64| {
                                 let mut y = self.y;
-                                for k in 0..N {
-                                    y[k] += tau * self.f[k];
+                                for (yk, fk) in y.iter_mut().zip(&self.f) {
+                                    *yk += tau * fk;
                                 }
                                 sys.events(self.t + tau, &y)[i]
                             };
@@ -267,13 +267,13 @@ impl<const N: usize, const E: usize> Driver<N, E> {
             let g1 = sys.events(t1, &y1);
             // Earliest armed event crossing in this step.
             let mut first: Option<(usize, f64)> = None;
-            for i in 0..E {
+            for (i, &g1_i) in g1.iter().enumerate() {
                 let Some(dir) = sys.watching(i) else { continue };
-                if dir.new_side(self.g[i]) || !dir.new_side(g1[i]) {
+                if dir.new_side(self.g[i]) || !dir.new_side(g1_i) {
                     continue;
                 }
-                let theta = locate(|th| sys.events(self.t + th * h, &stepper.dense(th))[i], self.g[i], g1[i], dir, self.settings.event_tol / h);
-                if first.map_or(true, |(_, best)| theta < best) {
+                let theta = locate(|th| sys.events(self.t + th * h, &stepper.dense(th))[i], self.g[i], g1_i, dir, self.settings.event_tol / h);
+                if first.is_none_or(|(_, best)| theta < best) {
                     first = Some((i, theta));
                 }
             }
@@ -370,7 +370,7 @@ mod tests {
         fn on_event(&mut self, _i: usize, t: f64, y: &mut [f64; 2]) {
             self.bounces.push(t);
             y[0] = 0.0f64.max(y[0]) + 1e-300;
-            y[1] = -0.5 * y[1];
+            y[1] *= -0.5;
         }
         fn next_breakpoint(&self, t: f64) -> Option<f64> {
             self.breakpoint.filter(|&b| b > t)

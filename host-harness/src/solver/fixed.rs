@@ -84,8 +84,8 @@ impl<const N: usize> Stepper<N> for Fixed<N> {
         let h01 = -2.0 * t3 + 3.0 * t2;
         let h11 = t3 - t2;
         let mut out = [0.0; N];
-        for i in 0..N {
-            out[i] = h00 * self.y0[i] + h10 * self.h * self.f0[i] + h01 * self.y1[i] + h11 * self.h * self.f1[i];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = h00 * self.y0[i] + h10 * self.h * self.f0[i] + h01 * self.y1[i] + h11 * self.h * self.f1[i];
         }
         out
     }

@@ -99,6 +99,9 @@ pub fn error_norm<const N: usize>(err: &[f64; N], y0: &[f64; N], y1: &[f64; N], 
 /// Used at the start and after every event, where the right-hand side has just changed (a contact
 /// begins, a damping is fixed) and the step carried over from before says nothing. `order` is the
 /// method's order; the result is at most `h_max`.
+// HINIT's own arguments (the system, the state, the method's order and the tolerances): a struct
+// for them would be built at its one call site only to be taken apart here.
+#[allow(clippy::too_many_arguments)]
 pub fn initial_step<const N: usize, S: System<N> + ?Sized>(sys: &S, t: f64, y0: &[f64; N], f0: &[f64; N], order: f64, rtol: f64, atol: f64, h_max: f64) -> f64 {
     let mut dnf = 0.0;
     let mut dny = 0.0;

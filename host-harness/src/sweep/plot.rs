@@ -277,6 +277,9 @@ where
     Ok(())
 }
 
+/// Draws one key entry's symbol with its left end at a point of the area.
+type KeySymbol<'a, DB> = dyn Fn(&DrawingArea<DB, Shift>, (i32, i32)) -> DrawResult + 'a;
+
 /// The colour bar, drawn by hand: a gradient, ticks at round values with labels, the metric's
 /// name and unit, and the key to the symbols.
 fn colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, h: &HeatMap, zlo: f64, zhi: f64) -> DrawResult
@@ -307,7 +310,7 @@ where
     // Key.
     let mut y = bottom + 30;
     let key = ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
-    let mut entry = |draw: &dyn Fn(&DrawingArea<DB, Shift>, (i32, i32)) -> DrawResult, text: &str| -> DrawResult {
+    let mut entry = |draw: &KeySymbol<'_, DB>, text: &str| -> DrawResult {
         draw(area, (18, y))?;
         area.draw(&Text::new(text.to_string(), (44, y), key.clone()))?;
         y += 24;
@@ -324,10 +327,10 @@ where
     if h.exhausted.iter().any(|&e| e) {
         entry(&x_mark(RGBColor(230, 30, 30)), "stroke exhausted")?;
     }
-    if h.status.iter().any(|&s| s == Status::Refused) {
+    if h.status.contains(&Status::Refused) {
         entry(&|a, (x, y)| { a.draw(&Rectangle::new([(x, y - 8), (x + 16, y + 8)], RGBColor(215, 215, 215).filled()))?; x_mark(RGBColor(90, 90, 90))(a, (x + 1, y)) }, "refused by the validator")?;
     }
-    if h.status.iter().any(|&s| s == Status::Failed) {
+    if h.status.contains(&Status::Failed) {
         entry(&|a, (x, y)| { a.draw(&Rectangle::new([(x, y - 8), (x + 16, y + 8)], RGBColor(120, 120, 120).filled()))?; Ok(()) }, "solver failed")?;
     }
     Ok(())

@@ -41,8 +41,8 @@
 use super::isr_cell::IsrCell;
 use core::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering::{Acquire, Relaxed, Release}};
 use cortex_m::peripheral::NVIC;
-use flinch_firmware::avoidance::link::{encode_velocity, StepDeadline, VEL_LEN};
-use flinch_firmware::avoidance::{BoardReal, Gains, Link, LinkConfig, Real, Repulsion, Watchdog};
+use flinch_firmware::avoidance::link::{board_config, encode_velocity, StepDeadline, BOARD_PERIOD_MS, VEL_LEN};
+use flinch_firmware::avoidance::{BoardReal, Link};
 
 /// USART1's line (RM0090 Table 61).
 pub const USART1_IRQ: u16 = 37;
@@ -52,8 +52,8 @@ pub const TIM3_IRQ: u16 = 29;
 const STEP_IRQ: u16 = TIM3_IRQ;
 const PRIO_USART: u8 = 0x40;
 const PRIO_STEP: u8 = 0xC0;
-/// The control period, ms.
-const PERIOD_MS: u32 = 10;
+/// The control period, ms (the library's, which `board_config` runs at).
+const PERIOD_MS: u32 = BOARD_PERIOD_MS;
 /// 16 MHz / 115,200 = 138.9: BRR 0x8B (mantissa 8, fraction 11/16), 115,108 baud (-0.08 %).
 const BRR_115200_AT_16MHZ: u32 = 0x8B;
 
@@ -87,33 +87,6 @@ fn cr1_modify(set: u32, clear: u32) {
 #[inline(always)]
 fn tim2_now_us() -> u32 {
     rd(TIM2_CNT)
-}
-
-/// The installation's avoidance settings: those of the demo scene (`scenes/avoid_*.toml`: k_a
-/// 0.25 m/s, the thesis's vortex) on the 1.05 m work plane; replace with the cell's.
-fn config() -> LinkConfig<BoardReal> {
-    let r = BoardReal::from_f32;
-    LinkConfig {
-        gains: Gains {
-            repulsion: Repulsion::Vortex { sign: 0 },
-            k_att: r(0.25),
-            k_rep: r(0.5),
-            capture_radius_m: r(0.03),
-            latch_height_m: r(0.02),
-            slow_height_m: r(0.05),
-            stop_height_m: r(0.15),
-            bounded: false,
-        },
-        watchdog: Watchdog { slow_after_ms: 100, stop_after_ms: 330 },
-        start_m: [r(0.2), r(0.5)],
-        goal_m: [r(0.9), r(0.5)],
-        speed_cap_mps: r(0.25),
-        period_ms: PERIOD_MS,
-        max_age_ms: 100,
-        byte_timeout_ms: 50,
-        // 115,200 baud brings 115 bytes in 10 ms.
-        budget_bytes: 256,
-    }
 }
 
 static LINK: IsrCell<Link<BoardReal>> = IsrCell::new();
@@ -164,7 +137,7 @@ const SR_ORE: u32 = 1 << 3;
 /// SysTick starts (the tick pends the step).
 pub fn init(nvic: &mut NVIC) {
     // SAFETY: once, before the step's interrupt (its only user) is unmasked below.
-    unsafe { LINK.init(Link::new(config())) };
+    unsafe { LINK.init(Link::new(board_config())) };
     // RCC APB2ENR USART1EN (bit 4); GPIOA MODER 10 = alternate function
     // for PA9/PA10; AFRH AF7 = USART1 for both.
     wr(RCC_APB2ENR, rd(RCC_APB2ENR) | (1 << 4));

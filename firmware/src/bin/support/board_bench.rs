@@ -152,6 +152,79 @@ fn reset_press<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, press_us: u
     run(w, now, 1_000);
 }
 
+/// A 100 ms reset press, then the board must arm (the stop output energised) within 2 s; `failure`
+/// is the bench's verdict if it does not.
+fn arm<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, failure: &str) {
+    reset_press(w, now, 100_000);
+    if !until_stop(w, now, true, 2_000_000) {
+        fail(failure);
+    }
+}
+
+/// A channel of the switch.
+#[derive(Clone, Copy)]
+enum Channel {
+    /// PA0, EXTI0 (IRQ 6).
+    A,
+    /// PA4, EXTI4 (IRQ 10).
+    B,
+}
+
+impl Channel {
+    fn other(self) -> Self {
+        match self {
+            Channel::A => Channel::B,
+            Channel::B => Channel::A,
+        }
+    }
+
+    /// Its EXTI line's bit in NVIC_ISPR0.
+    fn pend_bit(self) -> u32 {
+        match self {
+            Channel::A => 1 << 6,
+            Channel::B => 1 << 10,
+        }
+    }
+}
+
+/// The obstacle moves channel `ch`'s contact: marker `mark`, the channel reads "tripped" and its
+/// edge is pended.
+fn trip<F: FnMut()>(w: &mut World<F>, ch: Channel, mark: u32) {
+    write(MARK, mark);
+    match ch {
+        Channel::A => w.a_tripped = true,
+        Channel::B => w.b_tripped = true,
+    }
+    PINS.store(w.pins(), Relaxed);
+    write(NVIC_ISPR0, ch.pend_bit());
+}
+
+/// The obstacle: channel `first`'s contact, then the other's 1 ms later, as a real actuator moves
+/// both (`marks`: the bench's markers for the two edges); the stop must have been written when the
+/// first edge's pend returned.
+fn obstacle<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, first: Channel, marks: [u32; 2]) {
+    trip(w, first, marks[0]);
+    // The edge has priority 0 and thread mode none: it ran before this line.
+    let stopped = ODR_D.load(Relaxed) & STOP == 0;
+    run(w, now, 1_000);
+    trip(w, first.other(), marks[1]);
+    run(w, now, 100_000);
+    match (first, stopped) {
+        (Channel::A, false) => fail("the stop was not written when the EXTI0 pend returned"),
+        (Channel::B, false) => fail("the stop was not written when the EXTI4 pend returned"),
+        (Channel::A, true) => hprintln!("bench: channel A edge: stop written before the pend returned"),
+        (Channel::B, true) => hprintln!("bench: channel B edge: stop written before the pend returned"),
+    }
+}
+
+/// The obstacle goes: both channels back at rest (marker 5), 100 ms.
+fn obstacle_gone<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32) {
+    write(MARK, 5); // marker 5: obstacle gone
+    w.a_tripped = false;
+    w.b_tripped = false;
+    run(w, now, 100_000);
+}
+
 /// The scenario; `now` reads TIM2 (microseconds of firmware time).
 pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     let mut w = World { idle, a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
@@ -159,71 +232,26 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     if ODR_D.load(Relaxed) & STOP != 0 {
         fail("'go' before any reset press");
     }
-    reset_press(&mut w, &now, 100_000);
-    if !until_stop(&mut w, &now, true, 2_000_000) {
-        fail("not armed within 2 s of the reset press");
-    }
+    arm(&mut w, &now, "not armed within 2 s of the reset press");
     hprintln!("bench: armed after the reset press");
     run(&mut w, &now, 50_000);
+    // The obstacle: channel A first (markers 3 and 4: EXTI0, then EXTI4).
+    obstacle(&mut w, &now, Channel::A, [3, 4]);
 
-    // The obstacle: channel A first, then B 1 ms later, as a real actuator moves both contacts.
-    write(MARK, 3); // marker 3: edge on channel A pended
-    w.a_tripped = true;
-    PINS.store(w.pins(), Relaxed);
-    write(NVIC_ISPR0, 1 << 6);
-    // EXTI0 has priority 0 and thread mode none: it ran before this line.
-    let stopped_a = ODR_D.load(Relaxed) & STOP == 0;
-    run(&mut w, &now, 1_000);
-    write(MARK, 4); // marker 4: edge on channel B pended
-    w.b_tripped = true;
-    PINS.store(w.pins(), Relaxed);
-    write(NVIC_ISPR0, 1 << 10);
-    run(&mut w, &now, 100_000);
-    if !stopped_a {
-        fail("the stop was not written when the EXTI0 pend returned");
-    }
-    hprintln!("bench: channel A edge: stop written before the pend returned");
-
-    // Obstacle gone, then a reset: re-arm. This time channel B moves first.
-    write(MARK, 5); // marker 5: obstacle gone
-    w.a_tripped = false;
-    w.b_tripped = false;
-    run(&mut w, &now, 100_000);
+    // Obstacle gone, then a reset: re-arm. This time channel B moves first (markers 6 and 7).
+    obstacle_gone(&mut w, &now);
     if ODR_D.load(Relaxed) & STOP != 0 {
         fail("re-armed without a reset press");
     }
-    reset_press(&mut w, &now, 100_000);
-    if !until_stop(&mut w, &now, true, 2_000_000) {
-        fail("not re-armed within 2 s of the second reset press");
-    }
+    arm(&mut w, &now, "not re-armed within 2 s of the second reset press");
     hprintln!("bench: re-armed after the second reset press");
     run(&mut w, &now, 50_000);
-    write(MARK, 6); // marker 6: edge on channel B pended
-    w.b_tripped = true;
-    PINS.store(w.pins(), Relaxed);
-    write(NVIC_ISPR0, 1 << 10);
-    let stopped_b = ODR_D.load(Relaxed) & STOP == 0;
-    run(&mut w, &now, 1_000);
-    write(MARK, 7); // marker 7: edge on channel A pended
-    w.a_tripped = true;
-    PINS.store(w.pins(), Relaxed);
-    write(NVIC_ISPR0, 1 << 6);
-    run(&mut w, &now, 100_000);
-    if !stopped_b {
-        fail("the stop was not written when the EXTI4 pend returned");
-    }
-    hprintln!("bench: channel B edge: stop written before the pend returned");
+    obstacle(&mut w, &now, Channel::B, [6, 7]);
 
     // The clock check: obstacle gone, reset, re-arm; then the LSI stops (the reference dies) while
     // armed. The firmware must drop both outputs (ClockDrift) within a window (100 ms) and a tick.
-    write(MARK, 5); // marker 5: obstacle gone
-    w.a_tripped = false;
-    w.b_tripped = false;
-    run(&mut w, &now, 100_000);
-    reset_press(&mut w, &now, 100_000);
-    if !until_stop(&mut w, &now, true, 2_000_000) {
-        fail("not re-armed within 2 s of the third reset press");
-    }
+    obstacle_gone(&mut w, &now);
+    arm(&mut w, &now, "not re-armed within 2 s of the third reset press");
     run(&mut w, &now, 50_000);
     write(MARK, 9); // marker 9: the LSI stops
     w.lsi_on = false;

@@ -6,6 +6,7 @@
 //! - gas (eq 47): `p1 = p10 (V_g0 / V_g)^kappa`, `V_g = V_g0 - A_p u`;
 //! - friction (eq 48): `d tanh(v / v0) + b v` (sgn regularised);
 //! - force on the tool `F_hyd + F_f` (eq 53-56), end-stops as the bi-stable one.
+//!
 //! Units: m, m^2, m^3, Pa, kg/m^3, N. Small-displacement stiffness `k_hyd = A_p^2 kappa p10 / V_g0`
 //! (eq 63). p10 is used as the thesis does (eq 47 applied to the given pressure).
 //!

@@ -1,0 +1,301 @@
+//! The board ELF in QEMU (netduinoplus2): its boot register trace, vectors, a corrupted flash image
+//! that must stop, and the `qemu-io` build's edge bench.
+
+use crate::common::{elf_path, read_expected, repo_root, run_captured, target_dir, QEMU_TIMEOUT, TARGET};
+use crate::firmware::qemu_io_dir;
+use crate::flash::flash_image;
+use std::fs;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::thread::sleep;
+use std::time::Duration;
+
+/// How long the board ELF runs in QEMU (wall time; SysTick runs on QEMU's virtual clock).
+const BOARD_RUN: Duration = Duration::from_secs(3);
+
+/// Run the real board ELF (`board`, built for the STM32F407) on QEMU's `netduinoplus2`, an STM32F405
+/// with the same core, RCC, GPIO, EXTI, TIM2 and IWDG addresses. QEMU 7.2 does not model the F405's
+/// RCC, GPIO or IWDG: it logs every access to them (`-d unimp`), so the log is the board's register
+/// trace. GPIO inputs read 0, i.e. the switch reads "tripped", the reset button is not pressed and
+/// both EDM relays read "not released": the firmware must stay stopped for the whole run.
+pub fn run_board_qemu() -> Result<String, String> {
+    run_board_elf(&elf_path("board"), "board-qemu.log")
+}
+
+fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
+    let log = target_dir().join(log_name);
+    let _ = fs::remove_file(&log);
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none", "-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
+    sleep(BOARD_RUN);
+    if let Ok(Some(status)) = child.try_wait() {
+        return Err(format!("qemu-system-arm -M netduinoplus2 exited early with {status} (see {})", log.display()));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))
+}
+
+/// Check the board's register trace (`-d unimp`): the boot sequence against
+/// `firmware/qemu/board-boot.txt`, then that "go" is never written and the tick keeps running.
+pub fn check_board_log(log: &str) -> Result<String, String> {
+    // GPIOD BSRR (offset 0x18): bits 12/13 set PD12 (stop) / PD13 (escalation) high = "go".
+    let writes: Vec<&str> = log.lines().filter(|l| l.contains("unimplemented device write")).collect();
+    let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+    let go = writes.iter().filter(|l| l.starts_with("GPIOD:") && l.contains("offset 0x018")).filter(|l| value(l).is_some_and(|v| v & 0x3000 != 0)).count();
+    if go != 0 {
+        return Err(format!("the board wrote 'go' (BSRR set PD12/PD13) {go} times with the reset never pressed"));
+    }
+    // The IWDG (QEMU names its page I2S2ext) is fed with 0xAAAA once per tick.
+    let ticks = writes.iter().filter(|l| value(l) == Some(0xAAAA)).count();
+    if ticks < 100 {
+        return Err(format!("only {ticks} ticks (IWDG feeds) in {} s: the board is not running", BOARD_RUN.as_secs()));
+    }
+    // The boot: every access up to the first tick's first read of the switch (GPIOA IDR).
+    let boot: Vec<&str> = log.lines().take_while(|l| !(l.starts_with("GPIOA:") && l.contains("offset 0x010"))).collect();
+    let expected_path = repo_root().join("firmware/qemu/board-boot.txt");
+    let expected = fs::read_to_string(&expected_path).map_err(|e| format!("reading {}: {e}", expected_path.display()))?;
+    let want: Vec<&str> = expected.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()).collect();
+    if !trace_matches(&boot, &want) {
+        return Err(format!(
+            "the board's boot register trace differs from firmware/qemu/board-boot.txt:\n--- got\n{}\n--- expected\n{}",
+            boot.join("\n"),
+            want.join("\n")
+        ));
+    }
+    Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
+}
+
+/// The board ELF's stack bound, bytes: asserted on the `qemu-io` build's painted stack (main, the
+/// log drain, the bench in thread mode, every interrupt), firmware/README.md "board stack": measured
+/// 15316 B with the avoidance link (3280 B before it; 15308 B before the review fixes): `Link::new` builds the 12,144 B link (the
+/// receiver's ring and two 30 x 30 grids) on the stack once, before it is moved into its static. The
+/// bound leaves about a quarter on top (a fault handler); the part has 128 KiB of SRAM, the statics
+/// take 14 KiB, and flip-link puts the stack below them so an overflow faults.
+const BOARD_STACK_LIMIT: u32 = 20480;
+
+/// The board ELF's painted stack use from the bench's `bench: stack used=N B` line.
+fn check_board_stack(out: &str) -> Result<u32, String> {
+    let line = out.lines().find(|l| l.starts_with("bench: stack used=")).ok_or("no 'bench: stack used=' line from the board bench")?;
+    let n: u32 = line
+        .strip_prefix("bench: stack used=")
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| format!("unreadable: {line}"))?;
+    if n == 0 || n > BOARD_STACK_LIMIT {
+        return Err(format!("board stack used {n} B: want 0 < used <= {BOARD_STACK_LIMIT} B ({line})"));
+    }
+    Ok(n)
+}
+
+/// A register trace against its expected lines; an expected line ending in `value *)` matches any
+/// value (a timestamp, or a CRC over one, that the free-running QEMU clock makes vary).
+fn trace_matches<A: AsRef<str>, B: AsRef<str>>(got: &[A], want: &[B]) -> bool {
+    got.len() == want.len()
+        && got.iter().zip(want).all(|(g, w)| {
+            let (g, w) = (g.as_ref(), w.as_ref());
+            match w.strip_suffix("value *)") {
+                Some(prefix) => g.starts_with(prefix) && g.ends_with(')'),
+                None => g == w,
+            }
+        })
+}
+
+/// The start-up flash CRC acts: a copy of the board ELF with one byte of .rodata flipped (the CRC
+/// word left as patched) must stop right after the boot's register set-up: the boot trace up to
+/// the brown-out read, then one write of both outputs low, and nothing after it (no tick, no
+/// de-energise by the library, no "go": the firmware is never built).
+pub fn check_board_corrupt() -> Result<String, String> {
+    use object::{Object, ObjectSection};
+    let good = elf_path("board");
+    let mut b = fs::read(&good).map_err(|e| format!("{}: {e}", good.display()))?;
+    let (_, crc_file, _) = flash_image(&b, true)?;
+    let off = {
+        let elf = object::File::parse(&*b).map_err(|e| format!("not an ELF object: {e}"))?;
+        let ro = elf.section_by_name(".rodata").ok_or("no .rodata in the board ELF")?;
+        let (start, size) = ro.file_range().ok_or(".rodata has no file data")?;
+        let mid = (start + size / 2) as usize;
+        if (crc_file..crc_file + 4).contains(&mid) { mid + 8 } else { mid }
+    };
+    b[off] ^= 0x01;
+    let bad = target_dir().join("board-corrupt.elf");
+    fs::write(&bad, &b).map_err(|e| format!("writing {}: {e}", bad.display()))?;
+    let log = run_board_elf(&bad, "board-corrupt.log")?;
+    let expected = read_expected("firmware/qemu/board-selfcheck.txt")?;
+    let got: Vec<&str> = log.lines().collect();
+    if !trace_matches(&got, &expected) {
+        return Err(format!(
+            "a board ELF with one flipped flash byte (file offset {off:#x}) did not stop as firmware/qemu/board-selfcheck.txt says:\n--- got (first 60)\n{}\n--- expected\n{}",
+            got.iter().take(60).copied().collect::<Vec<_>>().join("\n"),
+            expected.join("\n")
+        ));
+    }
+    Ok(format!("one flipped flash byte: stopped after {} accesses, outputs low, SelfCheck latched and logged in the backup SRAM, no tick in {} s", got.len(), BOARD_RUN.as_secs()))
+}
+
+/// The board's vector table (`__INTERRUPTS`): both switch channels' EXTI lines (EXTI0 = IRQ 6, PA0;
+/// EXTI4 = IRQ 10, PA4) go to the edge handler and the bookkeeping line (UART5 = IRQ 53) to the
+/// bookkeeping. QEMU does not model the F405's GPIO, so the edges cannot be driven there; this
+/// checks that they are wired.
+pub fn check_board_vectors(path: &Path) -> Result<String, String> {
+    use object::{Object, ObjectSection, ObjectSymbol};
+    let b = fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let elf = object::File::parse(&*b).map_err(|e| format!("{}: not an ELF object: {e}", path.display()))?;
+    let sym = |part: &str| elf.symbols().find(|s| s.name().is_ok_and(|n| n.contains(part))).map(|s| s.address());
+    let table = sym("__INTERRUPTS").ok_or("no __INTERRUPTS in the board ELF")?;
+    let entry = |irq: u64| -> Result<u64, String> {
+        let addr = table + 4 * irq;
+        let sec = elf
+            .sections()
+            .find(|s| s.address() <= addr && addr + 4 <= s.address() + s.size())
+            .ok_or_else(|| format!("vector {irq} outside every section"))?;
+        let data = sec.data().map_err(|e| format!("reading {}: {e}", sec.name().unwrap_or("?")))?;
+        let off = (addr - sec.address()) as usize;
+        let w = data.get(off..off + 4).ok_or("vector table truncated")?;
+        Ok(u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) & !1)
+    };
+    for (irq, handler, what) in [(6, "exti0_entry", "EXTI0 (switch channel A)"), (10, "exti4_entry", "EXTI4 (switch channel B)"), (53, "book_entry", "UART5 (the edge's bookkeeping)"), (50, "tim5_entry", "TIM5 (the LSI capture, clock check)"), (37, "usart1_entry", "USART1 (the avoidance's weights in, velocity out)"), (29, "tim3_entry", "TIM3's line (the avoidance step, pended by the tick)")] {
+        let want = sym(handler).ok_or_else(|| format!("no {handler} in the board ELF"))? & !1;
+        let got = entry(irq)?;
+        if got != want {
+            return Err(format!("vector {irq}, {what}: {got:#x}, want {handler} at {want:#x}"));
+        }
+    }
+    Ok("vectors: EXTI0 and EXTI4 -> edge, UART5 -> bookkeeping, TIM5 -> LSI capture, USART1 and TIM3 -> avoidance".into())
+}
+
+/// Run the `qemu-io` board ELF on netduinoplus2 until its bench exits (semihosting), deterministic
+/// time (`-icount shift=3`); returns the bench's output and the `-d unimp` register trace.
+pub fn run_board_edge() -> Result<(String, String), String> {
+    let log = target_dir().join("board-edge.log");
+    let _ = fs::remove_file(&log);
+    let elf = qemu_io_dir().join(TARGET).join("release").join("board");
+    let mut cmd = Command::new("qemu-system-arm");
+    cmd.args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none"])
+        .args(["-semihosting-config", "enable=on,target=native", "-icount", "shift=3"])
+        .args(["-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(&elf);
+    let (out, status) = run_captured(cmd, "qemu-system-arm -M netduinoplus2 (board edge bench)", QEMU_TIMEOUT)?;
+    if !status.success() {
+        return Err(format!("the board edge bench failed ({status}):\n{out}"));
+    }
+    let trace = fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))?;
+    Ok((out, trace))
+}
+
+/// The bench's markers (GPIOI BSRR writes, `board_bench.rs`).
+fn bench_marker(v: u32) -> &'static str {
+    match v {
+        1 => "reset pressed",
+        2 => "reset released",
+        3 => "edge on channel A pended (EXTI0)",
+        4 => "edge on channel B pended (EXTI4)",
+        5 => "obstacle gone",
+        6 => "edge on channel B pended (EXTI4)",
+        7 => "edge on channel A pended (EXTI0)",
+        8 => "end",
+        9 => "the LSI stops (the clock check's reference)",
+        _ => "unknown marker",
+    }
+}
+
+/// The board edge run's trace reduced to what a person checks: the bench's markers and every change
+/// of the three outputs (PD12 stop, PD13 escalation, PD14 sensor supply; 1 = energised). Repeated
+/// de-energise writes of the stopped ticks change nothing and do not appear.
+fn board_edge_timeline(trace: &[&str]) -> Vec<String> {
+    let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+    let mut odr = 0u32;
+    let mut out = Vec::new();
+    for l in trace {
+        let Some(v) = value(l) else { continue };
+        if l.starts_with("GPIOI:") && l.contains("offset 0x018") {
+            out.push(format!("bench {v}: {}", bench_marker(v)));
+        } else if l.starts_with("GPIOD:") && l.contains("offset 0x018") {
+            let new = (odr & !(v >> 16)) | (v & 0xFFFF);
+            for (bit, name) in [(12, "PD12 stop"), (13, "PD13 escalation"), (14, "PD14 sensor supply")] {
+                if (new ^ odr) & (1 << bit) != 0 {
+                    out.push(format!("{name} -> {}", (new >> bit) & 1));
+                }
+            }
+            odr = new;
+        }
+    }
+    out
+}
+
+/// Check the board edge run: the bench passed; the boot is the production board's
+/// (`firmware/qemu/board-boot.txt`); the markers and output changes equal
+/// `firmware/qemu/board-edge.txt`; and after each edge pended while armed the very next device
+/// access is the stop write (GPIOD BSRR 0x10000000): nothing, not even a tick, comes between.
+pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
+    if !out.contains("bench: PASS") {
+        return Err(format!("the board edge bench did not pass:\n{out}"));
+    }
+    let lines: Vec<&str> = trace.lines().collect();
+    let mut expected_boot = read_expected("firmware/qemu/board-boot.txt")?;
+    // The qemu-io build's one difference in the boot: right after the backup SRAM is switched on
+    // (the PWR_CR write) its two "not on silicon" checks: it reads GPIOD's MODER back, writes a test
+    // word ("QEMU") to the last backup SRAM word and reads it back, and stops for good if either
+    // read is not 0 (real GPIO or real backup SRAM: the bench image is on silicon, not in QEMU).
+    let pwr = expected_boot.iter().position(|l| l.starts_with("PWR: unimplemented device write")).ok_or("board-boot.txt has no PWR_CR write")?;
+    for (i, l) in [
+        "GPIOD: unimplemented device read  (size 4, offset 0x000)",
+        "BKPSRAM: unimplemented device write (size 4, offset 0x3fc, value 0x51534d55)",
+        "BKPSRAM: unimplemented device read  (size 4, offset 0x3fc)",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        expected_boot.insert(pwr + 1 + i, l.into());
+    }
+    if lines.len() < expected_boot.len() || !trace_matches(&lines[..expected_boot.len()], &expected_boot) {
+        return Err(format!(
+            "the qemu-io board's boot differs from firmware/qemu/board-boot.txt:\n--- got\n{}",
+            lines.iter().take(expected_boot.len()).copied().collect::<Vec<_>>().join("\n")
+        ));
+    }
+    let rest = &lines[expected_boot.len()..];
+    let got = board_edge_timeline(rest);
+    let want = read_expected("firmware/qemu/board-edge.txt")?;
+    if got != want {
+        return Err(format!(
+            "the board edge run differs from firmware/qemu/board-edge.txt:\n--- got\n{}\n--- expected\n{}",
+            got.join("\n"),
+            want.join("\n")
+        ));
+    }
+    let stop_write = "GPIOD: unimplemented device write (size 4, offset 0x018, value 0x10000000)";
+    let mut direct = 0;
+    for marker in ["value 0x00000003)", "value 0x00000006)"] {
+        let i = rest
+            .iter()
+            .position(|l| l.starts_with("GPIOI:") && l.ends_with(marker))
+            .ok_or_else(|| format!("no bench marker {marker} in the trace"))?;
+        match rest.get(i + 1) {
+            Some(next) if *next == stop_write => direct += 1,
+            next => {
+                return Err(format!(
+                    "after the edge pend ({}) the next device access is {:?}, not the stop write",
+                    rest[i],
+                    next.copied().unwrap_or("nothing")
+                ))
+            }
+        }
+    }
+    let ticks = rest.iter().filter(|l| l.starts_with("I2S2ext:") && (l.ends_with("value 0xaaaa)") || l.ends_with("value 0x0000aaaa)"))).count();
+    let stack = check_board_stack(out)?;
+    Ok(format!(
+        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks; board stack {stack} B <= {BOARD_STACK_LIMIT} B (painted)",
+        got.len()
+    ))
+}

@@ -1,0 +1,148 @@
+//! The board's avoidance over its serial port in QEMU: weights frames in, velocity frames out.
+
+use crate::common::{read_expected, target_dir, TARGET};
+use crate::firmware::qemu_clock_dir;
+use std::fs;
+use std::process::{Command, Stdio};
+use std::thread::sleep;
+use std::time::{Duration, Instant};
+
+/// How long the whole serial conversation may take (QEMU's virtual clock follows the host's).
+const SERIAL_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// A 5 x 5 weights frame over the 1.05 m work plane (centres 0.21 m apart from 0.105 m, sigma
+/// 0.105 m), every weight `w_m`: the shipped demo's grid size; 0.5 m puts the field at the tool far
+/// above the board's stop height (the hand over the tool), 0 is an empty field.
+fn weights_frame(seq: u32, w_m: f64) -> Vec<u8> {
+    use flinch_firmware::avoidance::frame::{encode_frame, FrameHeader, MAX_FRAME};
+    let q = |v: f64| (v * 65536.0).round() as i32;
+    let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: q(0.105), y0_q16: q(0.105), spacing_q16: q(0.21), sigma_q16: q(0.105) };
+    let mut out = vec![0u8; MAX_FRAME];
+    let n = encode_frame(&h, &[q(w_m); 25], &mut out).unwrap_or(0);
+    out.truncate(n);
+    out
+}
+
+/// One velocity frame as the expected file writes it; `full` adds the numbers that depend only on
+/// the frames sent (not on when QEMU delivered them).
+fn velocity_line(what: &str, f: &flinch_firmware::avoidance::link::VelocityFrame, full: bool) -> String {
+    if full {
+        format!(
+            "{what}: status={} seq={} vx_umps={} vy_umps={} x_um={} y_um={} good={} refused={}",
+            f.status.name(), f.seq, f.vx_umps, f.vy_umps, f.x_um, f.y_um, f.good, f.refused
+        )
+    } else {
+        format!("{what}: status={} seq={}", f.status.name(), f.seq)
+    }
+}
+
+/// The board's avoidance over its serial port: the `qemu-clock` board ELF on netduinoplus2, USART1
+/// connected to a Unix socket this function listens on. Weights frames go in, the board's velocity
+/// frames come back and are decoded; the conversation waits for the board's answer before each
+/// next frame, so the lines compared do not depend on the host's timing. Compared with
+/// `firmware/qemu/board-serial.txt`; a mismatch, a missing frame or a timeout fails.
+pub fn board_serial() -> Result<String, String> {
+    use flinch_firmware::avoidance::link::{decode_velocity, Status, VelocityFrame, VEL_LEN, VEL_SYNC0, VEL_SYNC1};
+    use std::io::{Read, Write};
+    use std::os::unix::net::UnixListener;
+    let sock = target_dir().join("board-serial.sock");
+    let _ = fs::remove_file(&sock);
+    let listener = UnixListener::bind(&sock).map_err(|e| format!("binding {}: {e}", sock.display()))?;
+    let log = target_dir().join("board-serial.log");
+    let elf = qemu_clock_dir().join(TARGET).join("release").join("board");
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-chardev"])
+        .arg(format!("socket,id=s0,path={}", sock.display()))
+        .args(["-serial", "chardev:s0", "-d", "unimp,guest_errors", "-D"])
+        .arg(&log)
+        .arg("-kernel")
+        .arg(&elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
+    let start = Instant::now();
+    let result = (|| -> Result<Vec<String>, String> {
+        listener.set_nonblocking(true).map_err(|e| e.to_string())?;
+        let mut stream = loop {
+            match listener.accept() {
+                Ok((s, _)) => break s,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    if start.elapsed() > SERIAL_TIMEOUT {
+                        return Err("QEMU never connected to the serial socket".into());
+                    }
+                    sleep(Duration::from_millis(20));
+                }
+                Err(e) => return Err(format!("accepting QEMU's serial connection: {e}")),
+            }
+        };
+        stream.set_nonblocking(false).map_err(|e| e.to_string())?;
+        stream.set_read_timeout(Some(Duration::from_millis(100))).map_err(|e| e.to_string())?;
+        let mut buf: Vec<u8> = Vec::new();
+        let mut frames = 0usize;
+        // The next velocity frame that satisfies `want` (frames before it are read and dropped).
+        let mut wait = |stream: &mut std::os::unix::net::UnixStream, what: &str, want: &dyn Fn(&VelocityFrame) -> bool| -> Result<VelocityFrame, String> {
+            loop {
+                while buf.len() >= VEL_LEN {
+                    if buf[0] == VEL_SYNC0 && buf[1] == VEL_SYNC1 {
+                        if let Some(f) = decode_velocity(&buf[..VEL_LEN]) {
+                            buf.drain(..VEL_LEN);
+                            frames += 1;
+                            if want(&f) {
+                                return Ok(f);
+                            }
+                            continue;
+                        }
+                    }
+                    buf.remove(0);
+                }
+                if start.elapsed() > SERIAL_TIMEOUT {
+                    return Err(format!("timed out after {} s waiting for {what} ({frames} velocity frames read)", SERIAL_TIMEOUT.as_secs()));
+                }
+                let mut chunk = [0u8; 512];
+                match stream.read(&mut chunk) {
+                    Ok(0) => return Err(format!("QEMU closed the serial port waiting for {what}")),
+                    Ok(n) => buf.extend_from_slice(&chunk[..n]),
+                    Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                    Err(e) => return Err(format!("reading the serial port: {e}")),
+                }
+            }
+        };
+        let mut lines = Vec::new();
+        let f = wait(&mut stream, "the first velocity frame", &|_| true)?;
+        lines.push(velocity_line("before any weights frame", &f, true));
+        stream.write_all(&weights_frame(1, 0.5)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 1 in use", &|f| f.seq == 1)?;
+        lines.push(velocity_line("frame 1 (field 0.5 m weights: the hand over the tool)", &f, true));
+        let mut bad = weights_frame(2, 0.0);
+        bad[40] ^= 0x01;
+        stream.write_all(&bad).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 2 refused", &|f| f.refused >= 1)?;
+        lines.push(velocity_line("frame 2 (one bit flipped)", &f, true));
+        stream.write_all(&weights_frame(3, 0.0)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 3 in use", &|f| f.seq == 3)?;
+        lines.push(velocity_line("frame 3 (empty field)", &f, true));
+        let f = wait(&mut stream, "the weights slowing with age", &|f| f.status != Status::Ok)?;
+        lines.push(velocity_line("the line silent, the weights ageing", &f, false));
+        let f = wait(&mut stream, "the weights stale", &|f| f.status == Status::StoppedStale)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("the line still silent", &f, false), f.vx_umps, f.vy_umps));
+        Ok(lines)
+    })();
+    let _ = child.kill();
+    let _ = child.wait();
+    let _ = fs::remove_file(&sock);
+    let got = result?;
+    for l in &got {
+        println!("board serial: {l}");
+    }
+    let want = read_expected("firmware/qemu/board-serial.txt")?;
+    if got != want {
+        return Err(format!(
+            "the board's velocity frames differ from firmware/qemu/board-serial.txt:\n--- got\n{}\n--- expected\n{}",
+            got.join("\n"),
+            want.join("\n")
+        ));
+    }
+    Ok(format!("board ELF (qemu-clock) on netduinoplus2: weights frames over USART1, {} velocity frames as in firmware/qemu/board-serial.txt", got.len()))
+}

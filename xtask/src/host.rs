@@ -1,0 +1,80 @@
+//! The stages that run on the host: the workspace tests, the loader fuzz, the plots without fontconfig.
+
+use crate::common::{cargo, repo_root, run_captured, target_dir};
+use crate::Outcome;
+use std::env;
+use std::fs;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+pub fn host_tests() -> Outcome {
+    let status = cargo().args(["test", "--workspace"]).current_dir(repo_root()).status();
+    match status {
+        Ok(s) if s.success() => Outcome::Pass("cargo test --workspace".into()),
+        Ok(s) => Outcome::Fail(format!("cargo test --workspace exited with {s}")),
+        Err(e) => Outcome::Fail(format!("could not run cargo: {e}")),
+    }
+}
+
+/// The loader fuzzed for a bounded time (tests/fuzz.rs, issue 18): `FLINCH_FUZZ_SECS` seconds
+/// (default 60) of mutated and random scenes; prints the cases run. Killed after twice that plus
+/// ten minutes of build.
+pub fn loader_fuzz() -> Outcome {
+    let secs: u64 = env::var("FLINCH_FUZZ_SECS").ok().and_then(|s| s.parse().ok()).unwrap_or(60);
+    let mut cmd = cargo();
+    cmd.args(["test", "-p", "flinch-tests", "--test", "fuzz", "--", "--ignored", "--nocapture"])
+        .env("FLINCH_FUZZ_SECS", secs.to_string())
+        .current_dir(repo_root());
+    match run_captured(cmd, "the loader fuzz", Duration::from_secs(2 * secs + 600)) {
+        Ok((out, status)) => {
+            let line = out.lines().find(|l| l.starts_with("fuzz: ")).unwrap_or("no summary line").to_string();
+            print!("{out}");
+            if status.success() {
+                Outcome::Pass(line)
+            } else {
+                Outcome::Fail(format!("{line} (exit {status})"))
+            }
+        }
+        Err(e) => Outcome::Fail(e),
+    }
+}
+
+/// The plots need no system font and the binary no font library: build `flinch` with pkg-config
+/// pointing nowhere (a `-sys` crate that needs libfontconfig1-dev fails to build), draw a PNG and
+/// an SVG with fontconfig disabled (`FONTCONFIG_FILE` empty), and check that `ldd` lists only the
+/// C runtime. Uses the dev-profile binary the host tests already built, so it adds seconds.
+pub fn no_fontconfig() -> Result<String, String> {
+    let start = Instant::now();
+    let nowhere = repo_root().join("target").join("no-pkg-config");
+    let env = [("PKG_CONFIG_PATH", nowhere.as_os_str()), ("PKG_CONFIG_LIBDIR", nowhere.as_os_str()), ("FONTCONFIG_FILE", "".as_ref()), ("FONTCONFIG_PATH", nowhere.as_os_str())];
+    let status = cargo().args(["build", "--quiet", "-p", "flinch-harness", "--bin", "flinch"]).envs(env).current_dir(repo_root()).status().map_err(|e| format!("could not run cargo: {e}"))?;
+    if !status.success() {
+        return Err(format!("cargo build -p flinch-harness --bin flinch without pkg-config exited with {status}"));
+    }
+    let bin = target_dir().join("debug").join("flinch");
+    let out = env::temp_dir().join(format!("flinch-no-fontconfig-{}", std::process::id()));
+    fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    for ext in ["png", "svg"] {
+        let plot = out.join(format!("x.{ext}"));
+        let o = Command::new(&bin).args(["run", "tables5-7_bistable", "--plot"]).arg(&plot).envs(env).current_dir(&out).output().map_err(|e| format!("could not run {}: {e}", bin.display()))?;
+        if !o.status.success() {
+            return Err(format!("flinch run --plot x.{ext} failed: {}", String::from_utf8_lossy(&o.stderr)));
+        }
+        let bytes = fs::read(&plot).map_err(|e| format!("{}: {e}", plot.display()))?;
+        if bytes.len() < 20_000 {
+            return Err(format!("{}: only {} bytes: the plot is broken", plot.display(), bytes.len()));
+        }
+        if ext == "svg" && !String::from_utf8_lossy(&bytes).contains("peak contact force") {
+            return Err(format!("{}: the SVG has no text", plot.display()));
+        }
+    }
+    let _ = fs::remove_dir_all(&out);
+    let ldd = Command::new("ldd").arg(&bin).output().map_err(|e| format!("could not run ldd: {e}"))?;
+    let listing = String::from_utf8_lossy(&ldd.stdout).to_string();
+    const C_RUNTIME: [&str; 8] = ["linux-vdso", "libc.so", "libm.so", "libgcc_s.so", "ld-linux", "libpthread.so", "libdl.so", "librt.so"];
+    let extra: Vec<&str> = listing.lines().map(str::trim).filter(|l| !l.is_empty() && !C_RUNTIME.iter().any(|c| l.contains(c))).collect();
+    if !extra.is_empty() {
+        return Err(format!("ldd {} lists more than the C runtime: {}", bin.display(), extra.join("; ")));
+    }
+    Ok(format!("built without pkg-config, PNG and SVG drawn without fontconfig, ldd lists only the C runtime ({} libraries), {:.1} s", listing.lines().count(), start.elapsed().as_secs_f64()))
+}
