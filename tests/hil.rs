@@ -418,3 +418,73 @@ fn hil_gives_the_plain_runs_results_on_every_shipped_scene() {
     }
     assert!(compared >= 5, "only {compared} scenes compared");
 }
+
+// ---- A category-0 power removal at its instant, not at the end of a solver step ------------------
+
+/// The MCU resets (watchdog) 7.3 ms into the controlled stop on Tables 5-7: the restarted firmware
+/// latches its reset and drops both outputs, so drive power goes `tick_to_output_s()` after the
+/// injection (IEC 60204-1 9.2.2, category 0), while the arm decelerates (not cruising, so the
+/// plant's past cannot be rewritten after the step). Before the fix the removal landed on the end
+/// of the solver step it was found in (639 us late at the defaults), so the power-off instant and
+/// the stop moved with `solver.max_step` and with the injection's place in a step.
+#[test]
+fn a_category_0_power_removal_lands_at_its_instant_whatever_the_step_grid() {
+    let lat = flinch_hal_sim::latency::tick_to_output_s();
+    let base = bistable();
+    let ctl0 = Controller::new(SCAN, 0.0, 1e-4);
+    let plain = hil::run(&base, &ctl0, false).unwrap().0;
+    let t_brake = plain.summary.t_brake.unwrap();
+    let at = t_brake + 7.3e-3;
+    assert!(at + lat < plain.summary.t_stop.unwrap(), "inside the controlled stop");
+    let brake = ctl0.brake();
+    let mut stops = Vec::new();
+    for max_step in [1e-2, 1e-3, 2.7e-4] {
+        for tick in [1e-4, 1e-3] {
+            let mut sc = base.clone();
+            sc.solver.max_step = max_step;
+            let ctl = Controller::new(SCAN, 0.0, tick);
+            let opts = hil::HilOptions { faults: vec![hil::Injection { kind: hil::FaultKind::Reset, at_s: at }], ..Default::default() };
+            let h = hil::run_with(&sc, &ctl, false, &opts).unwrap_or_else(|e| panic!("{e}")).0;
+            let f = &h.firmware;
+            let label = format!("max_step {max_step} s, tick {tick} s");
+            assert!(f.category0, "{label}");
+            let off = f.power_removed.unwrap();
+            // Exact: the instant is a breakpoint of the motion law the solver steps onto; 1e-12 s is
+            // the rounding of the sums that make it.
+            assert!((off - (at + lat)).abs() < 1e-12, "{label}: power removed at {off}, due at {}", at + lat);
+            assert_eq!(f.stop_seen, plain.firmware.stop_seen, "{label}");
+            // Coasting from v(off) = V_c - d_c (off - t_brake) for the brake delay, then the brakes:
+            // t_stop follows in closed form from the motion law (plant/brake.rs).
+            let v_off = sc.motion.speed - sc.motion.decel * (off - t_brake);
+            let want = off + brake.delay + v_off / brake.decel;
+            let t_stop = h.summary.t_stop.unwrap();
+            assert!((t_stop - want).abs() < 1e-9, "{label}: t_stop {t_stop}, closed form {want}");
+            assert!(!h.summary.warnings.iter().any(|w| w.contains("applied at")), "{label}: {:?}", h.summary.warnings);
+            stops.push((label, t_stop, h.summary.max_travel));
+        }
+    }
+    // And the plant after it: the largest travel agrees across step grids to the solver's accuracy
+    // (the 1e-3 relative of the hil-against-run comparison below).
+    let (_, _, x0) = &stops[0];
+    for (label, _, x) in &stops {
+        assert!((x - x0).abs() <= 1e-3 * x0, "{label}: max travel {x} vs {x0}");
+    }
+}
+
+/// The same removal with the history streamed: the pass that found the removal late has handed
+/// rows to the stream already; the run that follows must not hand them again or go back in time.
+#[test]
+fn a_rerun_for_category_0_streams_each_row_once() {
+    let sc = bistable();
+    let ctl = Controller::new(SCAN, 0.0, 1e-4);
+    let t_brake = hil::run(&sc, &ctl, false).unwrap().0.summary.t_brake.unwrap();
+    let opts = hil::HilOptions { faults: vec![hil::Injection { kind: hil::FaultKind::Reset, at_s: t_brake + 7.3e-3 }], ..Default::default() };
+    let (kept, history) = hil::run_with(&sc, &ctl, true, &opts).unwrap();
+    let mut ts = Vec::new();
+    let mut sink = |s: &sim::Sample, _: &hil::RowSignals<'_>| ts.push(s.t);
+    let (streamed, _) = hil::run_recording(&sc, &ctl, &opts, hil::Record::Stream(&mut sink)).unwrap();
+    assert!(ts.windows(2).all(|w| w[1] > w[0]), "rows in time order, once each");
+    assert_eq!(ts.len(), history.len());
+    assert!(ts.iter().zip(&history).all(|(a, b)| (a - b.t).abs() < 1e-12));
+    assert_eq!(streamed.firmware.power_removed, kept.firmware.power_removed);
+}

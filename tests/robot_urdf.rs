@@ -494,7 +494,7 @@ fn viper() -> Chain {
 #[test]
 fn viper_standin_frames_follow_its_dh_table() {
     use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-    let dh = [(0.075, 0.335, -PI / 2.0), (0.270, 0.0, 0.0), (0.090, 0.0, PI / 2.0), (0.0, 0.295, -PI / 2.0), (0.0, 0.0, PI / 2.0), (0.0, 0.080, 0.0)];
+    let dh = [(0.075, 0.335, -PI / 2.0), (0.270, 0.0, 0.0), (-0.090, 0.0, PI / 2.0), (0.0, 0.295, -PI / 2.0), (0.0, 0.0, PI / 2.0), (0.0, 0.080, 0.0)];
     let chain = viper();
     assert_eq!(chain.dof(), 6);
     assert_close!(chain.moving_mass(), 20.8, 1e-12);
@@ -507,6 +507,36 @@ fn viper_standin_frames_follow_its_dh_table() {
         let at = chain.place(&q);
         assert!((at.tip - t.translation.vector).norm() < 1e-12, "{q:?}: {} vs {}", at.tip, t.translation.vector);
     }
+}
+
+/// The stand-in's arm is the published Viper 650's, not its mirror image: its wrist centre and
+/// forearm (joint 4) axis are those of ViSP's model of the real robot at the same q1, q2, q3.
+/// Source: github.com/lagadic/visp, modules/robot/src/real-robot/viper/vpViper650.cpp (a1 = 0.075,
+/// a2 = 0.270, a3 = 0.090, d1 = 0.335, d4 = 0.295 m) and vpViper.cpp, `vpViper::get_fMw` (the wrist
+/// frame; its z column at q4 = q5 = 0 is the forearm axis). With the file's twists (+90 deg at
+/// joint 3) that arm is a3 = -0.090 in the URDF; a3 = +0.090 (the file before this test) put the
+/// elbow offset on the other side of the forearm, a mirror image no joint zero can turn into the
+/// real arm (the wrist then missed get_fMw's by up to 2 a3 = 0.18 m).
+#[test]
+fn viper_standin_wrist_is_visps_viper650() {
+    let (a1, a2, a3, d1, d4) = (0.075, 0.270, 0.090, 0.335, 0.295);
+    let chain = viper();
+    let mut worst: f64 = 0.0;
+    for q in [[0.0f64; 6], [0.1, -0.5, 0.7, 0.3, -0.9, 0.2], [1.0, 0.4, -1.2, 2.0, 0.5, -1.0], [-2.5, 1.3, 2.9, 0.0, 0.0, 0.0], [0.7, -1.9, -0.4, 1.0, 2.0, 3.0]] {
+        let (c1, s1, c2, s2) = (q[0].cos(), q[0].sin(), q[1].cos(), q[1].sin());
+        let (c23, s23) = ((q[1] + q[2]).cos(), (q[1] + q[2]).sin());
+        let reach = -c23 * a3 + s23 * d4 + a1 + a2 * c2;
+        let wrist = [c1 * reach, s1 * reach, s23 * a3 + c23 * d4 - a2 * s2 + d1];
+        let forearm = [c1 * s23, s1 * s23, c23];
+        let at = chain.place(&q);
+        // Joint 5's origin is the wrist centre (the three wrist axes meet there), joint 4's axis the
+        // forearm's.
+        for k in 0..3 {
+            worst = worst.max((at.points[4][k] - wrist[k]).abs());
+            worst = worst.max((at.axes[3][k] - forearm[k]).abs());
+        }
+    }
+    assert!(worst < 1e-12, "the stand-in's wrist is {worst} m (or its forearm axis that far) from ViSP's Viper 650");
 }
 
 /// The thesis's eq 12-14 element (flange held in the other five directions) is never below the

@@ -12,6 +12,13 @@
 //! removed (category 0). So a `hil` run costs about what `flinch run` costs (docs/accuracy.md,
 //! "Firmware in the loop").
 //!
+//! A category-0 removal the firmware decides inside a plant step is found after the step: where
+//! the arm cruised at constant speed since, the plant takes it at its instant all the same
+//! (`Run::remove_power`); elsewhere (accelerating, braking) the run starts again with the removal
+//! scheduled at its instant from t = 0, a breakpoint the solver steps onto ([`run_passes`]). The
+//! power-off instant is then the firmware's decision plus its output latency whatever the step
+//! grid (`tests/hil.rs`, `a_category_0_power_removal_lands_at_its_instant_whatever_the_step_grid`).
+//!
 //! # What the robot sees
 //!
 //! The stop output reaches the controller `hal_sim::latency::edge_to_stop_s()` (7.25 us, the
@@ -372,30 +379,93 @@ pub fn run_recording(scene: &Scene, ctl: &Controller, opts: &HilOptions, record:
     cfg.filter = opts.filter;
     cfg.reset = opts.reset;
     let refused = |e: flinch_firmware::ConfigError| format!("the firmware refused its configuration: {}", e.message());
+    let mut record = record;
     if opts.two_channels {
         // Antivalent pair: channel A as the single switch, channel B its complement (NO).
         let kind_b = SwitchKind::Magnetic { trip_high: !kind.trip_level_high() };
-        let mut rig = SimRig::dual_after(cfg, Boot::UNKNOWN, kind, kind_b, um(threshold) as i32, DISCREPANCY_US).map_err(refused)?;
-        let (a, b) = rig.channel_pins().ok_or("no channels")?;
-        let apply = move |rig: &mut SimRig<DualSwitch<SimPin, SimPin, SimPin>>, f: FaultKind| match (f, channel_fault(f, if f == FaultKind::StuckRestB { kind_b } else { kind })) {
-            (FaultKind::Reset, _) => rig.mcu_reset(ResetCause::Watchdog),
-            (FaultKind::StuckRestB, Some(pf)) => rig.inject_pin_fault(&b, pf),
-            (_, Some(pf)) => rig.inject_pin_fault(&a, pf),
-            (_, None) => apply_common(rig, f),
+        let make = || SimRig::dual_after(cfg, Boot::UNKNOWN, kind, kind_b, um(threshold) as i32, DISCREPANCY_US).map_err(refused);
+        let apply = move |rig: &mut SimRig<DualSwitch<SimPin, SimPin, SimPin>>, f: FaultKind| {
+            let Some((a, b)) = rig.channel_pins() else { return };
+            match (f, channel_fault(f, if f == FaultKind::StuckRestB { kind_b } else { kind })) {
+                (FaultKind::Reset, _) => rig.mcu_reset(ResetCause::Watchdog),
+                (FaultKind::StuckRestB, Some(pf)) => rig.inject_pin_fault(&b, pf),
+                (_, Some(pf)) => rig.inject_pin_fault(&a, pf),
+                (_, None) => apply_common(rig, f),
+            }
         };
-        run_loop(scene, ctl, record, threshold, &mut rig, opts, apply)
+        run_passes(scene, ctl, &mut record, threshold, opts, make, apply)
     } else {
         if opts.faults.iter().any(|f| f.kind == FaultKind::StuckRestB) {
             return Err("--fault stuck-rest-b: needs a two-channel switch (--channels 2); this run has one channel".into());
         }
-        let mut rig = SimRig::digital(cfg, kind, um(threshold) as i32).map_err(refused)?;
+        let make = || SimRig::digital(cfg, kind, um(threshold) as i32).map_err(refused);
         let apply = move |rig: &mut SimRig<DigitalSwitch<SimPin, SimPin>>, f: FaultKind| match (f, channel_fault(f, kind)) {
             (FaultKind::Reset, _) => rig.mcu_reset(ResetCause::Watchdog),
             (_, Some(pf)) => rig.inject_switch_fault(pf),
             (_, None) => apply_common(rig, f),
         };
-        run_loop(scene, ctl, record, threshold, &mut rig, opts, apply)
+        run_passes(scene, ctl, &mut record, threshold, opts, make, apply)
     }
+}
+
+/// How many passes a run may take to put a category-0 power removal at its instant (see
+/// [`run_passes`]).
+const MAX_PASSES: usize = 3;
+
+/// Two firmware decisions at most this far apart are the same instant, s: the firmware's clock
+/// counts whole microseconds.
+const SAME_INSTANT_S: f64 = 1e-6;
+
+/// What one pass of [`run_loop`] ended with.
+enum Pass {
+    /// The run, complete.
+    Done(Box<(HilReport, Vec<Sample>)>),
+    /// The firmware removed drive power at `off` s, inside a plant step that had already gone past
+    /// it with the arm not cruising (so the past could not be rewritten exactly): run again with
+    /// the removal scheduled at `off` from the start. Rows up to `streamed_until` s have been
+    /// handed to the stream already.
+    Again { off: f64, streamed_until: f64 },
+}
+
+/// Runs [`run_loop`] with a fresh firmware from `make`, again with the power removal scheduled
+/// where a pass found it late.
+///
+/// Why: the plant steps before the firmware catches up with it, so a category-0 escalation (IEC
+/// 60204-1 9.2.2, removal of drive power) decided at an instant inside the plant's step is found
+/// once the step has ended. Applying it at the step's end made the power-removal time, the coasting
+/// and the stop depend on the solver's step grid (up to a step late: 639 us on Tables 5-7 with a
+/// reset during braking). The motion law cannot be rewritten after the fact except where the arm
+/// cruised at constant speed (`Run::remove_power`), so otherwise the pass stops there and the run
+/// starts again with the removal scheduled at its instant: a motion-law breakpoint, which the
+/// solver steps onto. Causality makes that exact: up to the removal the scheduled law is the same
+/// law, so the firmware decides the same thing at the same instant (checked: to the firmware's
+/// 1 us clock; a pass that disagrees is run again from its own instant, at most [`MAX_PASSES`]).
+fn run_passes<S: flinch_firmware::Sensor>(
+    scene: &Scene,
+    ctl: &Controller,
+    record: &mut Record<'_>,
+    threshold: f64,
+    opts: &HilOptions,
+    make: impl Fn() -> Result<SimRig<S>, String>,
+    mut apply: impl FnMut(&mut SimRig<S>, FaultKind),
+) -> Result<(HilReport, Vec<Sample>), String> {
+    let mut schedule: Option<f64> = None;
+    let mut streamed_until = f64::NEG_INFINITY;
+    let mut found = Vec::new();
+    for _ in 0..MAX_PASSES {
+        let mut rig = make()?;
+        match run_loop(scene, ctl, record, threshold, &mut rig, opts, &mut apply, schedule, streamed_until)? {
+            Pass::Done(r) => return Ok(*r),
+            Pass::Again { off, streamed_until: s } => {
+                found.push(off);
+                schedule = Some(off);
+                streamed_until = streamed_until.max(s);
+            }
+        }
+    }
+    Err(format!(
+        "category 0: the firmware's drive power removal did not settle on one instant in {MAX_PASSES} passes (found at {found:?} s, each pass scheduled at the one before): the plant and the firmware disagree at the solver's tolerance; tighten [solver] rtol/atol"
+    ))
 }
 
 /// What the firmware must be given, in time order, found on the plant's dense output.
@@ -497,12 +567,14 @@ fn latency_of(p: Path) -> f64 {
 fn run_loop<S: flinch_firmware::Sensor>(
     scene: &Scene,
     ctl: &Controller,
-    mut record: Record<'_>,
+    record: &mut Record<'_>,
     threshold: f64,
     rig: &mut SimRig<S>,
     opts: &HilOptions,
     mut apply: impl FnMut(&mut SimRig<S>, FaultKind),
-) -> Result<(HilReport, Vec<Sample>), String> {
+    schedule: Option<f64>,
+    streamed_until: f64,
+) -> Result<Pass, String> {
     rig.boot(1_000_000).map_err(|s| format!("the firmware did not arm after 1 s of self-test (stuck in {s:?})"))?;
     let mut pending: std::collections::VecDeque<Injection> = opts.faults.iter().copied().collect();
     let mut outcomes: Vec<FaultOutcome> = Vec::new();
@@ -510,6 +582,11 @@ fn run_loop<S: flinch_firmware::Sensor>(
 
     let keep = !matches!(record, Record::Nothing);
     let mut plant = Run::new(scene, true, keep);
+    if let Some(off) = schedule {
+        // Found by an earlier pass (run_passes): a breakpoint of the motion law from the start.
+        plant.remove_power(off, brake);
+    }
+    let mut last_streamed = streamed_until;
     // Recorded samples wait here until the firmware has caught up with their instant.
     let rows: Rc<RefCell<Vec<Sample>>> = Rc::new(RefCell::new(Vec::new()));
     if let Record::Stream(_) = record {
@@ -544,6 +621,8 @@ fn run_loop<S: flinch_firmware::Sensor>(
     // capacity, where taking the vector left the probe a new one to grow again every step (its
     // reallocations were 10 % of a Tables 5-7 hil run's instructions, callgrind).
     let mut inputs: Vec<Input> = Vec::new();
+    // A power removal this pass could not put at its instant (see run_passes).
+    let mut late: Option<f64> = None;
     while t < scene.duration_s {
         // The step the solver would take anyway; until the controller has seen the stop, not past
         // its next sample (braking starts there if it sees the stop).
@@ -579,11 +658,23 @@ fn run_loop<S: flinch_firmware::Sensor>(
                     // The escalation output drops the drives' power directly (a safety relay, STO),
                     // not through the controller's scan cycle.
                     let off = at + latency::tick_to_output_s();
-                    let applied = plant.remove_power(off, brake);
-                    if applied > off + 1e-12 {
-                        warnings.push(format!("category 0: drive power removal due at {off} s was applied at {applied} s, the end of the solver step the escalation was found in ({} us late)", ((applied - off) * 1e6).round()));
+                    match schedule {
+                        // Scheduled by the pass before: the firmware must decide it again here.
+                        Some(s) => {
+                            if (off - s).abs() > SAME_INSTANT_S {
+                                late = Some(off);
+                            }
+                            power_removed = Some(s);
+                        }
+                        None => {
+                            // Exact if the plant has not passed `off` or the arm cruised since.
+                            let applied = plant.remove_power(off, brake);
+                            if applied > off + 1e-12 {
+                                late = Some(off);
+                            }
+                            power_removed = Some(applied);
+                        }
                     }
-                    power_removed = Some(applied);
                 }
             }
             esc_level = esc;
@@ -613,6 +704,10 @@ fn run_loop<S: flinch_firmware::Sensor>(
             pending.pop_front();
             inject(rig, f, &mut apply, &mut outcomes, &mut |rig, at, path, outcomes| note(rig, at, path, &mut plant, outcomes));
         }
+        if let Some(off) = late {
+            // Nothing after the step's start has reached the stream: this pass ends here.
+            return Ok(Pass::Again { off, streamed_until: last_streamed });
+        }
         // The controller's samples up to now.
         while next_sample <= now {
             if stop_seen.is_none() && level_at(&stop_output, next_sample) {
@@ -621,16 +716,25 @@ fn run_loop<S: flinch_firmware::Sensor>(
             }
             next_sample += scan;
         }
-        if let Record::Stream(sink) = &mut record {
+        if let Record::Stream(sink) = record {
             let signals = RowSignals { stop_output: &stop_output, stop_seen };
             for s in rows.borrow_mut().drain(..) {
-                sink(&s, &signals);
+                // An earlier pass streamed these already (run_passes).
+                if s.t > last_streamed {
+                    sink(&s, &signals);
+                    last_streamed = s.t;
+                }
             }
         }
         t = now;
     }
     plant.sim.probe = None;
     plant.sim.sink = None;
+    if let (Some(off), None) = (schedule, power_removed) {
+        return Err(format!(
+            "category 0: the firmware removed drive power at {off} s in a first pass, but not when the removal was scheduled there from the start (the same plant up to that instant): the plant and the firmware disagree at the solver's tolerance; tighten [solver] rtol/atol"
+        ));
+    }
     let mut summary = plant.summary();
     if let Some(off) = power_removed {
         warnings.push(format!(
@@ -686,7 +790,7 @@ fn run_loop<S: flinch_firmware::Sensor>(
         stop_output,
     };
     let history = if matches!(record, Record::History) { std::mem::take(&mut plant.sim.history) } else { Vec::new() };
-    Ok((HilReport { summary, firmware }, history))
+    Ok(Pass::Done(Box::new((HilReport { summary, firmware }, history))))
 }
 
 /// The stop output's level at `t` (the last change at or before it).

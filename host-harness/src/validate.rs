@@ -113,7 +113,7 @@ fn num_row(quantity: &str, thesis: f64, ours: f64, unit: &str, tol_rel: f64) -> 
         ours: format!("{} {unit}", sig(ours)).trim().into(),
         // The absolute difference to the thesis value's own resolution (three significant digits),
         // so a change far below what the thesis states does not change the document.
-        diff: format!("{:+.*} ({:+.1} %, tolerance {:.0} %)", decimals(thesis), d, rel * 100.0, tol_rel * 100.0).replace("(-0.0 %", "(+0.0 %"),
+        diff: format!("{} ({} %, tolerance {:.0} %)", signed(d, decimals(thesis)), signed(rel * 100.0, 1), tol_rel * 100.0),
         verdict,
         open: String::new(),
     }
@@ -237,9 +237,20 @@ fn front_damping(sc: &Scene) -> f64 {
     }
 }
 
-/// Milliseconds after `t0`, one decimal.
+/// Milliseconds after `t0`, one decimal, signed ([`signed`]: an instant that rounds to `t0` is
+/// "+0.0 ms", never "-0.0 ms").
 fn ms_after(t: f64, t0: f64) -> String {
-    format!("{:+.1} ms", (t - t0) * 1e3)
+    format!("{} ms", signed((t - t0) * 1e3, 1))
+}
+
+/// `x` with its sign and `decimals` decimals, for people: a value that rounds to zero is "+0.0"
+/// whatever side of zero it was on (Rust's `{:+.1}` writes -0.04 and -0.0 as "-0.0").
+pub fn signed(x: f64, decimals: usize) -> String {
+    let s = format!("{x:+.decimals$}");
+    match s.strip_prefix('-') {
+        Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => format!("+{rest}"),
+        _ => s,
+    }
 }
 
 /// Index of the value nearest `x` on an axis.
@@ -481,7 +492,7 @@ pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
             claim_row("Fig. 42: peak contact force vs V_c (m_t = 0.75 kg, stroke not exhausted)", "almost linear", format!("R^2 of a straight line = {:.4} ({} speeds up to {} m/s; beyond, the stroke runs out)", r2, lx.len(), sig(lx.last().copied().unwrap_or(f64::NAN))), "R^2 > 0.98", r2 > 0.98),
             claim_row("Fig. 42: peak contact force, m_t 0.25 -> 1.25 kg (0.2 m/s)", "grows with m_t", format!("{} -> {} N", sig(m_lo), sig(m_hi)), "grows", m_hi > m_lo),
             claim_row("Fig. 43: peak contact force, k_c 1e6 -> 1e8 (0.2 m/s)", "grows with k_c", format!("{} -> {} N", sig(k_lo), sig(k_hi)), "grows", k_hi > k_lo),
-            claim_row("Fig. 44: peak contact force, k_b 100 -> 300 N/m (0.2 m/s)", "grows slightly", format!("{} -> {} N ({:+.1} %)", sig(b_lo), sig(b_hi), (b_hi / b_lo - 1.0) * 100.0), "grows by < 10 %", b_hi >= b_lo && b_hi / b_lo < 1.10),
+            claim_row("Fig. 44: peak contact force, k_b 100 -> 300 N/m (0.2 m/s)", "grows slightly", format!("{} -> {} N ({} %)", sig(b_lo), sig(b_hi), signed((b_hi / b_lo - 1.0) * 100.0, 1)), "grows by < 10 %", b_hi >= b_lo && b_hi / b_lo < 1.10),
             claim_row("Fig. 45: peak contact force over DT = 0..0.1 s (0.2 m/s, stroke not exhausted)", "independent of DT", format!("spread {:.1} % over {} points", spread * 100.0, held.len()), "spread < 5 %", spread < 0.05),
             claim_row("Fig. 45: V_c = 0.25 m/s, DT = 0.05 s", "the flange just reaches the obstacle: a small second peak", format!("stroke exhausted: {}; peak {} N vs {} N at DT = 0", corner.stroke_exhausted, sig(corner.peak_contact_force), sig(corner_ok.peak_contact_force)), "exhausted", corner.stroke_exhausted),
             claim_row("Fig. 46: working modes at 0.05 / 0.20 / 0.25 m/s (m_t = 0.75 kg, DT = 16 ms)", "1 / 2 / 3", format!("{} / {} / {}", fmt_mode(modes[0]), fmt_mode(modes[1]), fmt_mode(modes[2])), "equal", modes == [Some(1), Some(2), Some(3)]),
@@ -591,13 +602,13 @@ pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
             claim_row("Fig. 73-74, objects, DT = 70 ms: force on the robot (front stop: eq 28, linear)", "lower with the hydraulic", format!("whole run: hydraulic {} vs bi-stable {}; first impact: hydraulic {} N, bi-stable {} N", whole(&h70), whole(&b70), sig(first(&h70)), sig(first(&b70))), "hydraulic < bi-stable", h70.peak_robot_force < b70.peak_robot_force)
                 .open(format!("{}; d_c 9 m/s^2: hydraulic {} N, bi-stable {} N", law_open(&h70_hc, &b70_hc), sig(h70_d9.peak_robot_force), sig(b70_d9.peak_robot_force))),
             claim_row("Fig. 73-74, objects, DT = 70 ms: force on the robot, front stop Hunt-Crossley", "lower with the hydraulic", format!("whole run: hydraulic {} vs bi-stable {}; first impact: hydraulic {} N, bi-stable {} N", whole(&h70_hc), whole(&b70_hc), sig(first(&h70_hc)), sig(first(&b70_hc))), "hydraulic < bi-stable", h70_hc.peak_robot_force < b70_hc.peak_robot_force)
-                .open(format!("the law moves the hydraulic's whole-run peak {} -> {} N ({:+.0} %), its first impact {} -> {} N", sig(h70.peak_robot_force), sig(h70_hc.peak_robot_force), (h70_hc.peak_robot_force / h70.peak_robot_force - 1.0) * 100.0, sig(first(&h70)), sig(first(&h70_hc)))),
+                .open(format!("the law moves the hydraulic's whole-run peak {} -> {} N ({} %), its first impact {} -> {} N", sig(h70.peak_robot_force), sig(h70_hc.peak_robot_force), signed((h70_hc.peak_robot_force / h70.peak_robot_force - 1.0) * 100.0, 0), sig(first(&h70)), sig(first(&h70_hc)))),
             claim_row("Fig. 75, objects, DT = 10 ms: object velocity", "lower with the bi-stable", vs(&h10, &b10) + " m/s", "bi-stable < hydraulic", obj(&b10) < obj(&h10))
                 .open(format!("d_c 9 m/s^2: hydraulic {} m/s, bi-stable {} m/s; front-stop law: Hunt-Crossley gives hydraulic {} m/s, bi-stable {} m/s", sig(obj(&h10_d9)), sig(obj(&b10_d9)), sig(obj(&h10_hc)), sig(obj(&b10_hc)))),
             claim_row("Fig. 76, objects, DT = 10 ms: force on the robot (front stop: eq 28, linear)", "still lower with the hydraulic", format!("whole run: hydraulic {} vs bi-stable {}", whole(&h10), whole(&b10)), "hydraulic < bi-stable", h10.peak_robot_force < b10.peak_robot_force)
                 .open(format!("d_c (Table 12 gives none; 5 m/s^2 here): 9 m/s^2 gives hydraulic {} N, bi-stable {} N; {}; k_fe (Table 12: 1e6 N/m): 1e5 N/m gives hydraulic {} N (eq 28), {} N (Hunt-Crossley)", sig(h10_d9.peak_robot_force), sig(b10_d9.peak_robot_force), law_open(&h10_hc, &b10_hc), sig(h10_soft.peak_robot_force), sig(h10_soft_hc.peak_robot_force))),
             claim_row("Fig. 76, objects, DT = 10 ms: force on the robot, front stop Hunt-Crossley", "still lower with the hydraulic", format!("whole run: hydraulic {} vs bi-stable {}", whole(&h10_hc), whole(&b10_hc)), "hydraulic < bi-stable", h10_hc.peak_robot_force < b10_hc.peak_robot_force)
-                .open(format!("the law moves the hydraulic's whole-run peak {} -> {} N ({:+.0} %), its first impact {} -> {} N", sig(h10.peak_robot_force), sig(h10_hc.peak_robot_force), (h10_hc.peak_robot_force / h10.peak_robot_force - 1.0) * 100.0, sig(first(&h10)), sig(first(&h10_hc)))),
+                .open(format!("the law moves the hydraulic's whole-run peak {} -> {} N ({} %), its first impact {} -> {} N", sig(h10.peak_robot_force), sig(h10_hc.peak_robot_force), signed((h10_hc.peak_robot_force / h10.peak_robot_force - 1.0) * 100.0, 0), sig(first(&h10)), sig(first(&h10_hc)))),
             claim_row("Fig. 76, objects, DT = 10 ms: force on the robot in the first impact alone", "lower with the hydraulic", format!("hydraulic {} N at {} vs bi-stable {} N at {}", sig(first(&h10)), first_at(&h10), sig(first(&b10)), first_at(&b10)), "hydraulic < bi-stable", first(&h10) < first(&b10))
                 .open(format!("orifice (R_o, c0: Table 12): the orifice term 0.5 c0 rho A_p^3 / A_o^2 s'^2 decides it; d_c 5 -> 9 m/s^2: hydraulic {} N; front-stop law: Hunt-Crossley gives hydraulic {} N, bi-stable {} N", sig(first(&h10_d9)), sig(first(&h10_hc)), sig(first(&b10_hc)))),
             claim_row("Fig. 78-79, hard surface, DT = 70 ms: force on the robot", "lower with the hydraulic", fs(&hs70, &bs70) + &format!("; hydraulic stroke exhausted: {}", hs70.stroke_exhausted), "hydraulic < bi-stable", hs70.peak_robot_force < bs70.peak_robot_force)
@@ -1131,4 +1142,38 @@ pub fn run(a: &ValidateArgs) -> Result<(), String> {
     let differ = sections.iter().flat_map(|s| &s.rows).filter(|r| r.verdict == Verdict::Differs).count();
     eprintln!("{}: {} sections, {} comparisons, {differ} differ; pictures in {}", path.display(), sections.len(), sections.iter().map(|s| s.rows.len()).sum::<usize>(), a.out.join("validation").display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every "-" followed by nothing but zeros and a point: a negative zero as people read it.
+    fn has_negative_zero(s: &str) -> bool {
+        s.match_indices('-').any(|(i, _)| {
+            let num: String = s[i + 1..].chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+            num.starts_with('0') && num.chars().all(|c| c == '0' || c == '.')
+        })
+    }
+
+    #[test]
+    fn no_negative_zero_in_signed_figures() {
+        // Table 4's first hit starts at the contact instant, found 1e-17 s before it by the solver:
+        // the timeline's legend said "hit 1 (-0.0 ms to +11.2 ms)".
+        let tc = 0.224_837_819_134_552_5;
+        assert_eq!(ms_after(tc - 1e-17, tc), "+0.0 ms");
+        assert_eq!(ms_after(tc - 4e-5, tc), "+0.0 ms");
+        assert_eq!(ms_after(tc - 6e-5, tc), "-0.1 ms");
+        assert_eq!(ms_after(tc + 0.0112, tc), "+11.2 ms");
+        assert_eq!(signed(-0.0, 1), "+0.0");
+        assert_eq!(signed(-0.0004, 3), "+0.000");
+        assert_eq!(signed(-0.0006, 3), "-0.001");
+        assert_eq!(signed(-12.0, 0), "-12");
+        assert_eq!(signed(f64::NAN, 1), "NaN");
+        // The difference column: Fig. 3's V_p rows printed "-0.000 (+0.0 %".
+        let r = num_row("v", 0.4, 0.4 - 1e-12, "m/s", 0.01);
+        assert_eq!(r.diff, "+0.000 (+0.0 %, tolerance 1 %)");
+        assert!(!has_negative_zero(&r.diff), "{}", r.diff);
+        assert!(has_negative_zero("hit 1 (-0.0 ms") && !has_negative_zero("-0.1 ms, 10-0.5"));
+    }
 }
