@@ -1,8 +1,8 @@
 //! Collision avoidance on the adversarial scenes of issue 9 (`scenes/avoid_*.toml`): whatever the
 //! law does, the outcome is reported honestly from the true geometry. A run that put the tool inside
 //! the operator is never "reached", its signed distance is negative (not clamped at 0), and
-//! `flinch avoid` answers `false` (exit 1).
-use flinch_harness::avoid::path::{simulate, Engine, PathResult, Reason, Setup, Status};
+//! `flinch avoid` exits 1 (unsafe); a safe stop before the goal exits 4.
+use flinch_harness::avoid::path::{simulate, Engine, PathResult, Reason, Setup, Status, Verdict};
 use flinch_harness::avoid::scene::Avoid;
 use flinch_harness::avoid::{self, AvoidArgs};
 use flinch_tests::scene_path;
@@ -87,7 +87,11 @@ fn honest(name: &str, scene: &Avoid, r: &PathResult) {
             assert!(r.min_signed_distance_m < 0.0 && r.time_inside_s > 0.0, "{name}: collision needs a penetration");
         }
         Status::SsmViolation(_) => assert!(r.min_signed_distance_m >= 0.0 && r.ssm_violations > 0, "{name}: ssm_violation is for runs never inside"),
+        // No synthetic run is unverified (only recorded frames are), and no shipped law gives a
+        // non-finite command.
+        Status::Fault | Status::Unverified(_) => panic!("{name}: {:?}", r.status),
     }
+    assert_eq!(r.verdict_basis, flinch_harness::avoid::path::VerdictBasis::SceneModel, "{name}");
     if r.min_signed_distance_m < 0.0 {
         assert!(matches!(r.status, Status::Collision(_)), "{name}: inside but {:?}", r.status);
     } else if r.ssm_violations > 0 {
@@ -427,8 +431,9 @@ fn random_variants_never_penetrate() {
     }
 }
 
-/// `flinch avoid` answers false (exit 1) on a collision and true on the shipped scene, and the CSV
-/// has the documented columns, one row per step.
+/// `flinch avoid` exits 1 on a collision, 4 on a safe stop before the goal (the wall with the
+/// monitor: it was exit 1, the same as the collision) and 0 on the empty diagonal, and the CSV has
+/// the documented columns, one row per step.
 #[test]
 fn cli_verdict_and_csv() {
     let csv = std::env::temp_dir().join(format!("flinch-avoid-{}.csv", std::process::id()));
@@ -446,7 +451,7 @@ fn cli_verdict_and_csv() {
         depth: None,
         robot_poses: None,
     };
-    assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(false));
+    assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(Verdict::Unsafe), "a collision: exit 1");
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state,swept_separation_m,ssm_bound_mps"));
@@ -456,11 +461,13 @@ fn cli_verdict_and_csv() {
     assert!(rows.iter().all(|r| r[7] <= r[5]), "swept separation never above the step's end");
     assert!(rows.iter().any(|r| r[3].hypot(r[4]) > r[8] + 1e-6), "the thesis's law exceeds the SSM bound: the CSV shows where");
     std::fs::remove_file(&csv).ok();
-    // With the monitor the wall is a safe stop, still exit 1 (the goal is not reached).
-    assert_eq!(avoid::run(&args("avoid_wall.toml", None, false)), Ok(false));
+    // With the monitor the wall is a safe stop: exit 4, told apart from the unsafe exit 1.
+    let stop = avoid::run(&args("avoid_wall.toml", None, false));
+    assert_eq!(stop, Ok(Verdict::SafeStop));
+    assert_eq!(stop.map(|v| v.code()), Ok(4));
     let mut empty = args("avoid_empty_diagonal.toml", None, false);
     empty.json = false;
-    assert_eq!(avoid::run(&empty), Ok(true));
+    assert_eq!(avoid::run(&empty).map(|v| v.code()), Ok(0));
 }
 
 /// One row of the docs' table: `| scene | law | status | reason | min_signed_distance_m |
@@ -616,7 +623,7 @@ fn ssm_verdict_uses_the_true_separation() {
         depth: None,
         robot_poses: None,
     };
-    assert_eq!(avoid::run_scene(&args, s), Ok(false), "exit 1");
+    assert_eq!(avoid::run_scene(&args, s).map(|v| v.code()), Ok(1), "exit 1");
     // As shipped (1.6 m/s = v_h): within the bound at every step.
     let (scene, r) = run("avoid_fast_hand.toml");
     safe("avoid_fast_hand.toml", &scene, &r);
@@ -827,4 +834,70 @@ fn random_variants_are_safe_and_honest() {
         *tally.entry(format!("{} {}", r.status.name(), r.status.reason().map_or("", |x| x.name()))).or_insert(0) += 1;
     }
     println!("{n} variants: {tally:?}; closest reached run {reached_near} m; {:.1} s", t_start.elapsed().as_secs_f64());
+}
+
+/// A command source that answers every step with a non-finite command (as the thesis's law can
+/// with extreme weights: no monitor stands between it and the drive in `--thesis` mode).
+struct NanEngine;
+
+impl flinch_harness::avoid::path::StepEngine for NanEngine {
+    fn new_field(&mut self, _: &flinch_harness::avoid::rbf::Field, _: u32, _: u32) -> Result<(), String> {
+        Ok(())
+    }
+    fn command(&mut self, _: [f64; 2], _: [f64; 2], _: u32, _: Option<&flinch_firmware::avoidance::Sensed<f64>>) -> flinch_harness::avoid::path::Cmd {
+        flinch_harness::avoid::path::Cmd { v: [f64::NAN, 0.1], limit_mps: 0.25, state: "field" }
+    }
+}
+
+/// Follow-up to issue 9 (item 3): a NaN command in `--thesis` mode (the monitor off) is a fault:
+/// the run's status is `fault`, the unfavourable verdict (exit 1), never `reached` nor a clean stop.
+/// Before: the NaN position read as "left the view", `stopped`, a safe stop.
+#[test]
+fn a_non_finite_command_is_a_fault() {
+    let mut s = Avoid::load(&scene_path("avoid_empty_diagonal.toml")).unwrap();
+    s.thesis_mode();
+    s.max_time_s = 1.0;
+    let setup = Setup::new(&s, None).unwrap();
+    let r = flinch_harness::avoid::path::simulate_with(&s, &setup, &mut NanEngine).unwrap();
+    let m = avoid::metrics_json(&r, Engine::Reference, false);
+    assert_eq!(m["status"], "fault", "{m}");
+    assert_eq!(m["reason"], "non_finite_command", "{m}");
+    assert_eq!(m["reached_goal"], false);
+    assert!(!r.status.ok());
+    // The tool did not move on a command it could not carry out; every reported number is finite.
+    assert!(r.points.iter().all(|p| p[0].is_finite() && p[1].is_finite()), "{:?}", r.points.last());
+    assert!(r.path_length_m.is_finite() && r.max_speed_mps.is_finite(), "{m}");
+}
+
+/// Follow-up to issue 9 (item 3): the CSV's last row is a control step like any other; it was
+/// labelled `stopped` whenever the run ended, even when the tool moved in that step (a timeout at
+/// cruise speed). Now `stopped` only where the step's command was zero.
+#[test]
+fn the_last_csv_row_is_stopped_only_when_the_tool_stood_still() {
+    let mut s = Avoid::load(&scene_path("avoid_empty_diagonal.toml")).unwrap();
+    s.max_time_s = 0.5;
+    let (_, r) = run_scene(s);
+    assert_eq!(r.status, Status::Stopped(Reason::Timeout), "{:?}", r.status);
+    let last = r.rows.last().unwrap();
+    assert!(last.v_mps[0].hypot(last.v_mps[1]) > 0.1, "moving at the timeout: {:?}", last.v_mps);
+    assert_ne!(last.state, "stopped", "it moved in that step: {:?}", last);
+    for w in &r.rows {
+        if w.state == "stopped" {
+            assert_eq!(w.v_mps, [0.0, 0.0], "{w:?}");
+        }
+    }
+}
+
+/// Follow-up to issue 9 (item 3): `reached_goal` says what it reports: `status` is `reached`, not
+/// merely "the tool got to the goal" (a run that crossed the operator and then arrived reports
+/// `false`, and `time_to_goal_s` says it arrived).
+#[test]
+fn reached_goal_is_documented_as_what_it_reports() {
+    let schema: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(scene_path("../docs/schema/avoid.json")).unwrap()).unwrap();
+    let d = schema["properties"]["reached_goal"]["description"].as_str().unwrap().to_string();
+    assert!(d.contains("`status` is `reached`"), "{d}");
+    assert!(d.contains("time_to_goal_s"), "{d}");
+    let (scene, r) = thesis("avoid_wall.toml");
+    let m = avoid::metrics_json(&r, Engine::Reference, scene.safety.on());
+    assert_eq!(m["reached_goal"], m["status"] == "reached", "{m}");
 }

@@ -461,6 +461,10 @@ pub enum Reason {
     /// separation at rest (`S_p(0)`, the clearance included): no path can keep it, so the tool
     /// does not move at all (instead of waiting in a protective stop or stalling to the timeout).
     NoRoom,
+    /// The command source gave a non-finite command (NaN or infinite): a fault, not a stop (with
+    /// the monitor on it never reaches the drive; in `--thesis` mode nothing stands in between).
+    /// The tool is held where it was.
+    NonFiniteCommand,
 }
 
 impl Reason {
@@ -474,6 +478,7 @@ impl Reason {
             Reason::Timeout => "timeout",
             Reason::LeftView => "left_view",
             Reason::NoRoom => "no_room",
+            Reason::NonFiniteCommand => "non_finite_command",
         }
     }
 }
@@ -497,10 +502,64 @@ pub enum Status {
     /// TRUE separation ([`SsmVerdict`]); `None`: it then reached the goal, `Some(reason)`: it
     /// stopped for that reason. Reported in place of `reached`, `too_close` and `stopped`.
     SsmViolation(Option<Reason>),
+    /// The command source failed ([`Reason::NonFiniteCommand`]), never inside before it: unsafe.
+    Fault,
+    /// A run on recorded frames (`--depth`) that would otherwise read `reached` (`None`) or
+    /// `stopped` (`Some(reason)`): the verdict was judged against the scene file's model operator,
+    /// which the recording need not show ([`VerdictBasis::SceneModelNotRecording`]), so neither the
+    /// clearance nor the SSM bound is known to have been kept. Never a favourable verdict.
+    Unverified(Option<Reason>),
+}
+
+/// What the verdict (signed distance, SSM bound) was judged against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VerdictBasis {
+    /// The scene file's model operator, which also drew every camera frame: the verdict is checked
+    /// against the ground truth of what the sensing saw.
+    SceneModel,
+    /// The scene file's model operator while the frames came from a recording (`--depth`): the
+    /// recording's true geometry is unknown, the verdict unverified.
+    SceneModelNotRecording,
+}
+
+impl VerdictBasis {
+    /// The name in the JSON (`verdict_basis`).
+    pub fn name(self) -> &'static str {
+        match self {
+            VerdictBasis::SceneModel => "scene_model",
+            VerdictBasis::SceneModelNotRecording => "scene_model_not_recording",
+        }
+    }
+}
+
+/// What `flinch avoid` exits with (docs/conventions.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Exit 0: `reached`, judged against the frames' own ground truth.
+    Good,
+    /// Exit 1: unsafe: `collision`, `too_close`, `ssm_violation` or `fault`.
+    Unsafe,
+    /// Exit 4: `stopped` safely before the goal (never inside, the SSM bound kept), verified.
+    SafeStop,
+    /// Exit 5: `reached_unverified` or `stopped_unverified`: on a recording, nothing checked.
+    Unverified,
+}
+
+impl Verdict {
+    /// The process exit code.
+    pub fn code(self) -> u8 {
+        match self {
+            Verdict::Good => crate::report::output::EXIT_OK,
+            Verdict::Unsafe => crate::report::output::EXIT_VERDICT,
+            Verdict::SafeStop => crate::report::output::EXIT_SAFE_STOP,
+            Verdict::Unverified => crate::report::output::EXIT_UNVERIFIED,
+        }
+    }
 }
 
 impl Status {
-    /// `reached`, `stopped`, `too_close` or `collision`.
+    /// `reached`, `stopped`, `too_close`, `collision`, `ssm_violation`, `fault`,
+    /// `reached_unverified` or `stopped_unverified`.
     pub fn name(self) -> &'static str {
         match self {
             Status::Reached => "reached",
@@ -508,16 +567,40 @@ impl Status {
             Status::TooClose => "too_close",
             Status::Collision(_) => "collision",
             Status::SsmViolation(_) => "ssm_violation",
+            Status::Fault => "fault",
+            Status::Unverified(None) => "reached_unverified",
+            Status::Unverified(Some(_)) => "stopped_unverified",
+        }
+    }
+    /// The exit class: only `reached` is [`Verdict::Good`].
+    pub fn verdict(self) -> Verdict {
+        match self {
+            Status::Reached => Verdict::Good,
+            Status::Stopped(_) => Verdict::SafeStop,
+            Status::Unverified(_) => Verdict::Unverified,
+            Status::TooClose | Status::Collision(_) | Status::SsmViolation(_) | Status::Fault => Verdict::Unsafe,
+        }
+    }
+    /// The same outcome judged on a basis that is not the frames' ground truth: `reached` becomes
+    /// `reached_unverified`, `stopped` `stopped_unverified`; the unsafe ones stay as they are (a
+    /// collision with the model operator is still reported).
+    pub fn unverified(self) -> Status {
+        match self {
+            Status::Reached => Status::Unverified(None),
+            Status::Stopped(r) => Status::Unverified(Some(r)),
+            s => s,
         }
     }
     /// Why it stopped (also after a collision), if it did not reach the goal.
     pub fn reason(self) -> Option<Reason> {
         match self {
-            Status::Reached | Status::TooClose | Status::Collision(None) | Status::SsmViolation(None) => None,
-            Status::Stopped(r) | Status::Collision(Some(r)) | Status::SsmViolation(Some(r)) => Some(r),
+            Status::Reached | Status::TooClose | Status::Collision(None) | Status::SsmViolation(None) | Status::Unverified(None) => None,
+            Status::Stopped(r) | Status::Collision(Some(r)) | Status::SsmViolation(Some(r)) | Status::Unverified(Some(r)) => Some(r),
+            Status::Fault => Some(Reason::NonFiniteCommand),
         }
     }
-    /// The verdict: reached the goal and never touched the operator.
+    /// The favourable verdict: reached the goal, never inside the operator, the clearance and the
+    /// SSM bound kept, judged against the frames' ground truth.
     pub fn ok(self) -> bool {
         self == Status::Reached
     }
@@ -536,7 +619,9 @@ pub struct StepRow {
     pub separation_m: f64,
     /// Speed limit that applied during the step, m/s.
     pub speed_limit_mps: f64,
-    /// What the controller did: `run`, `slow`, `protective_stop`, `stopped`.
+    /// What the controller did: `run`, `slow`, `protective_stop`, `no_data`, `field` (monitor off),
+    /// or `stopped` on the run's last step when its command was zero and the run ended before the
+    /// goal.
     pub state: &'static str,
     /// Lower bound of the signed distance over the step's whole segment (the obstacles moving
     /// meanwhile), m: [`swept_min_m`].
@@ -572,6 +657,8 @@ pub struct PathResult {
     pub rows: Vec<StepRow>,
     /// How the run ended.
     pub status: Status,
+    /// What the verdict was judged against.
+    pub verdict_basis: VerdictBasis,
     /// Time spent with the tool inside the operator, s: every step whose segment entered it
     /// (swept distance below 0) counts whole.
     pub time_inside_s: f64,
@@ -919,6 +1006,11 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         }
         let cmd = engine.command(p, goal, now, sensed.as_ref());
         last_state = cmd.state;
+        if !(cmd.v[0].is_finite() && cmd.v[1].is_finite()) {
+            // A command the drive cannot carry out: a fault (the tool held where it was).
+            ended = Some(Reason::NonFiniteCommand);
+            break;
+        }
         let [vx, vy] = cmd.v;
         let speed = (vx * vx + vy * vy).sqrt();
         // Eq 79.
@@ -990,7 +1082,8 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         });
     }
     if let Some(r) = rows.last_mut() {
-        if ended.is_some() {
+        // The row is the step's command: `stopped` only when the tool stood still in it.
+        if ended.is_some() && r.v_mps == [0.0, 0.0] {
             r.state = "stopped";
         }
     }
@@ -998,6 +1091,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     // Stopped runs are judged against contact only: a person may walk up to a stopped robot.
     let status = match (collided, ended) {
         (true, e) => Status::Collision(e),
+        (false, Some(Reason::NonFiniteCommand)) => Status::Fault,
         (false, e) if ssm_violations > 0 => Status::SsmViolation(e),
         (false, None) if min_s < scene.clearance_m => Status::TooClose,
         (false, None) => Status::Reached,
@@ -1015,6 +1109,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         clearance_m: scene.clearance_m,
         rows,
         status,
+        verdict_basis: VerdictBasis::SceneModel,
         time_inside_s: time_inside,
         max_speed_mps: vmax,
         max_speed_near_operator_mps: vmax_near,
