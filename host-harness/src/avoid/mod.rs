@@ -322,10 +322,13 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
             println!("avoid {name}: engine reference (f64)");
         }
         let sf = &scene.safety;
+        let monitor = flinch_firmware::avoidance::SafeController::new(path::ssm_params::<f64>(&scene));
         if sf.on() {
             println!(
-                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, T_r {} s, T_s {} s, C {:.4} m (detection capability {:.1} mm), Z {} m, clearance {} m, latency {} s, cap {} m/s",
+                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, K {} m/s (ISO 13855 6.2: stop separation {:.3} m), T_r {} s, T_s {} s, C {:.4} m (detection capability {:.1} mm), Z {} m, clearance {} m, latency {} s, cap {} m/s",
                 sf.human_speed_mps,
+                monitor.approach_speed_mps(),
+                monitor.stop_separation_m(),
                 sf.reaction_time_s,
                 sf.stopping_time_s,
                 sf.intrusion_used_m(scene.camera.m_per_px),

@@ -99,8 +99,10 @@ pub fn ssm_params<R: Real>(scene: &Avoid) -> SsmParams<R> {
 
 /// The speed the SSM bound of ISO/TS 15066 5.5.4 allows at a TRUE separation `s_m` (from the tool's
 /// surface to the obstacles' true footprint, m), m/s: the largest `v_r` with
-/// `S_p(v_r) = v_h (T_r + T_s) + v_r (T_r + T_s / 2) + C + Z_d + Z_r + clearance <= s_m`, at most the
-/// cap (`T_s` is the stopping time from the cap). The same function the firmware's monitor applies
+/// `S_p(v_r) = K (T_r + T_s) + v_r (T_r + T_s / 2) + C + Z_d + Z_r + clearance <= s_m`, at most the
+/// cap (`T_s` is the stopping time from the cap; `K` by ISO 13855:2010 6.2 from the scene's `v_h`:
+/// `max(2.0 m/s, v_h)` where that gives a stop separation within 0.5 m, else `v_h` with at least
+/// 0.5 m, as the monitor computes it: [`SafeController::approach_speed_mps`]). The same function the firmware's monitor applies
 /// to its sensed lower bound ([`SafeController::speed_limit`]); here it is given the ground truth,
 /// so a sensing chain that overstates the separation (a hidden hand, a hand faster than `v_h`, an
 /// age not counted) shows. The sensing latency is not added to `T_r`: the verdict uses the true
@@ -222,14 +224,15 @@ pub const STEER_BAND_M: f64 = 0.05;
 
 /// The separation (from the tool's surface, at capture, less the motion since) that the steering
 /// barrier holds, m: the monitor's zero-speed separation (with the clearance asked), plus what a
-/// person covers at `v_h` while the oldest frame is in use (capture to command, one camera period,
-/// one control step), plus the robot's own term at the cap, plus 10 mm. There the monitor still
-/// allows the cap, so the tool goes round at its cruise speed instead of being stopped.
+/// person covers at the monitor's approach speed `K` (ISO 13855 6.2: 2.0 m/s within 0.5 m) while
+/// the oldest frame is in use (capture to command, one camera period, one control step), plus the
+/// robot's own term at the cap, plus 10 mm. There the monitor still allows the cap, so the tool
+/// goes round at its cruise speed instead of being stopped.
 pub fn steer_barrier_m(scene: &Avoid) -> Result<f64, String> {
     let s = &scene.safety;
-    let stop = s.human_speed_mps * (s.reaction_time_s + s.stopping_time_s) + s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m;
+    let monitor = SafeController::new(ssm_params::<f64>(scene));
     let oldest = frame_delay_s(scene)? + scene.frame_period_s + scene.dt_s;
-    Ok(stop + s.human_speed_mps * oldest + scene.speed_mps * (s.reaction_time_s + s.stopping_time_s / 2.0) + 0.01)
+    Ok(monitor.stop_separation_m() + monitor.approach_speed_mps() * oldest + scene.speed_mps * (s.reaction_time_s + s.stopping_time_s / 2.0) + 0.01)
 }
 
 /// The monitor with its steering barrier for a scene (`None`: monitor off, as the thesis wrote it).
