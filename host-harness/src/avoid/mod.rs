@@ -3,18 +3,20 @@
 //! `depth` reads 16-bit depth images, generates synthetic ones and pre-processes them (5.1); `rbf`
 //! fits the Gaussian grid, filters the weights and evaluates the field and its gradient (5.2);
 //! `calib` removes the robot by calibration (5.2.1); `path` closes the loop with the firmware's
-//! potential-field step (5.3); `scene` reads `[avoid]` scene files; `plot` draws Fig. 88-90.
+//! potential-field step (5.3), `engine` gives it its commands and `verdict` judges the run; `scene` reads `[avoid]` scene files; `plot` draws Fig. 88-90.
 //! `flinch avoid SCENE.toml` is [`run`].
 
 pub mod calib;
 pub mod camera;
 pub mod compare;
 pub mod depth;
+pub mod engine;
 pub mod path;
 pub mod plot;
 pub mod rbf;
 pub mod recorded;
 pub mod scene;
+pub mod verdict;
 
 use std::path::PathBuf;
 
