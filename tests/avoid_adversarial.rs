@@ -19,9 +19,7 @@ fn thesis(name: &str) -> (Avoid, PathResult) {
 }
 
 fn run_scene(scene: Avoid) -> (Avoid, PathResult) {
-    let setup = Setup::new(&scene, None).unwrap();
-    let res = simulate(&scene, &setup, Engine::Reference).unwrap();
-    (scene, res)
+    flinch_tests::avoid::run_reference(scene)
 }
 
 /// What every run must satisfy, whatever the scene.
@@ -209,13 +207,7 @@ fn every_adversarial_scene_is_safe_with_the_monitor() {
 /// `stopped` into a `reached`, or the reverse, is a difference the host has to show, not hide).
 #[test]
 fn every_scene_is_safe_on_the_board_engine() {
-    let scenes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-    let mut names: Vec<String> = std::fs::read_dir(&scenes)
-        .unwrap()
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("avoid_") && n.ends_with(".toml"))
-        .collect();
-    names.sort();
+    let names = flinch_tests::avoid::scene_names();
     assert!(names.len() >= 10, "{names:?}");
     for name in &names {
         let scene = Avoid::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
@@ -442,20 +434,7 @@ fn random_variants_never_penetrate() {
 #[test]
 fn cli_verdict_and_csv() {
     let csv = std::env::temp_dir().join(format!("flinch-avoid-{}.csv", std::process::id()));
-    let args = |name: &str, csv: Option<std::path::PathBuf>, thesis: bool| AvoidArgs {
-        scene: scene_path(name),
-        plot: None,
-        json: true,
-        mcu: false,
-        calibration: None,
-        save_calibration: None,
-        compare: false,
-        csv,
-        thesis,
-        save_depth: None,
-        depth: None,
-        robot_poses: None,
-    };
+    let args = |name: &str, csv: Option<std::path::PathBuf>, thesis: bool| AvoidArgs { csv, thesis, ..flinch_tests::avoid::args(scene_path(name)) };
     assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(Verdict::Unsafe), "a collision: exit 1");
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
@@ -495,13 +474,7 @@ fn table_row(name: &str, law: &str, r: &PathResult) -> String {
 /// diff). Every row of ours is also checked safe, every row of the thesis's honest.
 #[test]
 fn docs_table_is_current() {
-    let scenes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-    let mut names: Vec<String> = std::fs::read_dir(&scenes)
-        .unwrap()
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("avoid_") && n.ends_with(".toml"))
-        .collect();
-    names.sort();
+    let names = flinch_tests::avoid::scene_names();
     let mut rows = vec![
         "| scene | law | status | reason | min_signed_distance_m | max_speed_near_operator_mps | time_to_goal_s | ssm_violations | max_speed_over_ssm_mps |".to_string(),
         "|---|---|---|---|---|---|---|---|---|".to_string(),
@@ -629,20 +602,7 @@ fn ssm_verdict_uses_the_true_separation() {
     assert_eq!(json["ssm_violations"].as_u64(), Some(r.ssm_violations as u64));
     assert!(json["max_speed_over_ssm_mps"].as_f64().unwrap() > 0.0);
     assert_eq!(json["reached_goal"], false);
-    let args = AvoidArgs {
-        scene: scene_path("avoid_moving_hand_wide.toml"),
-        plot: None,
-        json: true,
-        mcu: false,
-        calibration: None,
-        save_calibration: None,
-        compare: false,
-        csv: None,
-        thesis: false,
-        save_depth: None,
-        depth: None,
-        robot_poses: None,
-    };
+    let args = flinch_tests::avoid::args(scene_path("avoid_moving_hand_wide.toml"));
     assert_eq!(avoid::run_scene(&args, s).map(|v| v.code()), Ok(1), "exit 1");
     // At ISO 13855's 2.0 m/s: within the bound at every step.
     let (scene, r) = run_scene(hand_at(2.0));

@@ -55,20 +55,7 @@ fn metrics(res: &PathResult) -> serde_json::Value {
 }
 
 fn args(scene: &Path, depth: &Path, poses: Option<PathBuf>) -> AvoidArgs {
-    AvoidArgs {
-        scene: scene.to_path_buf(),
-        plot: None,
-        json: true,
-        mcu: false,
-        calibration: None,
-        save_calibration: None,
-        compare: false,
-        csv: None,
-        thesis: false,
-        save_depth: None,
-        depth: Some(depth.to_path_buf()),
-        robot_poses: poses,
-    }
+    AvoidArgs { depth: Some(depth.to_path_buf()), robot_poses: poses, ..flinch_tests::avoid::args(scene.to_path_buf()) }
 }
 
 /// Recorded frames of the demo, in both conventions, give one and the same run, which arrives as the
