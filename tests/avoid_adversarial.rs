@@ -1,8 +1,8 @@
 //! Collision avoidance on the adversarial scenes of issue 9 (`scenes/avoid_*.toml`): whatever the
 //! law does, the outcome is reported honestly from the true geometry. A run that put the tool inside
 //! the operator is never "reached", its signed distance is negative (not clamped at 0), and
-//! `flinch avoid` answers `false` (exit 1).
-use flinch_harness::avoid::path::{simulate, Engine, PathResult, Reason, Setup, Status};
+//! `flinch avoid` exits 1 (unsafe); a safe stop before the goal exits 4.
+use flinch_harness::avoid::path::{simulate, Engine, PathResult, Reason, Setup, Status, Verdict};
 use flinch_harness::avoid::scene::Avoid;
 use flinch_harness::avoid::{self, AvoidArgs};
 use flinch_tests::scene_path;
@@ -19,9 +19,7 @@ fn thesis(name: &str) -> (Avoid, PathResult) {
 }
 
 fn run_scene(scene: Avoid) -> (Avoid, PathResult) {
-    let setup = Setup::new(&scene, None).unwrap();
-    let res = simulate(&scene, &setup, Engine::Reference).unwrap();
-    (scene, res)
+    flinch_tests::avoid::run_reference(scene)
 }
 
 /// What every run must satisfy, whatever the scene.
@@ -87,7 +85,11 @@ fn honest(name: &str, scene: &Avoid, r: &PathResult) {
             assert!(r.min_signed_distance_m < 0.0 && r.time_inside_s > 0.0, "{name}: collision needs a penetration");
         }
         Status::SsmViolation(_) => assert!(r.min_signed_distance_m >= 0.0 && r.ssm_violations > 0, "{name}: ssm_violation is for runs never inside"),
+        // No synthetic run is unverified (only recorded frames are), and no shipped law gives a
+        // non-finite command.
+        Status::Fault | Status::Unverified(_) => panic!("{name}: {:?}", r.status),
     }
+    assert_eq!(r.verdict_basis, flinch_harness::avoid::path::VerdictBasis::SceneModel, "{name}");
     if r.min_signed_distance_m < 0.0 {
         assert!(matches!(r.status, Status::Collision(_)), "{name}: inside but {:?}", r.status);
     } else if r.ssm_violations > 0 {
@@ -150,8 +152,13 @@ fn step_motion(scene: &Avoid, r: &PathResult, k: usize) -> f64 {
 fn ssm_bound_at(scene: &Avoid, s: f64, v_obs: f64) -> f64 {
     let f = &scene.safety;
     let v_h = f.human_speed_mps.max(v_obs);
-    let free = s - v_h * (f.reaction_time_s + f.stopping_time_s) - f.intrusion_used_m(scene.camera.m_per_px) - f.sensor_uncertainty_m - f.robot_uncertainty_m - scene.clearance_m;
-    (free / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps)
+    let t = f.reaction_time_s + f.stopping_time_s;
+    let margin = f.intrusion_used_m(scene.camera.m_per_px) + f.sensor_uncertainty_m + f.robot_uncertainty_m + scene.clearance_m;
+    // ISO 13855:2010 6.2, formula (1): K = 2.0 m/s (v_h if faster) where the resulting separation
+    // is at most 0.5 m; else K = v_h and the separation at least 0.5 m.
+    let near = v_h.max(2.0) * t + margin;
+    let stop = if near <= 0.5 { near } else { (v_h * t + margin).max(0.5) };
+    ((s - stop) / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps)
 }
 
 /// With the monitor on (as shipped): never inside the operator, never above the cap, and at every
@@ -200,13 +207,7 @@ fn every_adversarial_scene_is_safe_with_the_monitor() {
 /// `stopped` into a `reached`, or the reverse, is a difference the host has to show, not hide).
 #[test]
 fn every_scene_is_safe_on_the_board_engine() {
-    let scenes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-    let mut names: Vec<String> = std::fs::read_dir(&scenes)
-        .unwrap()
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("avoid_") && n.ends_with(".toml"))
-        .collect();
-    names.sort();
+    let names = flinch_tests::avoid::scene_names();
     assert!(names.len() >= 10, "{names:?}");
     for name in &names {
         let scene = Avoid::load(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
@@ -351,7 +352,7 @@ fn the_demo_needs_avoidance_and_goes_round() {
 
 /// Where there is room (a 2.1 m workspace): a hand head-on (a symmetric hill: Fig. 87's trap), a
 /// hand beside the path and a hand that moves onto the path. Ours reaches the goal every time,
-/// keeping the clearance asked (and the barrier's ~0.45 m), at the cruise speed (the barrier holds
+/// keeping the clearance asked (and the barrier's ~0.55 m), at the cruise speed (the barrier holds
 /// the tool where the monitor allows it), never within 0.1 m of the operator; the SSM bound from the
 /// true separation holds at every step (`safe`). Without the steering barrier (the monitor alone,
 /// field as the thesis wrote it) the same scenes stop, or go through with the thesis's law alone.
@@ -427,26 +428,14 @@ fn random_variants_never_penetrate() {
     }
 }
 
-/// `flinch avoid` answers false (exit 1) on a collision and true on the shipped scene, and the CSV
-/// has the documented columns, one row per step.
+/// `flinch avoid` exits 1 on a collision, 4 on a safe stop before the goal (the wall with the
+/// monitor: it was exit 1, the same as the collision) and 0 on the empty diagonal, and the CSV has
+/// the documented columns, one row per step.
 #[test]
 fn cli_verdict_and_csv() {
     let csv = std::env::temp_dir().join(format!("flinch-avoid-{}.csv", std::process::id()));
-    let args = |name: &str, csv: Option<std::path::PathBuf>, thesis: bool| AvoidArgs {
-        scene: scene_path(name),
-        plot: None,
-        json: true,
-        mcu: false,
-        calibration: None,
-        save_calibration: None,
-        compare: false,
-        csv,
-        thesis,
-        save_depth: None,
-        depth: None,
-        robot_poses: None,
-    };
-    assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(false));
+    let args = |name: &str, csv: Option<std::path::PathBuf>, thesis: bool| AvoidArgs { csv, thesis, ..flinch_tests::avoid::args(scene_path(name)) };
+    assert_eq!(avoid::run(&args("avoid_wall.toml", Some(csv.clone()), true)), Ok(Verdict::Unsafe), "a collision: exit 1");
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit_mps,state,swept_separation_m,ssm_bound_mps"));
@@ -456,11 +445,13 @@ fn cli_verdict_and_csv() {
     assert!(rows.iter().all(|r| r[7] <= r[5]), "swept separation never above the step's end");
     assert!(rows.iter().any(|r| r[3].hypot(r[4]) > r[8] + 1e-6), "the thesis's law exceeds the SSM bound: the CSV shows where");
     std::fs::remove_file(&csv).ok();
-    // With the monitor the wall is a safe stop, still exit 1 (the goal is not reached).
-    assert_eq!(avoid::run(&args("avoid_wall.toml", None, false)), Ok(false));
+    // With the monitor the wall is a safe stop: exit 4, told apart from the unsafe exit 1.
+    let stop = avoid::run(&args("avoid_wall.toml", None, false));
+    assert_eq!(stop, Ok(Verdict::SafeStop));
+    assert_eq!(stop.map(|v| v.code()), Ok(4));
     let mut empty = args("avoid_empty_diagonal.toml", None, false);
     empty.json = false;
-    assert_eq!(avoid::run(&empty), Ok(true));
+    assert_eq!(avoid::run(&empty).map(|v| v.code()), Ok(0));
 }
 
 /// One row of the docs' table: `| scene | law | status | reason | min_signed_distance_m |
@@ -483,13 +474,7 @@ fn table_row(name: &str, law: &str, r: &PathResult) -> String {
 /// diff). Every row of ours is also checked safe, every row of the thesis's honest.
 #[test]
 fn docs_table_is_current() {
-    let scenes = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-    let mut names: Vec<String> = std::fs::read_dir(&scenes)
-        .unwrap()
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.starts_with("avoid_") && n.ends_with(".toml"))
-        .collect();
-    names.sort();
+    let names = flinch_tests::avoid::scene_names();
     let mut rows = vec![
         "| scene | law | status | reason | min_signed_distance_m | max_speed_near_operator_mps | time_to_goal_s | ssm_violations | max_speed_over_ssm_mps |".to_string(),
         "|---|---|---|---|---|---|---|---|---|".to_string(),
@@ -579,45 +564,51 @@ fn obstacles_trap_and_wall() {
 }
 
 /// Item 1 of the follow-up to issue 9: the run's own verdict checks the commanded speed against the
-/// SSM bound at the TRUE separation. Adversarial case: the fast-hand scene with the hand twice as fast
-/// as the `v_h` the monitor assumes (3.2 m/s against 1.6 m/s), so the separation the monitor
-/// believes (sensed, less `v_h` times the frame's age) is optimistic. The tool is moving when the
+/// SSM bound at the TRUE separation. Adversarial case: a hand faster than the `K` the monitor
+/// assumes (3.2 m/s against ISO 13855's 2.0 m/s within 0.5 m), so the separation the monitor
+/// believes (sensed, less `K` times the frame's age) is optimistic. The tool is moving when the
 /// hand lands near it: the run is `ssm_violation` (or `collision`), never `reached` or a clean
-/// stop, and `flinch avoid` exits 1. With the hand at `v_h` (the shipped scene) no step violates.
+/// stop, and `flinch avoid` exits 1. With the hand at 2.0 m/s no step violates.
+///
+/// The scene: `avoid_moving_hand_wide` with the hand waiting at the near edge until t = 3 s, then
+/// reaching the path (0.95 m) at 3.2 m/s. (This test used `avoid_fast_hand` until the monitor took
+/// ISO 13855's 2.0 m/s within 0.5 m: its larger separation holds the tool out of that hand's
+/// reach, so that scene no longer exercises the verdict.)
 #[test]
 fn ssm_verdict_uses_the_true_separation() {
-    let mut s = Avoid::load(&scene_path("avoid_fast_hand.toml")).unwrap();
-    // 0.4 m in 0.125 s: 3.2 m/s.
-    s.operator.keyframes[2].t_s = s.operator.keyframes[1].t_s + 0.125;
+    let hand_at = |v: f64| {
+        let mut s = Avoid::load(&scene_path("avoid_moving_hand_wide.toml")).unwrap();
+        s.max_time_s = 8.0;
+        let k = s.operator.keyframes.clone();
+        let mut wait = k[0].clone();
+        wait.t_s = 3.0;
+        let mut arrive = k[1].clone();
+        arrive.t_s = 3.0 + (k[1].hand_m[1] - k[0].hand_m[1]) / v;
+        s.operator.keyframes = vec![k[0].clone(), wait, arrive];
+        s
+    };
+    let s = hand_at(3.2);
     let (scene, r) = run_scene(s.clone());
     honest("hand at 3.2 m/s", &scene, &r);
     println!("hand at 3.2 m/s: {:?}, {} steps over the bound by up to {:.3} m/s, closest {:.3} m", r.status, r.ssm_violations, r.max_speed_over_ssm_mps, r.min_signed_distance_m);
     assert!(r.ssm_violations > 0, "the true separation fell below S_p while the tool moved: {:?}, {} m", r.status, r.min_signed_distance_m);
     assert!(r.max_speed_over_ssm_mps > 0.0);
-    // Never inside: without the verdict this run read "stopped, blocked", a clean stop (measured:
-    // 3 steps over the bound by up to 0.224 m/s, the surface 0.165 m from the hand at the closest).
+    // Never inside: without the verdict this run would read "stopped, blocked", a clean stop
+    // (measured: 8 steps over the bound by up to 0.250 m/s, the surface 0.251 m from the hand at
+    // the closest).
     assert!(matches!(r.status, Status::SsmViolation(Some(_))), "{:?}", r.status);
     assert!(r.min_signed_distance_m > 0.0, "{}", r.min_signed_distance_m);
     let json = avoid::metrics_json(&r, Engine::Reference, true);
     assert_eq!(json["ssm_violations"].as_u64(), Some(r.ssm_violations as u64));
     assert!(json["max_speed_over_ssm_mps"].as_f64().unwrap() > 0.0);
     assert_eq!(json["reached_goal"], false);
-    let args = AvoidArgs {
-        scene: scene_path("avoid_fast_hand.toml"),
-        plot: None,
-        json: true,
-        mcu: false,
-        calibration: None,
-        save_calibration: None,
-        compare: false,
-        csv: None,
-        thesis: false,
-        save_depth: None,
-        depth: None,
-        robot_poses: None,
-    };
-    assert_eq!(avoid::run_scene(&args, s), Ok(false), "exit 1");
-    // As shipped (1.6 m/s = v_h): within the bound at every step.
+    let args = flinch_tests::avoid::args(scene_path("avoid_moving_hand_wide.toml"));
+    assert_eq!(avoid::run_scene(&args, s).map(|v| v.code()), Ok(1), "exit 1");
+    // At ISO 13855's 2.0 m/s: within the bound at every step.
+    let (scene, r) = run_scene(hand_at(2.0));
+    safe("hand at 2.0 m/s", &scene, &r);
+    assert_eq!(r.status, Status::Stopped(Reason::Blocked));
+    // As shipped (`avoid_fast_hand`, 1.6 m/s): within the bound at every step.
     let (scene, r) = run("avoid_fast_hand.toml");
     safe("avoid_fast_hand.toml", &scene, &r);
 }
@@ -827,4 +818,102 @@ fn random_variants_are_safe_and_honest() {
         *tally.entry(format!("{} {}", r.status.name(), r.status.reason().map_or("", |x| x.name()))).or_insert(0) += 1;
     }
     println!("{n} variants: {tally:?}; closest reached run {reached_near} m; {:.1} s", t_start.elapsed().as_secs_f64());
+}
+
+/// A command source that answers every step with a non-finite command (as the thesis's law can
+/// with extreme weights: no monitor stands between it and the drive in `--thesis` mode).
+struct NanEngine;
+
+impl flinch_harness::avoid::path::StepEngine for NanEngine {
+    fn new_field(&mut self, _: &flinch_harness::avoid::rbf::Field, _: u32, _: u32) -> Result<(), String> {
+        Ok(())
+    }
+    fn command(&mut self, _: [f64; 2], _: [f64; 2], _: u32, _: Option<&flinch_firmware::avoidance::Sensed<f64>>) -> flinch_harness::avoid::path::Cmd {
+        flinch_harness::avoid::path::Cmd { v: [f64::NAN, 0.1], limit_mps: 0.25, state: "field" }
+    }
+}
+
+/// Follow-up to issue 9 (item 3): a NaN command in `--thesis` mode (the monitor off) is a fault:
+/// the run's status is `fault`, the unfavourable verdict (exit 1), never `reached` nor a clean stop.
+/// Before: the NaN position read as "left the view", `stopped`, a safe stop.
+#[test]
+fn a_non_finite_command_is_a_fault() {
+    let mut s = Avoid::load(&scene_path("avoid_empty_diagonal.toml")).unwrap();
+    s.thesis_mode();
+    s.max_time_s = 1.0;
+    let setup = Setup::new(&s, None).unwrap();
+    let r = flinch_harness::avoid::path::simulate_with(&s, &setup, &mut NanEngine).unwrap();
+    let m = avoid::metrics_json(&r, Engine::Reference, false);
+    assert_eq!(m["status"], "fault", "{m}");
+    assert_eq!(m["reason"], "non_finite_command", "{m}");
+    assert_eq!(m["reached_goal"], false);
+    assert!(!r.status.ok());
+    // The tool did not move on a command it could not carry out; every reported number is finite.
+    assert!(r.points.iter().all(|p| p[0].is_finite() && p[1].is_finite()), "{:?}", r.points.last());
+    assert!(r.path_length_m.is_finite() && r.max_speed_mps.is_finite(), "{m}");
+}
+
+/// Follow-up to issue 9 (item 3): the CSV's last row is a control step like any other; it was
+/// labelled `stopped` whenever the run ended, even when the tool moved in that step (a timeout at
+/// cruise speed). Now `stopped` only where the step's command was zero.
+#[test]
+fn the_last_csv_row_is_stopped_only_when_the_tool_stood_still() {
+    let mut s = Avoid::load(&scene_path("avoid_empty_diagonal.toml")).unwrap();
+    s.max_time_s = 0.5;
+    let (_, r) = run_scene(s);
+    assert_eq!(r.status, Status::Stopped(Reason::Timeout), "{:?}", r.status);
+    let last = r.rows.last().unwrap();
+    assert!(last.v_mps[0].hypot(last.v_mps[1]) > 0.1, "moving at the timeout: {:?}", last.v_mps);
+    assert_ne!(last.state, "stopped", "it moved in that step: {:?}", last);
+    for w in &r.rows {
+        if w.state == "stopped" {
+            assert_eq!(w.v_mps, [0.0, 0.0], "{w:?}");
+        }
+    }
+}
+
+/// Follow-up to issue 9 (item 3): `reached_goal` says what it reports: `status` is `reached`, not
+/// merely "the tool got to the goal" (a run that crossed the operator and then arrived reports
+/// `false`, and `time_to_goal_s` says it arrived).
+#[test]
+fn reached_goal_is_documented_as_what_it_reports() {
+    let schema: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(scene_path("../docs/schema/avoid.json")).unwrap()).unwrap();
+    let d = schema["properties"]["reached_goal"]["description"].as_str().unwrap().to_string();
+    assert!(d.contains("`status` is `reached`"), "{d}");
+    assert!(d.contains("time_to_goal_s"), "{d}");
+    let (scene, r) = thesis("avoid_wall.toml");
+    let m = avoid::metrics_json(&r, Engine::Reference, scene.safety.on());
+    assert_eq!(m["reached_goal"], m["status"] == "reached", "{m}");
+}
+
+/// Follow-up to issue 9 (item 4): ISO 13855:2010 6.2, formula (1) `S = K T + C`: K = 2,000 mm/s
+/// where the resulting S is at most 500 mm. The monitor assumed `v_h` = 1.6 m/s at every distance,
+/// so a hand reaching at 2.0 m/s (within 0.5 m: ISO 13855's own figure, and the loader's allowed
+/// range) and stopping 50 mm from the tool's path gave steps over the bound that the verdict, which
+/// takes the hand's true speed, reported as `ssm_violation`. Now the monitor takes K = 2.0 m/s where
+/// its stop separation is within 0.5 m: no step over the bound, for hands stopping 30 to 70 mm from
+/// the path at several instants.
+#[test]
+fn a_hand_at_iso_13855s_near_speed_stays_within_the_bound() {
+    let base = Avoid::load(&scene_path("avoid_fast_hand.toml")).unwrap();
+    let mut worst = (0usize, 0.0f64, String::new());
+    for gap in [0.03, 0.05, 0.07] {
+        for t0 in [0.3, 0.45, 0.6, 0.75, 0.9] {
+            let mut s = base.clone();
+            // The hand's edge `gap` from the wrist's edge on the straight line y = 0.5, reached at
+            // 2.0 m/s from its rest at y = 0.06.
+            let y = 0.5 - s.robot.wrist_radius_m - s.operator.hand_radius_m - gap;
+            s.operator.keyframes[1].t_s = t0;
+            s.operator.keyframes[2].t_s = t0 + (y - 0.06) / 2.0;
+            s.operator.keyframes[2].hand_m = [0.45, y];
+            let name = format!("hand to {gap} m from the path at 2.0 m/s from t = {t0} s");
+            let (scene, r) = run_scene(s);
+            println!("{name}: {:?}, {} steps over by up to {:.4} m/s, closest {:.3} m", r.status, r.ssm_violations, r.max_speed_over_ssm_mps, r.min_signed_distance_m);
+            honest(&name, &scene, &r);
+            if r.ssm_violations > worst.0 {
+                worst = (r.ssm_violations, r.max_speed_over_ssm_mps, name);
+            }
+        }
+    }
+    assert_eq!(worst.0, 0, "{worst:?}");
 }

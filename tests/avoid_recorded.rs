@@ -55,20 +55,7 @@ fn metrics(res: &PathResult) -> serde_json::Value {
 }
 
 fn args(scene: &Path, depth: &Path, poses: Option<PathBuf>) -> AvoidArgs {
-    AvoidArgs {
-        scene: scene.to_path_buf(),
-        plot: None,
-        json: true,
-        mcu: false,
-        calibration: None,
-        save_calibration: None,
-        compare: false,
-        csv: None,
-        thesis: false,
-        save_depth: None,
-        depth: Some(depth.to_path_buf()),
-        robot_poses: poses,
-    }
+    AvoidArgs { depth: Some(depth.to_path_buf()), robot_poses: poses, ..flinch_tests::avoid::args(scene.to_path_buf()) }
 }
 
 /// Recorded frames of the demo, in both conventions, give one and the same run, which arrives as the
@@ -92,8 +79,9 @@ fn recorded_frames_in_both_conventions_give_the_same_run() {
     assert_eq!(a.points, b.points);
     assert_eq!((sa.frames_used, sa.max_filled_cells), (sb.frames_used, sb.max_filled_cells));
 
-    // The same outcome as the synthetic camera: the recorded frames hold the same scene.
-    assert_eq!(a.status, Status::Reached, "{:?}", metrics(&a));
+    // The same outcome as the synthetic camera (the recorded frames hold the same scene), but
+    // unverified: the verdict is the scene model's, not the recording's.
+    assert_eq!(a.status, Status::Unverified(None), "{:?}", metrics(&a));
     assert!(a.min_signed_distance_m >= scene.clearance_m, "{}", a.min_signed_distance_m);
     let (ta, ts) = (a.time_to_goal_s.unwrap(), synthetic.time_to_goal_s.unwrap());
     assert!((ta - ts).abs() < 2.0, "recorded {ta} s, synthetic {ts} s");
@@ -104,9 +92,9 @@ fn recorded_frames_in_both_conventions_give_the_same_run() {
     // Same through the CLI's entry point, and with the MCU engine.
     let file = root.join("scene.toml");
     std::fs::write(&file, &text).unwrap();
-    assert_eq!(avoid::run(&args(&file, &mm, Some(poses.clone()))), Ok(true));
+    assert_eq!(avoid::run(&args(&file, &mm, Some(poses.clone()))).map(|v| v.code()), Ok(5));
     let (m, _) = recorded::simulate(&scene, &setup, Engine::Mcu, &mm, Some(&poses)).unwrap();
-    assert_eq!(m.status, Status::Reached, "--mcu on the recording");
+    assert_eq!(m.status, Status::Unverified(None), "--mcu on the recording");
     let rx = m.rx.unwrap();
     assert_eq!((rx.bad_crc, rx.bad_header, rx.short), (0, 0, 0));
     std::fs::remove_dir_all(&root).ok();
@@ -156,8 +144,8 @@ fn a_null_hole_over_the_hand_is_an_obstacle() {
     // The unknown region is an obstacle: the tool stops short of it, or the steering takes it
     // round with the clearance asked for (issue 9's barrier on the sensed separation).
     match hole.status {
-        Status::Stopped(_) => {}
-        Status::Reached => assert!(hole.min_signed_distance_m >= scene.clearance_m, "reached, but {} from the hand", hole.min_signed_distance_m),
+        Status::Unverified(Some(_)) => {}
+        Status::Unverified(None) => assert!(hole.min_signed_distance_m >= scene.clearance_m, "reached, but {} from the hand", hole.min_signed_distance_m),
         ref s => panic!("{s:?}"),
     }
     let (erased, _) = recorded::simulate(&scene, &setup, Engine::Reference, &table, Some(&poses)).unwrap();
@@ -177,7 +165,7 @@ fn without_poses_the_robot_is_an_obstacle() {
     let root = tmp("noposes");
     render_recording(&scene, &[(&root, 0.001)], 240, 240, &track).unwrap();
     let (res, _) = recorded::simulate(&scene, &setup, Engine::Reference, &root, None).unwrap();
-    assert_eq!(res.status, Status::Stopped(flinch_harness::avoid::path::Reason::NoRoom));
+    assert_eq!(res.status, Status::Unverified(Some(flinch_harness::avoid::path::Reason::NoRoom)));
     assert!(res.path_length_m < 1e-9, "{}", res.path_length_m);
     std::fs::remove_dir_all(&root).ok();
 }
@@ -340,4 +328,43 @@ fn points_under_the_plane_are_unknown_not_floor() {
     // A point within the sense height under the plane is the floor through the noise: not counted.
     let (_, _, _, info0) = process_frame(&scene, &setup, &cam, &clean, Some(tool), tool);
     assert_eq!(info0.below_plane_points, 0);
+}
+
+/// Follow-up to issue 9 (item 1): with `--depth` the verdict is judged against the scene file's
+/// model operator, not against what the recording shows. Adversarial case: the recording holds the
+/// demo's hand on the straight line; the scene file's operator stands in a far corner. The tool
+/// goes round the recorded hand (the sensing sees it) and the model says it never came near anyone:
+/// without a marker that read `reached`, exit 0, for a run whose ground truth nobody checked. Wanted:
+/// `reached_unverified`, `verdict_basis` naming the scene model, not the favourable verdict, in the
+/// JSON and through the CLI's entry point.
+#[test]
+fn a_verdict_on_a_recording_is_not_verified() {
+    let (text, scene) = scene();
+    let setup = Setup::new(&scene, None).unwrap();
+    let synthetic = simulate(&scene, &setup, Engine::Reference).unwrap();
+    let root = tmp("elsewhere");
+    let rec = root.join("rec");
+    render_recording(&scene, &[(&rec, 0.001)], 240, 240, &track(&scene, &synthetic)).unwrap();
+    // The scene file's operator: in the far corner, 0.8 m from the path, with nothing in the way.
+    let elsewhere_text = text.replace("{ t_s = 0.0, hand_m = [1.05, 1.05] }", "{ t_s = 0.0, hand_m = [1.9, 0.15] }").replace("entry_m = [1.05, 0.0]", "entry_m = [2.1, 0.0]");
+    assert_ne!(elsewhere_text, text);
+    let elsewhere = Avoid::parse(&elsewhere_text).unwrap();
+    let poses = rec.join("poses.csv");
+    let (r, _) = recorded::simulate(&elsewhere, &setup, Engine::Reference, &rec, Some(&poses)).unwrap();
+    let m = metrics(&r);
+    assert!(r.time_to_goal_s.is_some(), "the tool gets to the goal round the recorded hand: {m}");
+    assert!(r.min_signed_distance_m > 0.5, "the model operator is far from the path: {m}");
+    assert_ne!(m["status"], "reached", "a recording is no ground truth: {m}");
+    assert_eq!(m["status"], "reached_unverified", "{m}");
+    assert_eq!(m["verdict_basis"], "scene_model_not_recording", "{m}");
+    assert_eq!(m["reached_goal"], false, "{m}");
+    // The synthetic run's basis is the model that drew its frames.
+    assert_eq!(metrics(&synthetic)["verdict_basis"], "scene_model");
+    // Through the CLI's entry point: not the favourable verdict (exit 5, docs/conventions.md), and
+    // the human output says so in words.
+    let file = root.join("scene.toml");
+    std::fs::write(&file, &elsewhere_text).unwrap();
+    let got = avoid::run(&args(&file, &rec, Some(poses.clone())));//X
+    assert_eq!(got.map(|v| v.code()), Ok(5), "exit 5: unverified");
+    std::fs::remove_dir_all(&root).ok();
 }

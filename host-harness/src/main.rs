@@ -16,8 +16,9 @@ use std::process::ExitCode;
 const AFTER_HELP: &str = "A SCENE is a TOML file, `-` for standard input, or the name of a shipped scene \
 (`flinch scenes list`). The scene contract (every key, unit and range) is docs/SCENES.md, the model \
 docs/MODEL.md, the output convention and exit codes docs/conventions.md, the JSON Schemas docs/schema/.\n\
-Exit codes: 0 ran (favourable verdict), 1 ran (unfavourable verdict of check, design, avoid, or a hil fault \
+Exit codes: 0 ran (favourable verdict), 1 ran (unfavourable verdict of check, design, avoid (unsafe), or a hil fault \
 ending in go; run exits 0 on a NOT SAFE summary: read `safe`), 2 bad input, 3 runtime failure, \
+4 avoid stopped safely before the goal, 5 avoid on recorded frames (--depth): unverified, \
 130 interrupted (Ctrl-C), 141 standard output closed by its reader.";
 
 #[derive(Parser)]
@@ -399,7 +400,15 @@ fn main() -> ExitCode {
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
         Command::Sample(a) => flinch_harness::sample::cli::run(a),
         Command::Bench(a) => bench_cmd(a),
-        Command::Avoid(a) => flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input).and_then(|sc| flinch_harness::avoid::run_scene(a, sc).map_err(Failure::runtime)),
+        Command::Avoid(a) => flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input).and_then(|sc| match flinch_harness::avoid::run_scene(a, sc) {
+            Ok(v) => match v.code() {
+                0 => Ok(true),
+                1 => Ok(false),
+                // 4 (stopped safely) and 5 (unverified): an answer, not an error; no message.
+                code => Err(Failure { code, message: String::new() }),
+            },
+            Err(e) => Err(Failure::runtime(e)),
+        }),
         Command::Robot(a) => flinch_harness::kinematics::cli::run(a),
         Command::Design(a) => classify(shipped::load(&a.scene).map(|_| ()), flinch_harness::design::run(a)),
         Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),

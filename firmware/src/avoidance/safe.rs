@@ -7,22 +7,29 @@
 //!
 //! `S_p = S_h + S_r + S_s + C + Z_d + Z_r` with
 //!
-//! * `S_h = v_h (T_r + T_s)`: the human approaching at `v_h` (ISO 13855:2010, 6.2 / 8: 1.6 m/s for
-//!   a walking person or a reaching arm beyond 0.5 m; 2.0 m/s close by) during the robot's reaction
-//!   time `T_r` and stopping time `T_s`;
+//! * `S_h = K (T_r + T_s)`: the human approaching at `K` during the robot's reaction time `T_r` and
+//!   stopping time `T_s`. `K` follows ISO 13855:2010, 6.2, formula (1) `S = K T + C`: first
+//!   `K = 2,000 mm/s`; where the resulting `S` is at most 500 mm that is the distance; where it is
+//!   more, `K = 1,600 mm/s` and `S` not less than 500 mm. Here `S` is the protective separation at
+//!   rest, `S_p(0) = K (T_r + T_s) + C + Z_d + Z_r` (and the host's clearance), and the configured
+//!   `v_h` is the far-field `K` (at least 1.6 m/s: the host's loader refuses less); the near-field
+//!   `K` is `max(2.0 m/s, v_h)`. So: `K = max(2, v_h)` when `max(2, v_h) (T_r + T_s) + margin <=
+//!   0.5 m`, else `K = v_h` with the stop separation `max(v_h (T_r + T_s) + margin, 0.5 m)`.
+//!   Computed once in [`SafeController::new`]: a step costs what it did. The same `K` is the
+//!   approach speed in the age term below.
 //! * `S_r = v_r T_r`: the robot moving on at its commanded speed `v_r` until it reacts;
 //! * `S_s = v_r T_s / 2`: the robot braking from `v_r` to rest in `T_s` (constant deceleration);
 //! * `C`: the intrusion distance (ISO 13855, 5.3: how far a body part can reach into the sensing
 //!   field before it is detected); `Z_d`, `Z_r`: the sensor's and the robot's position uncertainty.
 //!
 //! The separation `S` used is a lower bound of the true one *now*, built from the last sensed frame:
-//! `S = S_capture - |p - p_capture| - v_h age`: the distance the sensor measured at capture, less the
+//! `S = S_capture - |p - p_capture| - K age`: the distance the sensor measured at capture, less the
 //! distance the tool has moved since and the distance a person could have covered since the image
 //! was taken (`age` counts from capture, so capture, fit and transmission latency are all in it).
 //! Stale data therefore stops the robot by distance, not only by a timeout.
 //!
 //! Solving `S_p(v_r) <= S` for `v_r` gives the speed limit
-//! `v_max = (S - v_h (T_r + T_s) - C - Z_d - Z_r) / (T_r + T_s / 2)`, clamped to `[0, cap]`.
+//! `v_max = (S - S_p(0)) / (T_r + T_s / 2)`, clamped to `[0, cap]`.
 //! When the numerator is not positive the robot is in a protective stop (command zero). It resumes by
 //! itself when the separation grows again (ISO 10218-1:2011, 5.10.6: SSM may restart automatically).
 //!
@@ -38,7 +45,9 @@ use super::num::Real;
 /// Parameters of the monitor. All in metres, seconds, metres per second.
 #[derive(Clone, Copy, Debug)]
 pub struct SsmParams<R> {
-    /// `v_h`, the human's approach speed (ISO 13855: 1.6 m/s).
+    /// `v_h`, the human's approach speed far from the robot (ISO 13855:2010 6.2: 1.6 m/s); the
+    /// monitor raises it to `max(2.0 m/s, v_h)` where its stop separation is within 0.5 m
+    /// ([`SafeController::approach_speed_mps`]).
     pub human_speed_mps: R,
     /// `T_r`, from the command leaving the monitor until the robot starts to brake (one control
     /// period plus the drive's own delay). The sensing latency is not in it: it is in `age`.
@@ -136,8 +145,11 @@ pub struct SafeController<R> {
     side: i8,
     /// `cap / 64`: a command leaning less than this to one side (per unit `|n|^2`) is head-on.
     lean_tol: R,
-    /// `v_h (T_r + T_s) + C + Z_d + Z_r`: the separation at which the limit reaches zero, m.
+    /// `K (T_r + T_s) + C + Z_d + Z_r` (at least 0.5 m when `K` is the far-field `v_h`): the
+    /// separation at which the limit reaches zero, m (ISO 13855:2010 6.2, see the module's docs).
     stop_separation_m: R,
+    /// `K`, the approach speed ISO 13855 6.2 gives for that separation, m/s.
+    approach_mps: R,
     /// `T_r + T_s / 2`, s.
     per_speed_s: R,
     /// `1 / (T_r + T_s / 2)`, 1/s, saturating in fixed point (a smaller factor: a lower limit).
@@ -150,8 +162,25 @@ impl<R: Real> SafeController<R> {
     /// A monitor with these parameters.
     pub fn new(params: SsmParams<R>) -> Self {
         let half = R::ONE.div(R::from_int(2));
+        // ISO 13855:2010 6.2, formula (1): K = 2.0 m/s (or the configured v_h if faster) where the
+        // resulting separation is at most 0.5 m; else the far-field v_h, the separation at least
+        // 0.5 m.
+        let t = params.reaction_time_s.add(params.stopping_time_s);
+        let two = R::from_int(2);
+        // NaN-safe: a NaN v_h stays NaN (far field, K NaN: every step stops).
+        let near_k = if params.human_speed_mps <= two { two } else { params.human_speed_mps };
+        let near = near_k.mul(t).add(params.margin_m);
+        let (approach_mps, stop_separation_m) = if near <= half {
+            (near_k, near)
+        } else {
+            let far = params.human_speed_mps.mul(t).add(params.margin_m);
+            // NaN-safe: anything not above 0.5 m is 0.5 m (a NaN parameter: 0.5 m, and the NaN
+            // K below stops every step).
+            (params.human_speed_mps, if far > half { far } else { half })
+        };
         SafeController {
-            stop_separation_m: params.human_speed_mps.mul(params.reaction_time_s.add(params.stopping_time_s)).add(params.margin_m),
+            stop_separation_m,
+            approach_mps,
             per_speed_s: params.reaction_time_s.add(params.stopping_time_s.mul(half)),
             inv_per_speed: R::ONE.div(params.reaction_time_s.add(params.stopping_time_s.mul(half))),
             params,
@@ -242,6 +271,18 @@ impl<R: Real> SafeController<R> {
         &self.params
     }
 
+    /// `K`, the human's approach speed the monitor uses (ISO 13855:2010 6.2: `max(2.0, v_h)` where
+    /// the stop separation is within 0.5 m, else `v_h`), m/s.
+    pub fn approach_speed_mps(&self) -> R {
+        self.approach_mps
+    }
+
+    /// The protective separation at rest `S_p(0) = K (T_r + T_s) + margin` (at least 0.5 m with
+    /// the far-field `K`): below it the limit is zero, m.
+    pub fn stop_separation_m(&self) -> R {
+        self.stop_separation_m
+    }
+
     /// The speed limit for a separation lower bound `s`, m/s (0: protective stop).
     pub fn speed_limit(&self, s: R) -> R {
         let cap = self.params.speed_cap_mps;
@@ -277,7 +318,7 @@ impl<R: Real> SafeController<R> {
         let stop = |state, separation_m| SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: R::ZERO, separation_m, state };
         let Some(f) = sensed else { return stop(SafeState::NoData, R::ZERO) };
         let moved = self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m));
-        let s = f.separation_m.sub(moved).sub(self.params.human_speed_mps.mul(f.age_s));
+        let s = f.separation_m.sub(moved).sub(self.approach_mps.mul(f.age_s));
         let limit = self.speed_limit(s);
         // NaN-safe: anything but a positive limit stops.
         if limit.partial_cmp(&R::ZERO) != Some(Ordering::Greater) {
@@ -347,17 +388,59 @@ mod tests {
     #[test]
     fn limit_follows_the_protective_separation() {
         let c = SafeController::new(params::<f64>());
-        // S_h + C = 1.6 * 0.11 + 0.02 = 0.196 m: below it, a protective stop.
-        assert_eq!(c.speed_limit(0.19), 0.0);
+        // ISO 13855 6.2: K T + C = 2.0 * 0.11 + 0.02 = 0.24 m <= 0.5 m: K = 2.0 m/s; below it, a
+        // protective stop.
+        assert_eq!(c.approach_speed_mps(), 2.0);
+        assert!((c.stop_separation_m() - 0.24).abs() < 1e-12);
+        assert_eq!(c.speed_limit(0.235), 0.0);
         // 10 mm above it: v = 0.01 / (0.01 + 0.05) = 0.1667 m/s.
-        assert!((c.speed_limit(0.206) - 0.01 / 0.06).abs() < 1e-9);
+        assert!((c.speed_limit(0.25) - 0.01 / 0.06).abs() < 1e-9);
         assert_eq!(c.speed_limit(5.0), 0.25, "capped");
         // The limit satisfies S_p(v) <= S: check eq 1 directly.
-        for s in [0.2, 0.21, 0.25, 0.3] {
+        for s in [0.24, 0.25, 0.27, 0.3] {
             let v = c.speed_limit(s);
-            let sp = 1.6 * 0.11 + v * 0.01 + v * 0.1 / 2.0 + 0.02;
+            let sp = 2.0 * 0.11 + v * 0.01 + v * 0.1 / 2.0 + 0.02;
             assert!(sp <= s + 1e-12, "S_p {sp} > S {s}");
         }
+    }
+
+    /// ISO 13855:2010 6.2, formula (1), with the configured `v_h` as the far-field K: 2.0 m/s where
+    /// the separation is within 0.5 m (a 1.6 m/s `v_h` raised), a faster `v_h` kept; where 2.0 m/s
+    /// gives more than 0.5 m, `v_h` with at least 0.5 m. The same in the board's number types.
+    #[test]
+    fn k_follows_iso_13855_within_half_a_metre() {
+        let with = |v_h: f64, t_s: f64, margin: f64| {
+            SafeController::new(SsmParams { human_speed_mps: v_h, reaction_time_s: 0.01, stopping_time_s: t_s - 0.01, margin_m: margin, speed_cap_mps: 0.25 })
+        };
+        let cases = [
+            // (v_h, T_r + T_s, margin) -> (K, stop separation)
+            ((1.6, 0.11, 0.02), (2.0, 0.24)),
+            ((2.5, 0.11, 0.02), (2.5, 0.295)),
+            // 2.0 * 0.2 + 0.1 = 0.5: exactly 0.5 m is still the near field.
+            ((1.6, 0.2, 0.1), (2.0, 0.5)),
+            // 2.0 * 0.2 + 0.15 = 0.55 > 0.5: K = 1.6, 1.6 * 0.2 + 0.15 = 0.47, raised to 0.5.
+            ((1.6, 0.2, 0.15), (1.6, 0.5)),
+            // 1.6 * 0.4 + 0.1 = 0.74: beyond 0.5 m either way.
+            ((1.6, 0.4, 0.1), (1.6, 0.74)),
+        ];
+        for ((v_h, t, m), (k, stop)) in cases {
+            let c = with(v_h, t, m);
+            assert!((c.approach_speed_mps() - k).abs() < 1e-12 && (c.stop_separation_m() - stop).abs() < 1e-12, "{v_h} {t} {m}: K {} S {}", c.approach_speed_mps(), c.stop_separation_m());
+            assert_eq!(c.speed_limit(stop - 1e-9), 0.0);
+            assert!(c.speed_limit(stop + 0.01) > 0.0);
+            let q = |v: f64| I16F16::from_f64(v);
+            let f = SafeController::new(SsmParams { human_speed_mps: q(v_h), reaction_time_s: q(0.01), stopping_time_s: q(t - 0.01), margin_m: q(m), speed_cap_mps: q(0.25) });
+            assert!((f.approach_speed_mps().to_f64() - k).abs() < 1e-3 && (f.stop_separation_m().to_f64() - stop).abs() < 1e-3, "I16F16 {v_h} {t} {m}");
+            let g = SafeController::new(SsmParams { human_speed_mps: v_h as f32, reaction_time_s: 0.01, stopping_time_s: (t - 0.01) as f32, margin_m: m as f32, speed_cap_mps: 0.25 });
+            assert!((f64::from(g.approach_speed_mps()) - k).abs() < 1e-5 && (f64::from(g.stop_separation_m()) - stop).abs() < 1e-5, "f32 {v_h} {t} {m}");
+        }
+        // The age term uses the same K: 0.1 s old eats 0.2 m at 2.0 m/s.
+        let c = with(1.6, 0.11, 0.02);
+        assert_eq!(c.limit(0.1, 0.0, 0.0, 0.0, Some(&sensed(0.43, 0.1))).state, SafeState::ProtectiveStop);
+        assert_eq!(c.limit(0.1, 0.0, 0.0, 0.0, Some(&sensed(0.45, 0.1))).state, SafeState::Run);
+        // NaN parameters stop.
+        let n = with(f64::NAN, 0.11, 0.02);
+        assert_eq!(n.limit(0.1, 0.0, 0.0, 0.0, Some(&sensed(5.0, 0.0))).state, SafeState::ProtectiveStop);
     }
 
     #[test]

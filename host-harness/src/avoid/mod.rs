@@ -3,18 +3,20 @@
 //! `depth` reads 16-bit depth images, generates synthetic ones and pre-processes them (5.1); `rbf`
 //! fits the Gaussian grid, filters the weights and evaluates the field and its gradient (5.2);
 //! `calib` removes the robot by calibration (5.2.1); `path` closes the loop with the firmware's
-//! potential-field step (5.3); `scene` reads `[avoid]` scene files; `plot` draws Fig. 88-90.
+//! potential-field step (5.3), `engine` gives it its commands and `verdict` judges the run; `scene` reads `[avoid]` scene files; `plot` draws Fig. 88-90.
 //! `flinch avoid SCENE.toml` is [`run`].
 
 pub mod calib;
 pub mod camera;
 pub mod compare;
 pub mod depth;
+pub mod engine;
 pub mod path;
 pub mod plot;
 pub mod rbf;
 pub mod recorded;
 pub mod scene;
+pub mod verdict;
 
 use std::path::PathBuf;
 
@@ -104,18 +106,30 @@ pub struct AvoidMetrics {
     pub engine: &'static str,
     /// The speed and separation monitor: "ssm" or "off".
     pub monitor: &'static str,
-    /// How the run ended: `reached`, `stopped`, `too_close`, `collision` (the tool's surface entered
-    /// an obstacle, over any step's swept segment) or `ssm_violation` (never inside, but faster than
-    /// the SSM bound at the true separation at some step); only `reached` exits 0.
+    /// How the run ended: `reached` (exit 0); `stopped` (safely, before the goal: exit 4);
+    /// `too_close`, `collision` (the tool's surface entered an obstacle, over any step's swept
+    /// segment), `ssm_violation` (never inside, but faster than the SSM bound at the true
+    /// separation at some step) or `fault` (a non-finite command) (all exit 1);
+    /// `reached_unverified` or `stopped_unverified` (on recorded frames: the verdict was judged
+    /// against the scene file's model operator, not the recording, see `verdict_basis`: exit 5).
+    /// Only `reached` exits 0.
     pub status: &'static str,
+    /// What the verdict (signed distance, SSM bound) was judged against: `scene_model` (the scene
+    /// file's operator, which also drew every frame: ground truth) or `scene_model_not_recording`
+    /// (`--depth`: the frames came from a recording whose true geometry is unknown; a favourable
+    /// outcome is then `reached_unverified` or `stopped_unverified`, never `reached`).
+    pub verdict_basis: &'static str,
     /// Why it stopped before the goal, if it did: `stalled`, `no_path`, `no_room`, `blocked`,
-    /// `stale_weights`, `timeout` or `left_view`.
+    /// `stale_weights`, `timeout`, `left_view` or `non_finite_command` (with `fault`).
     pub reason: Option<&'static str>,
     /// Why `reason` is null.
     pub reason_null_reason: Option<&'static str>,
     /// The tool entered the operator's true footprint.
     pub collided: bool,
-    /// The goal was reached.
+    /// `status` is `reached`: the goal was reached, never inside the operator, the clearance and
+    /// the SSM bound kept at every step, judged against the frames' ground truth. False for a run
+    /// that got to the goal but was `too_close`, a `collision`, an `ssm_violation` or
+    /// `reached_unverified`: whether the tool got to the goal at all is `time_to_goal_s`.
     pub reached_goal: bool,
     /// Time at which the goal was reached, s.
     pub time_to_goal_s: Option<f64>,
@@ -180,6 +194,7 @@ impl AvoidMetrics {
             },
             monitor: if monitor { "ssm" } else { "off" },
             status: res.status.name(),
+            verdict_basis: res.verdict_basis.name(),
             reason,
             reason_null_reason: reason.is_none().then_some("reached the goal"),
             collided: res.min_signed_distance_m < 0.0,
@@ -246,16 +261,18 @@ pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> 
         .map_err(|e| output::write_error(out, &e).message)
 }
 
-/// Entry point of `flinch avoid`: `Ok(true)` when the tool reached the goal without ever entering
-/// the operator, keeping the clearance and the SSM bound at every step; `Ok(false)` otherwise (exit
-/// 1: a collision, an SSM violation, too close, or a stop before the goal).
-pub fn run(args: &AvoidArgs) -> Result<bool, String> {
+/// Entry point of `flinch avoid`: the verdict, whose [`path::Verdict::code`] is the exit code:
+/// 0 when the tool reached the goal without ever entering the operator, keeping the clearance and
+/// the SSM bound at every step (judged against the frames' ground truth); 1 unsafe (a collision,
+/// an SSM violation, too close, a fault); 4 stopped safely before the goal; 5 unverified (recorded
+/// frames: the verdict is the scene model's, not the recording's).
+pub fn run(args: &AvoidArgs) -> Result<path::Verdict, String> {
     run_scene(args, scene::Avoid::load(&args.scene)?)
 }
 
 /// [`run`] on a scene already read (`args.scene` names it in messages; it is not read again, so
 /// `-` works).
-pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, String> {
+pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verdict, String> {
     if args.thesis {
         scene.thesis_mode();
     }
@@ -281,7 +298,7 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
         img.save(p)?;
     }
     if args.compare {
-        return run_compare(&scene, &setup, &args.scene).map(|_| true);
+        return run_compare(&scene, &setup, &args.scene).map(|_| path::Verdict::Good);
     }
     let engine = if args.mcu { Engine::Mcu } else { Engine::Reference };
     let (res, recorded) = match &args.depth {
@@ -307,10 +324,13 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             println!("avoid {name}: engine reference (f64)");
         }
         let sf = &scene.safety;
+        let monitor = flinch_firmware::avoidance::SafeController::new(path::ssm_params::<f64>(&scene));
         if sf.on() {
             println!(
-                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, T_r {} s, T_s {} s, C {:.4} m (detection capability {:.1} mm), Z {} m, clearance {} m, latency {} s, cap {} m/s",
+                "  monitor           speed and separation (ISO/TS 15066 5.5.4): v_h {} m/s, K {} m/s (ISO 13855 6.2: stop separation {:.3} m), T_r {} s, T_s {} s, C {:.4} m (detection capability {:.1} mm), Z {} m, clearance {} m, latency {} s, cap {} m/s",
                 sf.human_speed_mps,
+                monitor.approach_speed_mps(),
+                monitor.stop_separation_m(),
                 sf.reaction_time_s,
                 sf.stopping_time_s,
                 sf.intrusion_used_m(scene.camera.m_per_px),
@@ -344,6 +364,9 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             path::Status::TooClose => format!("TOO CLOSE: reached the goal but came closer to the operator than clearance_m = {} m", res.clearance_m),
             path::Status::Collision(None) => "COLLISION: the tool entered the operator (then reached the goal)".to_string(),
             path::Status::Collision(Some(r)) => format!("COLLISION: the tool entered the operator (then stopped: {})", r.name()),
+            path::Status::Fault => "FAULT: the command source gave a non-finite command (NaN or infinite); the tool was held where it was".to_string(),
+            path::Status::Unverified(None) => "UNVERIFIED: the tool reached the goal on recorded frames, but the verdict was judged against the scene file's model operator, not against the people in the recording: the clearance and the SSM bound are not known to have been kept".to_string(),
+            path::Status::Unverified(Some(r)) => format!("UNVERIFIED: stopped before the goal ({}) on recorded frames; the verdict was judged against the scene file's model operator, not against the people in the recording: not known to be safe", r.name()),
             path::Status::SsmViolation(e) => format!(
                 "SSM VIOLATION: {} steps faster than ISO/TS 15066 5.5.4 allows at the true separation, by up to {:.3} m/s (first at t = {:.2} s); then {}",
                 res.ssm_violations,
@@ -353,6 +376,13 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             ),
         };
         println!("  status            {} ({verdict})", res.status.name());
+        println!(
+            "  verdict basis     {}",
+            match res.verdict_basis {
+                path::VerdictBasis::SceneModel => "the scene file's operator, which drew every frame (ground truth)",
+                path::VerdictBasis::SceneModelNotRecording => "the scene file's operator, NOT the recording: unverified",
+            }
+        );
         match res.time_to_goal_s {
             Some(t) => println!("  time to goal      {t:.3} s"),
             None => println!("  time to goal      not reached (final {:?})", res.points.last()),
@@ -396,7 +426,7 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<bool, Stri
             crate::report::output::note(&format!("wrote {} (plot)", p.display()));
         }
     }
-    Ok(res.status.ok())
+    Ok(res.status.verdict())
 }
 
 fn run_compare(scene: &scene::Avoid, setup: &Setup, file: &std::path::Path) -> Result<(), String> {

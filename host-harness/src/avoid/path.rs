@@ -2,205 +2,22 @@
 //! at its key-framed position), pre-processed, cleared of the robot with the calibration, fitted and
 //! filtered; every control step the field is sampled at the tool and eq 74-79 move it.
 //!
-//! Two engines share the firmware's [`Controller`]: [`Engine::Reference`] samples the field in `f64`
+//! Two engines ([`super::engine`]) share the firmware's [`Controller`](fw::Controller): [`Engine::Reference`] samples the field in `f64`
 //! with the full (untruncated) sum; [`Engine::Mcu`] runs the firmware exactly as on the target: each
-//! fit is encoded into a serial frame, fed to a [`Receiver`] in the board's number type
-//! ([`BoardReal`]: `f32`, or `I16F16` when the firmware is built with the feature `avoid-fixed`), and
+//! fit is encoded into a serial frame, fed to a [`Receiver`](fw::Receiver) in the board's number type
+//! ([`BoardReal`](fw::BoardReal): `f32`, or `I16F16` when the firmware is built with the feature `avoid-fixed`), and
 //! the step uses the lookup-table Gaussian over the truncated window plus the weights-age watchdog.
 
-use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Steer, Watchdog};
-use flinch_firmware::avoidance::{num::I16F16, BoardReal};
-use flinch_hal_sim::serial::SimSerial;
+use flinch_firmware::avoidance::{self as fw, RxStats, SafeController, Sensed};
+
+// The command sources and the verdict live in their own modules; their names stay reachable here.
+pub use super::engine::*;
+pub use super::verdict::*;
 
 use super::calib::{preprocess, zigzag, Calibration};
 use super::depth::{render, Rng};
 use super::rbf::{filter_weights, Field, Fitter, RbfGrid};
 use super::scene::Avoid;
-
-/// Which implementation computes the command.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Engine {
-    /// `f64`, full sum.
-    Reference,
-    /// The firmware step in the board's number type ([`BoardReal`]) behind the serial frame protocol.
-    Mcu,
-}
-
-/// The name of the board's number type ([`BoardReal`], which the `--mcu` engine runs): `"f32"` (the
-/// M4F default), or `"I16F16"` when the firmware is built with the feature `avoid-fixed`
-/// (`cargo build -p flinch-harness --features avoid-fixed` forwards it).
-pub fn board_real_name() -> &'static str {
-    use core::any::TypeId;
-    if TypeId::of::<BoardReal>() == TypeId::of::<f32>() {
-        "f32"
-    } else if TypeId::of::<BoardReal>() == TypeId::of::<I16F16>() {
-        "I16F16"
-    } else {
-        "unknown"
-    }
-}
-
-/// The `--mcu` engine for a scene: the firmware as the board runs it, in [`BoardReal`] with the
-/// lookup-table Gaussian.
-pub fn mcu_engine(scene: &Avoid) -> Result<FwEngine<BoardReal, fw::GaussLut<BoardReal>>, String> {
-    FwEngine::new(scene, fw::GaussLut::new())
-}
-
-/// A command source for [`simulate_with`]: gets every new field, answers every control step.
-pub trait StepEngine {
-    /// A new fit is available (frame `seq` at `now_ms`).
-    fn new_field(&mut self, field: &Field, seq: u32, now_ms: u32) -> Result<(), String>;
-    /// Velocity command at `p`, after the speed and separation monitor when `sensed` is given (the
-    /// last frame's separation, tool position and age): what the drive receives.
-    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32, sensed: Option<&Sensed<f64>>) -> Cmd;
-    /// Receiver counters, if there is a receiver.
-    fn rx_stats(&self) -> Option<RxStats> {
-        None
-    }
-}
-
-/// One command as the drive receives it.
-#[derive(Clone, Copy, Debug)]
-pub struct Cmd {
-    /// Velocity, m/s.
-    pub v: [f64; 2],
-    /// Speed limit that applied, m/s.
-    pub limit_mps: f64,
-    /// `run`, `slow`, `protective_stop`, `no_data` (the monitor) or `field` (monitor off).
-    pub state: &'static str,
-}
-
-fn state_name(s: SafeState) -> &'static str {
-    match s {
-        SafeState::Run => "run",
-        SafeState::Slow => "slow",
-        SafeState::ProtectiveStop => "protective_stop",
-        SafeState::NoData => "no_data",
-    }
-}
-
-/// The monitor's parameters for a scene (`None`: monitor off).
-pub fn ssm<R: Real>(scene: &Avoid) -> Option<SsmParams<R>> {
-    scene.safety.on().then(|| ssm_params(scene))
-}
-
-/// The scene's speed and separation parameters (ISO/TS 15066 5.5.4), whether the monitor is on or
-/// not: what the monitor uses, and what the run's verdict checks every step against.
-pub fn ssm_params<R: Real>(scene: &Avoid) -> SsmParams<R> {
-    let s = &scene.safety;
-    SsmParams {
-        human_speed_mps: R::from_f64(s.human_speed_mps),
-        reaction_time_s: R::from_f64(s.reaction_time_s),
-        stopping_time_s: R::from_f64(s.stopping_time_s),
-        margin_m: R::from_f64(s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m),
-        speed_cap_mps: R::from_f64(scene.speed_mps),
-    }
-}
-
-/// The speed the SSM bound of ISO/TS 15066 5.5.4 allows at a TRUE separation `s_m` (from the tool's
-/// surface to the obstacles' true footprint, m), m/s: the largest `v_r` with
-/// `S_p(v_r) = v_h (T_r + T_s) + v_r (T_r + T_s / 2) + C + Z_d + Z_r + clearance <= s_m`, at most the
-/// cap (`T_s` is the stopping time from the cap). The same function the firmware's monitor applies
-/// to its sensed lower bound ([`SafeController::speed_limit`]); here it is given the ground truth,
-/// so a sensing chain that overstates the separation (a hidden hand, a hand faster than `v_h`, an
-/// age not counted) shows. The sensing latency is not added to `T_r`: the verdict uses the true
-/// separation at the instant the command is given, so no sensing delay stands between the person's
-/// position and the check (the monitor counts it in the frame's age).
-///
-/// `v_h` is never less than how fast the scene's obstacles truly move ([`SsmVerdict::bound_at_mps`]):
-/// the monitor must assume a speed, the verdict knows it.
-pub struct SsmVerdict(SafeController<f64>, SsmParams<f64>);
-
-impl SsmVerdict {
-    /// For a scene.
-    pub fn new(scene: &Avoid) -> Self {
-        let p = ssm_params(scene);
-        SsmVerdict(SafeController::new(p), p)
-    }
-    /// The bound at true separation `s_m`, m/s (0: only standing still is allowed).
-    pub fn bound_mps(&self, s_m: f64) -> f64 {
-        self.0.speed_limit(s_m)
-    }
-    /// The bound at true separation `s_m` with the obstacles truly approaching at up to
-    /// `obstacle_mps` (taken as `v_h` when faster than the scene's), m/s.
-    pub fn bound_at_mps(&self, s_m: f64, obstacle_mps: f64) -> f64 {
-        if obstacle_mps.is_finite() && obstacle_mps > self.1.human_speed_mps {
-            SafeController::new(SsmParams { human_speed_mps: obstacle_mps, ..self.1 }).speed_limit(s_m)
-        } else {
-            self.0.speed_limit(s_m)
-        }
-    }
-}
-
-/// A commanded speed above the SSM bound by more than this counts as a violation, m/s (the monitor
-/// scales to at most its limit; this absorbs rounding only).
-pub const SSM_TOL_MPS: f64 = 1e-6;
-
-/// The swept distance's resolution: over each control step the signed distance is bounded from
-/// below to within this of the true minimum over the step's segment, m.
-pub const SWEPT_TOL_M: f64 = 1e-4;
-
-/// The most samples [`swept_min_m`] takes over one step (a hand at 1.6 m/s and the tool at 0.25 m/s
-/// with 10 ms steps need 93).
-pub const SWEPT_MAX_SAMPLES: usize = 2048;
-
-/// The fastest any part of the operator or an obstacle moves, m/s: the largest speed between
-/// consecutive key frames of the hand (the forearm's segment follows its end, no faster) and of
-/// every moving obstacle.
-pub fn max_obstacle_speed_mps(scene: &Avoid) -> f64 {
-    obstacle_speed_mps(scene, f64::NEG_INFINITY, f64::INFINITY)
-}
-
-/// [`max_obstacle_speed_mps`] over the key-frame segments that overlap the times `[t0, t1]` (held
-/// positions before the first and after the last key frame do not move), m/s.
-pub fn obstacle_speed_mps(scene: &Avoid, t0: f64, t1: f64) -> f64 {
-    let seg = |a: (f64, [f64; 2]), b: (f64, [f64; 2])| {
-        let d = (b.1[0] - a.1[0]).hypot(b.1[1] - a.1[1]);
-        if d == 0.0 || b.0 <= t0 || a.0 >= t1 {
-            0.0
-        } else if b.0 > a.0 {
-            d / (b.0 - a.0)
-        } else {
-            f64::INFINITY
-        }
-    };
-    let hand = scene.operator.keyframes.windows(2).map(|w| seg((w[0].t_s, w[0].hand_m), (w[1].t_s, w[1].hand_m))).fold(0.0, f64::max);
-    scene
-        .operator
-        .obstacles
-        .iter()
-        .flat_map(|o| o.keyframes.windows(2).map(|w| seg((w[0].t_s, [w[0].x_m, w[0].y_m]), (w[1].t_s, [w[1].x_m, w[1].y_m]))))
-        .fold(hand, f64::max)
-}
-
-/// A lower bound of the signed distance (tool surface to the true footprint) over a control step:
-/// the tool moving at constant velocity from `p0` (time `t0`) to `p1` (time `t1`), the operator and
-/// the obstacles moving on their key frames meanwhile; m. Along the step the signed distance is
-/// Lipschitz with constant `L = |p1 - p0| + v_o (t1 - t0)` per unit of the step's fraction (the
-/// footprint's signed distance is 1-Lipschitz in the point, and changes by no more than its parts
-/// move, at most `v_o`: [`obstacle_speed_mps`] over the step, or any larger value). Sampled at `n`
-/// equal parts, each part's minimum is at least `(d_a + d_b - L / n) / 2`; `n` is chosen so that
-/// this is within [`SWEPT_TOL_M`] of the samples, at most [`SWEPT_MAX_SAMPLES`] (beyond, the bound
-/// stays conservative and is looser: within `L / (2 n)`). Never above the distance at either end.
-pub fn swept_min_m(scene: &Avoid, v_o: f64, (t0, p0): (f64, [f64; 2]), (t1, p1): (f64, [f64; 2])) -> f64 {
-    let d0 = scene.signed_distance_m(t0, p0);
-    let d1 = scene.signed_distance_m(t1, p1);
-    let l = (p1[0] - p0[0]).hypot(p1[1] - p0[1]) + v_o * (t1 - t0).max(0.0);
-    if !(l > 0.0) || !l.is_finite() {
-        // Nothing moves (or a key frame jumps: the end points are all that is known; a jump is
-        // refused by the loader).
-        return d0.min(d1);
-    }
-    let n = (l / (2.0 * SWEPT_TOL_M)).ceil().clamp(1.0, SWEPT_MAX_SAMPLES as f64) as usize;
-    let (mut lower, mut prev) = (d0.min(d1), d0);
-    for i in 1..=n {
-        let s = i as f64 / n as f64;
-        let d = if i == n { d1 } else { scene.signed_distance_m(t0 + s * (t1 - t0), [p0[0] + s * (p1[0] - p0[0]), p0[1] + s * (p1[1] - p0[1])]) };
-        lower = lower.min(0.5 * (prev + d - l / n as f64));
-        prev = d;
-    }
-    lower
-}
 
 /// Capture to command for a scene: the latency plus, when the baud rate is modelled, one frame's
 /// time on the line, s.
@@ -214,142 +31,6 @@ pub fn frame_delay_s(scene: &Avoid) -> Result<f64, String> {
             }
             None => 0.0,
         })
-}
-
-/// Width of the steering barrier's band, m: over it the allowed approach speed rises from 0 to
-/// the cap.
-pub const STEER_BAND_M: f64 = 0.05;
-
-/// The separation (from the tool's surface, at capture, less the motion since) that the steering
-/// barrier holds, m: the monitor's zero-speed separation (with the clearance asked), plus what a
-/// person covers at `v_h` while the oldest frame is in use (capture to command, one camera period,
-/// one control step), plus the robot's own term at the cap, plus 10 mm. There the monitor still
-/// allows the cap, so the tool goes round at its cruise speed instead of being stopped.
-pub fn steer_barrier_m(scene: &Avoid) -> Result<f64, String> {
-    let s = &scene.safety;
-    let stop = s.human_speed_mps * (s.reaction_time_s + s.stopping_time_s) + s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m;
-    let oldest = frame_delay_s(scene)? + scene.frame_period_s + scene.dt_s;
-    Ok(stop + s.human_speed_mps * oldest + scene.speed_mps * (s.reaction_time_s + s.stopping_time_s / 2.0) + 0.01)
-}
-
-/// The monitor with its steering barrier for a scene (`None`: monitor off, as the thesis wrote it).
-pub fn safe_controller<R: Real>(scene: &Avoid) -> Result<Option<SafeController<R>>, String> {
-    let Some(p) = ssm::<R>(scene) else { return Ok(None) };
-    let (w, h) = scene.extent_m();
-    let q = R::from_f64;
-    Ok(Some(SafeController::new(p).with_steer(Steer {
-        barrier_m: q(steer_barrier_m(scene)?),
-        band_m: q(STEER_BAND_M),
-        view_m: [R::ZERO, R::ZERO, q(w), q(h)],
-        edge_margin_m: q(scene.robot.wrist_radius_m),
-    })))
-}
-
-fn monitored<R: Real>(safe: &mut Option<SafeController<R>>, v: [R; 2], p: [f64; 2], sensed: Option<&Sensed<f64>>, cap: f64) -> Cmd {
-    match safe {
-        None => Cmd { v: [v[0].to_f64(), v[1].to_f64()], limit_mps: cap, state: "field" },
-        Some(c) => {
-            let q = R::from_f64;
-            let sn = sensed.map(|s| Sensed {
-                separation_m: q(s.separation_m),
-                tool_x_m: q(s.tool_x_m),
-                tool_y_m: q(s.tool_y_m),
-                age_s: q(s.age_s),
-                nearest_x_m: q(s.nearest_x_m),
-                nearest_y_m: q(s.nearest_y_m),
-            });
-            let (x, y) = (q(p[0]), q(p[1]));
-            let (vx, vy) = c.steer(v[0], v[1], x, y, sn.as_ref());
-            let out = c.limit(vx, vy, x, y, sn.as_ref());
-            Cmd { v: [out.vx.to_f64(), out.vy.to_f64()], limit_mps: out.limit_mps.to_f64(), state: state_name(out.state) }
-        }
-    }
-}
-
-/// The `f64` reference: full-sum field, firmware controller and monitor in `f64`.
-pub struct RefEngine {
-    ctl: Controller<f64>,
-    safe: Option<SafeController<f64>>,
-    cap: f64,
-    field: Option<Field>,
-}
-
-impl RefEngine {
-    /// For a scene.
-    pub fn new(scene: &Avoid) -> Result<Self, String> {
-        Ok(RefEngine { ctl: Controller::new(gains(scene)?), safe: safe_controller(scene)?, cap: scene.speed_mps, field: None })
-    }
-}
-
-impl StepEngine for RefEngine {
-    fn new_field(&mut self, field: &Field, _: u32, _: u32) -> Result<(), String> {
-        self.field = Some(field.clone());
-        Ok(())
-    }
-    fn command(&mut self, p: [f64; 2], goal: [f64; 2], _: u32, sensed: Option<&Sensed<f64>>) -> Cmd {
-        let (h, fx, fy) = self.field.as_ref().map_or((0.0, 0.0, 0.0), |f| f.sample(p[0], p[1]));
-        let s = fw::FieldSample { height: h, grad_x: fx, grad_y: fy };
-        let c = self.ctl.command(p[0], p[1], goal[0], goal[1], &s, 1.0);
-        monitored(&mut self.safe, [c.vx, c.vy], p, sensed, self.cap)
-    }
-}
-
-/// The firmware as on the target, in number type `R` with Gaussian `G`: frames written by the host
-/// onto a `hal-sim` serial line and polled by the firmware's [`Receiver`] (as on the MCU),
-/// truncated-window field, controller, weights-age watchdog.
-pub struct FwEngine<R, G> {
-    ctl: Controller<R>,
-    safe: Option<SafeController<R>>,
-    cap: f64,
-    rx: Box<Receiver<R>>,
-    /// The host's end of the line and the MCU's.
-    line: (SimSerial, SimSerial),
-    gauss: G,
-    watchdog: Watchdog,
-}
-
-impl<R: Real, G: fw::Gauss<R>> FwEngine<R, G> {
-    /// For a scene.
-    pub fn new(scene: &Avoid, gauss: G) -> Result<Self, String> {
-        let watchdog = Watchdog {
-            slow_after_ms: (3.0 * scene.frame_period_s * 1e3) as u32,
-            stop_after_ms: (10.0 * scene.frame_period_s * 1e3) as u32,
-        };
-        let mut rx = Box::new(Receiver::new(200, 20));
-        // As the board's `Link::new`: a restarted host's new session is taken once the weights
-        // watchdog has stopped the robot, not before.
-        rx.new_session_after_ms = watchdog.stop_after_ms;
-        Ok(FwEngine {
-            ctl: Controller::new(gains(scene)?),
-            safe: safe_controller(scene)?,
-            cap: scene.speed_mps,
-            rx,
-            line: SimSerial::pair(),
-            gauss,
-            watchdog,
-        })
-    }
-}
-
-impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
-    fn new_field(&mut self, field: &Field, seq: u32, _now_ms: u32) -> Result<(), String> {
-        // Sent now; the firmware reads it from the line on its next step.
-        let frame = field.to_frame(seq, 0)?;
-        embedded_io::Write::write_all(&mut self.line.0, &frame).map_err(|e| format!("serial line: {e:?}"))?;
-        Ok(())
-    }
-    fn command(&mut self, p: [f64; 2], goal: [f64; 2], now_ms: u32, sensed: Option<&Sensed<f64>>) -> Cmd {
-        // Bounded per call, as on the MCU: what is left is read on the next steps.
-        let _ = self.rx.poll(&mut self.line.1, now_ms);
-        let q = R::from_f64;
-        let s = fw::sample(self.rx.grid(), &self.gauss, q(p[0]), q(p[1]));
-        let wd = self.watchdog.factor::<R>(self.rx.weights_age_ms(now_ms));
-        let c = self.ctl.command(q(p[0]), q(p[1]), q(goal[0]), q(goal[1]), &s, wd);
-        monitored(&mut self.safe, [c.vx, c.vy], p, sensed, self.cap)
-    }
-    fn rx_stats(&self) -> Option<RxStats> {
-        Some(self.rx.stats)
-    }
 }
 
 /// What is computed once per scene: the pseudo-inverses, the calibration (only with
@@ -441,88 +122,6 @@ pub struct Snapshot {
     pub field: Field,
 }
 
-/// Why a run stopped before the goal.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Reason {
-    /// The progress monitor tripped and the tool had barely moved: a local minimum.
-    Stalled,
-    /// The progress monitor tripped while the tool kept moving without getting closer: orbiting or
-    /// climbing over an obstacle, no way through found.
-    NoPath,
-    /// Held in a protective stop (separation below the protective separation) when time ran out.
-    Blocked,
-    /// The weights were too old (the stale-weights stop) when time ran out.
-    StaleWeights,
-    /// `max_time_s` passed while moving and making progress.
-    Timeout,
-    /// The tool left the camera's view (the sensed workspace): stopped there.
-    LeftView,
-    /// With the monitor on, the first frame shows the start or the goal inside the protective
-    /// separation at rest (`S_p(0)`, the clearance included): no path can keep it, so the tool
-    /// does not move at all (instead of waiting in a protective stop or stalling to the timeout).
-    NoRoom,
-}
-
-impl Reason {
-    /// The name used in the JSON and the text output.
-    pub fn name(self) -> &'static str {
-        match self {
-            Reason::Stalled => "stalled",
-            Reason::NoPath => "no_path",
-            Reason::Blocked => "blocked",
-            Reason::StaleWeights => "stale_weights",
-            Reason::Timeout => "timeout",
-            Reason::LeftView => "left_view",
-            Reason::NoRoom => "no_room",
-        }
-    }
-}
-
-/// How a run ended. A run that ever put the tool inside the operator is a [`Status::Collision`]
-/// whatever happened afterwards: it is never reported as reached; one that reached the goal but came
-/// closer than `clearance_m` is [`Status::TooClose`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Status {
-    /// At the goal, never inside the operator.
-    Reached,
-    /// Stopped before the goal, never inside the operator.
-    Stopped(Reason),
-    /// The tool reached the goal, never inside the operator, but its surface came closer to the
-    /// operator than `clearance_m` on the way.
-    TooClose,
-    /// The tool entered the operator (signed distance < 0) at least once; `None`: it then reached
-    /// the goal, `Some(reason)`: it then stopped for that reason.
-    Collision(Option<Reason>),
-    /// Never inside, but at some step the commanded speed exceeded the SSM bound computed from the
-    /// TRUE separation ([`SsmVerdict`]); `None`: it then reached the goal, `Some(reason)`: it
-    /// stopped for that reason. Reported in place of `reached`, `too_close` and `stopped`.
-    SsmViolation(Option<Reason>),
-}
-
-impl Status {
-    /// `reached`, `stopped`, `too_close` or `collision`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Status::Reached => "reached",
-            Status::Stopped(_) => "stopped",
-            Status::TooClose => "too_close",
-            Status::Collision(_) => "collision",
-            Status::SsmViolation(_) => "ssm_violation",
-        }
-    }
-    /// Why it stopped (also after a collision), if it did not reach the goal.
-    pub fn reason(self) -> Option<Reason> {
-        match self {
-            Status::Reached | Status::TooClose | Status::Collision(None) | Status::SsmViolation(None) => None,
-            Status::Stopped(r) | Status::Collision(Some(r)) | Status::SsmViolation(Some(r)) => Some(r),
-        }
-    }
-    /// The verdict: reached the goal and never touched the operator.
-    pub fn ok(self) -> bool {
-        self == Status::Reached
-    }
-}
-
 /// One control step as the CSV writes it.
 #[derive(Clone, Copy, Debug)]
 pub struct StepRow {
@@ -536,7 +135,9 @@ pub struct StepRow {
     pub separation_m: f64,
     /// Speed limit that applied during the step, m/s.
     pub speed_limit_mps: f64,
-    /// What the controller did: `run`, `slow`, `protective_stop`, `stopped`.
+    /// What the controller did: `run`, `slow`, `protective_stop`, `no_data`, `field` (monitor off),
+    /// or `stopped` on the run's last step when its command was zero and the run ended before the
+    /// goal.
     pub state: &'static str,
     /// Lower bound of the signed distance over the step's whole segment (the obstacles moving
     /// meanwhile), m: [`swept_min_m`].
@@ -572,6 +173,8 @@ pub struct PathResult {
     pub rows: Vec<StepRow>,
     /// How the run ended.
     pub status: Status,
+    /// What the verdict was judged against.
+    pub verdict_basis: VerdictBasis,
     /// Time spent with the tool inside the operator, s: every step whose segment entered it
     /// (swept distance below 0) counts whole.
     pub time_inside_s: f64,
@@ -753,20 +356,6 @@ pub fn nearest_obstacle_at(map: &super::depth::HeightMap, m_per_px: f64, p: [f64
     }
 }
 
-/// The firmware gains of a scene.
-pub fn gains<R: Real>(scene: &Avoid) -> Result<Gains<R>, String> {
-    Ok(Gains {
-        repulsion: scene.repulsion_law()?,
-        k_att: R::from_f64(scene.speed_mps),
-        k_rep: R::from_f64(scene.k_rep),
-        capture_radius_m: R::from_f64(scene.capture_radius_m),
-        latch_height_m: R::from_f64(scene.latch_height_m),
-        slow_height_m: R::from_f64(scene.slow_height_m),
-        stop_height_m: R::from_f64(scene.stop_height_m),
-        bounded: scene.safety.on(),
-    })
-}
-
 /// Counts stall episodes in a path: the tool moved less than `move_m` over `window` steps while
 /// farther than `tol_m` from the goal. An episode ends when it moves again.
 pub fn count_stalls(points: &[[f64; 2]], goal: [f64; 2], window: usize, move_m: f64, tol_m: f64) -> usize {
@@ -783,7 +372,7 @@ pub fn count_stalls(points: &[[f64; 2]], goal: [f64; 2], window: usize, move_m: 
     stalls
 }
 
-/// Simulate the scene with the reference or the on-target ([`BoardReal`], lookup table) engine.
+/// Simulate the scene with the reference or the on-target ([`BoardReal`](fw::BoardReal), lookup table) engine.
 pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResult, String> {
     match engine {
         Engine::Reference => simulate_with(scene, setup, &mut RefEngine::new(scene)?),
@@ -919,6 +508,11 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         }
         let cmd = engine.command(p, goal, now, sensed.as_ref());
         last_state = cmd.state;
+        if !(cmd.v[0].is_finite() && cmd.v[1].is_finite()) {
+            // A command the drive cannot carry out: a fault (the tool held where it was).
+            ended = Some(Reason::NonFiniteCommand);
+            break;
+        }
         let [vx, vy] = cmd.v;
         let speed = (vx * vx + vy * vy).sqrt();
         // Eq 79.
@@ -990,7 +584,8 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         });
     }
     if let Some(r) = rows.last_mut() {
-        if ended.is_some() {
+        // The row is the step's command: `stopped` only when the tool stood still in it.
+        if ended.is_some() && r.v_mps == [0.0, 0.0] {
             r.state = "stopped";
         }
     }
@@ -998,6 +593,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     // Stopped runs are judged against contact only: a person may walk up to a stopped robot.
     let status = match (collided, ended) {
         (true, e) => Status::Collision(e),
+        (false, Some(Reason::NonFiniteCommand)) => Status::Fault,
         (false, e) if ssm_violations > 0 => Status::SsmViolation(e),
         (false, None) if min_s < scene.clearance_m => Status::TooClose,
         (false, None) => Status::Reached,
@@ -1015,6 +611,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         clearance_m: scene.clearance_m,
         rows,
         status,
+        verdict_basis: VerdictBasis::SceneModel,
         time_inside_s: time_inside,
         max_speed_mps: vmax,
         max_speed_near_operator_mps: vmax_near,

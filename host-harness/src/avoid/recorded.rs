@@ -404,9 +404,13 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: super::path::Engine, depth
     use super::path::{mcu_engine, simulate_from, Engine, RefEngine};
     let rec = Recording::open(depth, poses)?;
     let mut src = RecordedSource::new(scene, rec)?;
-    let res = match engine {
+    let mut res = match engine {
         Engine::Reference => simulate_from(scene, setup, &mut RefEngine::new(scene)?, &mut src)?,
         Engine::Mcu => simulate_from(scene, setup, &mut mcu_engine(scene)?, &mut src)?,
     };
+    // The verdict was judged against the scene file's model operator, not the recording's people:
+    // never a verified `reached` or `stopped`.
+    res.verdict_basis = super::path::VerdictBasis::SceneModelNotRecording;
+    res.status = res.status.unverified();
     Ok((res, src.stats))
 }

@@ -19,6 +19,12 @@ pub const EXIT_VERDICT: u8 = 1;
 pub const EXIT_BAD_INPUT: u8 = 2;
 /// Runtime failure: the solver gave up, an output could not be written.
 pub const EXIT_RUNTIME: u8 = 3;
+/// `avoid` only: ran, stopped safely before the goal (never inside the operator, the SSM bound
+/// kept): not the goal, but not unsafe either.
+pub const EXIT_SAFE_STOP: u8 = 4;
+/// `avoid` only: ran on recorded frames, and the verdict is not verified (judged against the scene
+/// file's model operator, not the recording).
+pub const EXIT_UNVERIFIED: u8 = 5;
 /// Interrupted by Ctrl-C (the shell's 128 + SIGINT); what was written so far is complete rows.
 pub const EXIT_INTERRUPTED: u8 = 130;
 
