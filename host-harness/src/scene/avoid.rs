@@ -182,7 +182,7 @@ const MODE: Key = Key::of(
 /// `[avoid.safety]` (ISO/TS 15066 5.5.4), every key optional: `avoid::scene::SafetyCfg::default()`.
 pub const SAFETY_KEYS: &[Key] = &[
     MODE,
-    Key::number("human_speed_mps", "m/s", Incl(1.6), Incl(10.0), "v_h: ISO 13855:2010 6.2 and ISO/TS 15066 5.5.4.2.3: 1.6 m/s (walking, arm beyond 0.5 m) or 2.0 m/s (reach within 0.5 m); slower is not a person; 10 m/s bounds a swing", "v_h, the human's approach speed").default(1.6),
+    Key::number("human_speed_mps", "m/s", Incl(1.6), Incl(10.0), "v_h: ISO 13855:2010 6.2 and ISO/TS 15066 5.5.4.2.3: 1.6 m/s (walking, arm beyond 0.5 m); slower is not a person; 10 m/s bounds a swing", "v_h, the human's far-field approach speed: where the protective separation with 2.0 m/s is at most 0.5 m, the monitor and the verdict use 2.0 m/s (ISO 13855 6.2, K = 2,000 mm/s), or this value if faster").default(1.6),
     Key::number("reaction_time_s", "s", Incl(0.0), Incl(10.0), "T_r: a control period plus the drive's delay, milliseconds; 10 s bounds it", "T_r").default(0.02),
     Key::number("stopping_time_s", "s", Incl(0.0), Incl(10.0), "T_s: a robot stops from cruise within a second; 10 s bounds it", "T_s").default(0.1),
     Key::number("intrusion_m", "m", Incl(0.0), Incl(1.0), "C of ISO 13855 5.3: up to 0.85 m (a reach over a barrier); the monitor never uses less than the sensor's detection capability requires", "C, intrusion distance").default(0.0),
