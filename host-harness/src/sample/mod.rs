@@ -17,6 +17,7 @@
 
 pub mod cli;
 mod dist;
+pub mod parquet_file;
 mod report;
 pub mod stats;
 
@@ -309,6 +310,13 @@ impl Plan {
     /// [`BLOCK`], writing each block's rows to `csv` in index order; stops after the block in
     /// which `stop` is raised. The report covers the samples that ran.
     pub fn run(&self, progress: Progress, csv: Option<&mut dyn Write>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
+        self.run_to(progress, csv, None, stop, pool)
+    }
+
+    /// As [`Plan::run`], also handing every row to `parquet` (`--parquet`). The caller finishes
+    /// the Parquet file ([`parquet_file::ParquetRows::finish`]) whatever this returns: on an error
+    /// writing the CSV, the Parquet file then holds the rows written before it.
+    pub fn run_to(&self, progress: Progress, csv: Option<&mut dyn Write>, mut parquet: Option<&mut parquet_file::ParquetRows>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
         let body = self.body();
         let mut w = csv.map(csv::Writer::from_writer);
         if let Some(w) = w.as_mut() {
@@ -316,9 +324,14 @@ impl Plan {
         }
         let report = self.run_rows(
             progress,
-            &mut |r: &Row| match w.as_mut() {
-                Some(w) => w.write_record(r.record_with(body)).map_err(io::Error::from),
-                None => Ok(()),
+            &mut |r: &Row| {
+                if let Some(w) = w.as_mut() {
+                    w.write_record(r.record_with(body)).map_err(io::Error::from)?;
+                }
+                match parquet.as_deref_mut() {
+                    Some(p) => p.push(r),
+                    None => Ok(()),
+                }
             },
             stop,
             pool,
