@@ -47,10 +47,15 @@ fn chunks_run_as_processes_merge_into_the_whole_run() {
     let o = flinch(&["sample", "--merge", "c1.json", "c1.json"], &d);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("overlap"));
-    // Two chunks of three: merged, with a note that it is partial.
+    // Two chunks of three: refused, naming the missing samples; merged with --partial, with a note.
     let o = flinch(&["sample", "--merge", "c1.json", "c3.json"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("cover 60 of the 90 samples: samples 30..60 are missing") && e.contains("--partial"), "{e}");
+    assert!(o.stdout.is_empty());
+    let o = flinch(&["sample", "--merge", "c1.json", "c3.json", "--partial"], &d);
     assert_eq!(o.status.code(), Some(0));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("cover 60 of the 90 samples"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cover 60 of the 90 samples (--partial; missing 30..60)"));
     assert!(String::from_utf8_lossy(&o.stdout).contains("60 of 90 samples (ranges 0..30, 60..90)"));
     let _ = std::fs::remove_dir_all(&d);
 }
@@ -105,6 +110,11 @@ fn ctrl_c_stops_with_complete_rows_and_a_report_of_what_ran() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let drawn = v["drawn"].as_u64().unwrap();
     assert!(drawn > 0 && drawn < 10_000_000 && v["complete"] == false, "{drawn}");
+    // Its report is a part of the study: --merge refuses it alone, naming the samples missing.
+    std::fs::write(d.join("cut.json"), &o.stdout).unwrap();
+    let m = flinch(&["sample", "--merge", "cut.json"], &d);
+    assert_eq!(m.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&m.stderr).contains(&format!("samples {drawn}..10000000 are missing")), "{}", String::from_utf8_lossy(&m.stderr));
     let rows = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(rows.lines().count() as u64, drawn + 1, "the CSV holds exactly the samples the report counts");
     assert!(rows.ends_with('\n'));

@@ -50,6 +50,10 @@ pub struct SampleArgs {
     /// Merge the --json reports of chunks of one study into its estimate.
     #[arg(long, value_name = "REPORT.json", num_args = 1.., conflicts_with_all = ["scene", "samples", "vary", "chunk", "csv", "parquet", "truncate"])]
     pub merge: Vec<PathBuf>,
+    /// With --merge: merge reports that do not cover the whole study (a chunk missing, or one
+    /// interrupted); the estimate is then over the samples covered. Without it that is refused.
+    #[arg(long, requires = "merge")]
+    pub partial: bool,
     /// Threads (default: all cores). The result does not depend on it.
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -91,7 +95,14 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
         }
         let m = merge(&reports, &names).map_err(|e| Failure::bad_input(e.0))?;
         if !m.complete {
-            output::note(&format!("note: the merged reports cover {} of the {} samples", m.drawn, m.samples));
+            let missing = m.missing().iter().map(|r| format!("{}..{}", r[0], r[1])).collect::<Vec<_>>().join(", ");
+            if !args.partial {
+                return Err(Failure::bad_input(format!(
+                    "--merge: the reports cover {} of the {} samples: samples {missing} are missing (a chunk not given, or one interrupted); give every chunk's report, or --partial to merge these anyway (the estimate is then over the samples covered)",
+                    m.drawn, m.samples
+                )));
+            }
+            output::note(&format!("note: the merged reports cover {} of the {} samples (--partial; missing {missing})", m.drawn, m.samples));
         }
         print(args, &m)?;
         return if m.solver_failed > 0 { Err(Failure::runtime(format!("the solver failed at {} of {} samples", m.solver_failed, m.drawn))) } else { Ok(true) };

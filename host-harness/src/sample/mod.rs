@@ -215,6 +215,14 @@ impl Plan {
         let mut vary = Vec::new();
         for spec in parsed {
             let info = key_info(&template.base, &spec.key);
+            if let Some(i) = info.as_ref().filter(|i| i.integer) {
+                return err(format!(
+                    "--vary {}: {} takes {}, and every distribution here is continuous: no draw would be whole, every sample would be refused (vary it with `flinch sweep`, or give it in the scene)",
+                    spec.spec(),
+                    spec.key,
+                    i.range
+                ));
+            }
             let mut within = spec.bounds;
             if truncate {
                 if let Some(i) = &info {
@@ -237,8 +245,10 @@ impl Plan {
             if let Some((a, b)) = within {
                 if a >= b || kept.is_nan() || kept <= 1e-12 {
                     return err(format!(
-                        "--vary {}: the distribution has no probability in [{a}, {b}]{}",
+                        "--vary {}: the distribution has no probability in [{}, {}] (less than 1e-12 of it lies there: no draw can be made){}",
                         spec.spec(),
+                        num(a),
+                        num(b),
                         info.as_ref().filter(|_| truncate).map_or(String::new(), |i| format!(" (with --truncate, the accepted range of {} is {})", spec.key, i.range))
                     ));
                 }
