@@ -81,7 +81,35 @@ fn chunks_merge_into_the_whole_run() {
     let e = merge(&[t1.clone(), seed4], &[]).unwrap_err().0;
     assert!(e.contains("seed"), "{e}");
     let other_scene = run(&plan("tables5-7_bistable_v020.toml", &FOUR_KEYS, 3, n, Some((2, 3)), false), 2).1;
-    assert!(merge(&[t1, other_scene], &[]).unwrap_err().0.contains("scene text"));
+    assert!(merge(&[t1.clone(), other_scene], &[]).unwrap_err().0.contains("scene text"));
+    // Another --vary (a different distribution of the same key; a key fewer) or another N.
+    let mut keys = FOUR_KEYS;
+    keys[1] = "decoupler.spring_rate=normal:200:11";
+    let other_vary = run(&plan("tables5-7_bistable_v025.toml", &keys, 3, n, Some((2, 3)), false), 2).1;
+    assert!(merge(&[t1.clone(), other_vary], &[]).unwrap_err().0.contains("--vary"));
+    let fewer = run(&plan("tables5-7_bistable_v025.toml", &FOUR_KEYS[..3], 3, n, Some((2, 3)), false), 2).1;
+    assert!(merge(&[t1.clone(), fewer], &[]).unwrap_err().0.contains("--vary"));
+    let other_n = run(&plan("tables5-7_bistable_v025.toml", &FOUR_KEYS, 3, n + 1, Some((2, 3)), false), 2).1;
+    assert!(merge(&[t1.clone(), other_n], &[]).unwrap_err().0.contains("--samples"));
+    // Chunks of another split that overlap (1/2 = 0..300 and 2/3 = 200..400).
+    let e = merge(&[r1.clone(), t2.clone()], &[]).unwrap_err().0;
+    assert!(e.contains("overlap") && e.contains("200..400"), "{e}");
+    // A report whose counts do not add up (edited by hand) is not merged.
+    for tamper in [
+        (|r: &mut SampleReport| r.drawn += 1) as fn(&mut SampleReport),
+        |r| r.ran += 1,
+        |r| r.estimates[0].failures = r.estimates[0].runs + 1,
+        |r| r.ranges = vec![[0, 900]],
+    ] {
+        let mut bad = t2.clone();
+        tamper(&mut bad);
+        let e = merge(&[t1.clone(), bad], &["a.json".into(), "b.json".into()]).unwrap_err().0;
+        assert!(e.contains("b.json: not a consistent"), "{e}");
+    }
+    // What is missing from a partial merge, for the command line's refusal.
+    assert_eq!(partial.missing(), vec![[200, 400]]);
+    assert_eq!(t2.missing(), vec![[0, 200], [400, 601]]);
+    assert!(r.missing().is_empty());
 }
 
 #[test]
@@ -240,4 +268,77 @@ fn bad_studies_are_refused_before_anything_runs() {
     assert!(refuse(&["target.restitution=uniform:1.1:1.2"], 10).contains("every sample would be refused"));
     // A truncation interval with no probability in it.
     assert!(refuse(&["motion.speed=normal:0.05:0.001:1:2"], 10).contains("no probability"));
+    // Parameters: a spread of zero or below, an empty or reversed interval, a mode outside it,
+    // numbers that are not finite (1e400 overflows to inf).
+    for (spec, says) in [
+        ("motion.speed=normal:0.25:-0.01", "SD must be > 0"),
+        ("motion.speed=normal:0.25:0", "SD must be > 0"),
+        ("motion.speed=lognormal:-1:0", "SIGMA must be > 0"),
+        ("motion.speed=lognormal:-1:-0.1", "SIGMA must be > 0"),
+        ("motion.speed=uniform:1:1", "LO must be below HI"),
+        ("motion.speed=uniform:2:1", "LO must be below HI"),
+        ("motion.speed=triangular:0.1:0.5:0.3", "LO <= MODE <= HI"),
+        ("motion.speed=triangular:0.1:0.05:0.3", "LO <= MODE <= HI"),
+        ("motion.speed=normal:nan:0.1", "not a finite number"),
+        ("motion.speed=normal:inf:0.1", "not a finite number"),
+        ("motion.speed=normal:1e400:0.1", "not a finite number"),
+        ("motion.speed=uniform:0.04:-inf", "not a finite number"),
+        // Truncations that exclude all the mass (refused at once: the draw is an inverse
+        // distribution function, no rejection loop), at 10 and 20 standard deviations, and for
+        // a lognormal below 0.
+        ("decoupler.spring_rate=normal:200:10:300:310", "no probability in [300, 310]"),
+        ("motion.speed=normal:0.05:0.001:0.07:0.08", "no probability"),
+        ("motion.speed=lognormal:-3:0.1:-2:-1", "no probability"),
+        // A continuous distribution for a whole-number key: no draw could be whole.
+        ("decoupler.springs=uniform:1:5", "decoupler.springs takes whole numbers"),
+        ("decoupler.springs=normal:3:0.5", "every sample would be refused"),
+        // Huge magnitudes, named readably in the message (not as a 309-digit number).
+        ("motion.speed=uniform:0.04:1e308", "uniform:0.04:1e308: every draw lies outside"),
+        ("motion.speed=lognormal:700:1", "every sample would be refused"),
+        // Keys that are not numbers: a string, a boolean, a table.
+        ("target.kind=uniform:0:1", "not a number"),
+        ("motion.start_at_speed=uniform:0:1", "must be true or false"),
+        ("motion=uniform:0:1", "is a table"),
+    ] {
+        let e = refuse(&[spec], 10);
+        assert!(e.contains(says), "{spec}: {e}");
+    }
+    // Chunks: K from 1 to M.
+    for bad in ["0/2", "3/2", "1/0", "0/0", "1/2/3", "-1/2", "1/", "/2"] {
+        assert!(sample::parse_chunk(bad).is_err(), "{bad}");
+    }
+}
+
+#[test]
+fn a_huge_study_runs_a_chunk_without_allocating_for_n_and_an_empty_chunk_is_empty() {
+    // N = 1e9: the chunk 1e8/1e8 is its last 10 samples, drawn as sample indices 999999990..1e9
+    // would be in the whole study; nothing is allocated for N (the run takes as long as 10 samples).
+    let keys = ["motion.speed=uniform:0.04:0.06"];
+    let p = plan("tables5-7_bistable.toml", &keys, 1, 1_000_000_000, Some((100_000_000, 100_000_000)), false);
+    assert_eq!(p.range, (999_999_990, 1_000_000_000));
+    let (csv, r) = run(&p, 2);
+    assert_eq!((r.drawn, r.ran, r.complete), (10, 10, false));
+    assert_eq!(r.ranges, vec![[999_999_990, 1_000_000_000]]);
+    assert!(csv.lines().nth(1).unwrap().starts_with("999999990,"));
+    assert_eq!(p.draw(999_999_995), plan("tables5-7_bistable.toml", &keys, 1, 1_000_000_000, None, false).draw(999_999_995));
+    // More chunks than samples: some chunks are empty, and all of them still merge to the whole.
+    let chunks: Vec<SampleReport> = (1..=5).map(|k| run(&plan("tables5-7_bistable.toml", &keys, 1, 3, Some((k, 5)), false), 1).1).collect();
+    assert_eq!(chunks.iter().map(|c| c.drawn).sum::<u64>(), 3);
+    assert!(chunks.iter().any(|c| c.drawn == 0 && c.ranges.is_empty()));
+    assert_eq!(merge(&chunks, &[]).unwrap(), run(&plan("tables5-7_bistable.toml", &keys, 1, 3, None, false), 1).1);
+}
+
+/// A truncation far in a tail (7 to 8 standard deviations above the mean, probability 1.3e-12)
+/// still draws within its bounds, and so does one in the lower tail.
+#[test]
+fn far_tail_truncations_draw_within_their_bounds() {
+    for (spec, lo, hi) in [("decoupler.spring_rate=normal:200:10:270:280", 270.0, 280.0), ("decoupler.spring_rate=normal:200:10:120:130", 120.0, 130.0)] {
+        let p = plan("tables5-7_bistable.toml", &[spec], 1, 10_000, None, false);
+        let xs: Vec<f64> = (0..10_000).map(|i| p.draw(i)[0]).collect();
+        assert!(xs.iter().all(|&x| (lo..=hi).contains(&x)), "{spec}: {:?}", xs.iter().find(|&&x| !(lo..=hi).contains(&x)));
+        // Most of the mass sits at the end nearer the mean.
+        let near = if lo > 200.0 { lo } else { hi };
+        let close = xs.iter().filter(|&&x| (x - near).abs() < 3.0).count();
+        assert!(close > 8_000, "{spec}: {close} of 10000 within 3 of {near}");
+    }
 }

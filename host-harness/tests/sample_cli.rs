@@ -1,5 +1,6 @@
 //! `flinch sample` as a user meets it: exit codes, `--csv -` with the report on standard error,
-//! chunks run as separate processes and merged from their JSON files, and a clean Ctrl-C.
+//! chunks run as separate processes and merged from their JSON files, and a clean Ctrl-C and write
+//! error (the CSV ends on a whole row, the Parquet file has its footer).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -46,10 +47,15 @@ fn chunks_run_as_processes_merge_into_the_whole_run() {
     let o = flinch(&["sample", "--merge", "c1.json", "c1.json"], &d);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("overlap"));
-    // Two chunks of three: merged, with a note that it is partial.
+    // Two chunks of three: refused, naming the missing samples; merged with --partial, with a note.
     let o = flinch(&["sample", "--merge", "c1.json", "c3.json"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("cover 60 of the 90 samples: samples 30..60 are missing") && e.contains("--partial"), "{e}");
+    assert!(o.stdout.is_empty());
+    let o = flinch(&["sample", "--merge", "c1.json", "c3.json", "--partial"], &d);
     assert_eq!(o.status.code(), Some(0));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("cover 60 of the 90 samples"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cover 60 of the 90 samples (--partial; missing 30..60)"));
     assert!(String::from_utf8_lossy(&o.stdout).contains("60 of 90 samples (ranges 0..30, 60..90)"));
     let _ = std::fs::remove_dir_all(&d);
 }
@@ -88,8 +94,11 @@ fn exit_codes_and_standard_output() {
 fn ctrl_c_stops_with_complete_rows_and_a_report_of_what_ran() {
     let d = tmp("ctrlc");
     let csv = d.join("rows.csv");
+    let pq = d.join("rows.parquet");
     let mut a: Vec<String> = ["sample", "tables5-7_bistable", "--samples", "1e7", "--json", "--csv"].map(String::from).to_vec();
     a.push(csv.display().to_string());
+    a.push("--parquet".into());
+    a.push(pq.display().to_string());
     a.extend(KEYS[..2].iter().map(|s| s.to_string()));
     let child = Command::new(env!("CARGO_BIN_EXE_flinch")).args(&a).current_dir(&d).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
     std::thread::sleep(Duration::from_millis(1500));
@@ -101,8 +110,74 @@ fn ctrl_c_stops_with_complete_rows_and_a_report_of_what_ran() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let drawn = v["drawn"].as_u64().unwrap();
     assert!(drawn > 0 && drawn < 10_000_000 && v["complete"] == false, "{drawn}");
+    // Its report is a part of the study: --merge refuses it alone, naming the samples missing.
+    std::fs::write(d.join("cut.json"), &o.stdout).unwrap();
+    let m = flinch(&["sample", "--merge", "cut.json"], &d);
+    assert_eq!(m.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&m.stderr).contains(&format!("samples {drawn}..10000000 are missing")), "{}", String::from_utf8_lossy(&m.stderr));
     let rows = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(rows.lines().count() as u64, drawn + 1, "the CSV holds exactly the samples the report counts");
     assert!(rows.ends_with('\n'));
+    // The Parquet file is complete (its footer written on Ctrl-C) and holds the same samples.
+    let (n, groups) = parquet_rows(&pq);
+    assert_eq!(n, (0..drawn as i64).collect::<Vec<_>>(), "the Parquet file holds exactly the samples the report counts");
+    assert!(groups.iter().all(|&g| g as usize <= flinch_harness::sample::parquet_file::ROW_GROUP), "{groups:?}");
+    assert!(e.contains("the report, the CSV and the Parquet file cover samples 0.."), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The `sample` column of a Parquet file and its row groups' sizes, by the parquet crate's reader
+/// (an error if the file is not a complete Parquet file).
+fn parquet_rows(path: &Path) -> (Vec<i64>, Vec<i64>) {
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    let r = SerializedFileReader::new(std::fs::File::open(path).unwrap()).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let groups = r.metadata().row_groups().iter().map(|g| g.num_rows()).collect();
+    let idx = r
+        .get_row_iter(None)
+        .unwrap()
+        .map(|row| match row.unwrap().get_column_iter().next().unwrap().1 {
+            parquet::record::Field::Long(i) => *i,
+            f => panic!("sample column: {f:?}"),
+        })
+        .collect();
+    (idx, groups)
+}
+
+#[test]
+fn a_write_error_leaves_a_complete_parquet_file_and_names_the_file() {
+    let d = tmp("full");
+    let pq = d.join("rows.parquet");
+    // The CSV's device is full (its first 64 KiB buffer fails, after some hundreds of rows): exit 3
+    // naming it, and the Parquet file beside it complete with the rows before the error.
+    let mut a: Vec<String> = ["sample", "tables5-7_bistable", "--samples", "3000", "--csv", "/dev/full", "--parquet"].map(String::from).to_vec();
+    a.push(pq.display().to_string());
+    a.extend(KEYS[..2].iter().map(|s| s.to_string()));
+    let o = flinch(&a.iter().map(String::as_str).collect::<Vec<_>>(), &d);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{e}");
+    assert!(e.contains("/dev/full: could not write"), "{e}");
+    let (idx, _) = parquet_rows(&pq);
+    assert!(!idx.is_empty() && idx.len() < 3000, "{} rows", idx.len());
+    assert_eq!(idx, (0..idx.len() as i64).collect::<Vec<_>>());
+    // The Parquet file's device is full: exit 3 naming it, not the CSV.
+    let csv = d.join("rows.csv");
+    let mut a: Vec<String> = ["sample", "tables5-7_bistable", "--samples", "3000", "--parquet", "/dev/full", "--csv"].map(String::from).to_vec();
+    a.push(csv.display().to_string());
+    a.extend(KEYS[..2].iter().map(|s| s.to_string()));
+    let o = flinch(&a.iter().map(String::as_str).collect::<Vec<_>>(), &d);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{e}");
+    assert!(e.contains("/dev/full: could not write") && !e.contains("rows.csv"), "{e}");
+    // Refused before anything runs: standard output, the same file twice.
+    for (extra, says) in [(vec!["--parquet", "-"], "give --parquet a file name"), (vec!["--parquet", "x.out", "--csv", "x.out"], "both name x.out")] {
+        let mut a = vec!["sample", "tables5-7_bistable", "--samples", "5"];
+        a.extend_from_slice(&extra);
+        a.extend_from_slice(&KEYS[..2]);
+        let o = flinch(&a, &d);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {e}");
+        assert!(e.contains(says), "{extra:?}: {e}");
+    }
+    assert!(!d.join("x.out").exists());
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -373,12 +373,29 @@ def _chunk(chunk: Any) -> Optional[Tuple[int, int]]:
     return k, m
 
 
-def merge(reports: Sequence[Union[Dict[str, Any], Sample]]) -> Dict[str, Any]:
+def merge(reports: Sequence[Union[Dict[str, Any], Sample]], *, partial: bool = False) -> Dict[str, Any]:
     """``flinch sample --merge``: the reports of chunks of one study merged into the report of their
     union (the whole study's, field for field, when every chunk is there). Refuses reports of
-    another study and overlapping chunks (InputError)."""
+    another study, overlapping chunks and reports whose counts do not add up (InputError), and,
+    unless ``partial=True`` (``--partial``), reports that do not cover the whole study (a chunk
+    missing or interrupted): the error names the samples missing."""
     texts = [json.dumps(r.report if isinstance(r, Sample) else r) for r in reports]
-    return json.loads(_flinch.merge(texts))
+    merged = json.loads(_flinch.merge(texts))
+    if not merged["complete"] and not partial:
+        missing, at = [], 0
+        for lo, hi in merged["ranges"]:
+            if lo > at:
+                missing.append(f"{at}..{lo}")
+            at = max(at, hi)
+        if at < merged["samples"]:
+            missing.append(f"{at}..{merged['samples']}")
+        raise InputError(
+            f"merge: the reports cover {merged['drawn']} of the {merged['samples']} samples: samples "
+            f"{', '.join(missing)} are missing (a chunk not given, or one interrupted); give every "
+            "chunk's report, or partial=True to merge these anyway (the estimate is then over the "
+            "samples covered)"
+        )
+    return merged
 
 
 def _chunk_report(file: str, text: str, specs: List[str], n: int, seed: int, truncate: bool, chunk: Tuple[int, int], jobs: Optional[int], rows: bool):

@@ -64,7 +64,9 @@ def test_chunks_merge_into_the_whole_study_and_merging_refuses_other_studies():
     assert flinch.merge(parts) == whole.report
     rows = pd.concat([p.rows for p in sorted(parts, key=lambda p: p.report["ranges"][0][0])], ignore_index=True)
     pd.testing.assert_frame_equal(rows, whole.rows)
-    partial = flinch.merge(parts[:2])
+    with pytest.raises(flinch.InputError, match=r"cover 401 of the 601 samples: samples 200\.\.400 are missing"):
+        flinch.merge(parts[:2])
+    partial = flinch.merge(parts[:2], partial=True)
     assert partial["complete"] is False and partial["drawn"] == 401
     other = flinch.sample(SCENE, n, FOUR, seed=4, chunk=(1, 3))
     with pytest.raises(flinch.InputError, match="another study"):

@@ -1,5 +1,6 @@
 //! The `flinch sample` command line.
 
+use super::parquet_file::{ParquetRows, ROW_GROUP};
 use super::{merge, parse_chunk, Plan, SampleReport, FORMS, STOP};
 use crate::report::output::{self, Failure};
 use crate::sweep::{Progress, Template};
@@ -38,12 +39,21 @@ pub struct SampleArgs {
     /// Write a row per sample here (`-`: standard output), in sample order, as it runs.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// Write the same rows to this Apache Parquet file (the CSV's columns in Parquet types, null
+    /// where the CSV has an empty cell), a row group at a time; with --csv too, both are written.
+    /// On Ctrl-C or an error the file is still complete: it holds the rows that ran.
+    #[arg(long, value_name = "FILE")]
+    pub parquet: Option<PathBuf>,
     /// Print the report as JSON (merge it with --merge).
     #[arg(long)]
     pub json: bool,
     /// Merge the --json reports of chunks of one study into its estimate.
-    #[arg(long, value_name = "REPORT.json", num_args = 1.., conflicts_with_all = ["scene", "samples", "vary", "chunk", "csv", "truncate"])]
+    #[arg(long, value_name = "REPORT.json", num_args = 1.., conflicts_with_all = ["scene", "samples", "vary", "chunk", "csv", "parquet", "truncate"])]
     pub merge: Vec<PathBuf>,
+    /// With --merge: merge reports that do not cover the whole study (a chunk missing, or one
+    /// interrupted); the estimate is then over the samples covered. Without it that is refused.
+    #[arg(long, requires = "merge")]
+    pub partial: bool,
     /// Threads (default: all cores). The result does not depend on it.
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -85,7 +95,14 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
         }
         let m = merge(&reports, &names).map_err(|e| Failure::bad_input(e.0))?;
         if !m.complete {
-            output::note(&format!("note: the merged reports cover {} of the {} samples", m.drawn, m.samples));
+            let missing = m.missing().iter().map(|r| format!("{}..{}", r[0], r[1])).collect::<Vec<_>>().join(", ");
+            if !args.partial {
+                return Err(Failure::bad_input(format!(
+                    "--merge: the reports cover {} of the {} samples: samples {missing} are missing (a chunk not given, or one interrupted); give every chunk's report, or --partial to merge these anyway (the estimate is then over the samples covered)",
+                    m.drawn, m.samples
+                )));
+            }
+            output::note(&format!("note: the merged reports cover {} of the {} samples (--partial; missing {missing})", m.drawn, m.samples));
         }
         print(args, &m)?;
         return if m.solver_failed > 0 { Err(Failure::runtime(format!("the solver failed at {} of {} samples", m.solver_failed, m.drawn))) } else { Ok(true) };
@@ -98,6 +115,14 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
     }
     if args.vary.is_empty() {
         return Err(Failure::bad_input(format!("nothing to vary: give --vary KEY=DIST at least once; DIST is one of {FORMS}")));
+    }
+    if let Some(p) = &args.parquet {
+        if output::is_stdout(p) {
+            return Err(Failure::bad_input("--parquet -: a Parquet file is binary and written with its footer last; give --parquet a file name"));
+        }
+        if args.csv.as_deref() == Some(p.as_path()) {
+            return Err(Failure::bad_input(format!("--csv and --parquet both name {}: give them different files", p.display())));
+        }
     }
     let chunk = args.chunk.as_deref().map(parse_chunk).transpose().map_err(|e| Failure::bad_input(e.0))?;
     if args.jobs == Some(0) {
@@ -118,8 +143,20 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
         }
     }
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    if args.parquet.is_some() && plan.range.1 > i64::MAX as u64 {
+        return Err(Failure::bad_input(format!("--parquet: sample indices above {} do not fit Parquet's INT64 column `sample`", i64::MAX)));
+    }
     let mut out = match &args.csv {
         Some(p) => Some(output::create(p)?),
+        None => None,
+    };
+    let parquet_path = args.parquet.clone().unwrap_or_default();
+    let mut pq = match &args.parquet {
+        Some(p) => {
+            let f = std::fs::File::create(p).map_err(|e| Failure::runtime(format!("{}: cannot create it: {e}", p.display())))?;
+            let w: Box<dyn std::io::Write + Send> = Box::new(std::io::BufWriter::with_capacity(1 << 16, f));
+            Some(ParquetRows::new(&plan, w, ROW_GROUP).map_err(|e| output::write_error(p, &e))?)
+        }
         None => None,
     };
     let t0 = Instant::now();
@@ -127,24 +164,37 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
         None => None,
         Some(j) => Some(rayon::ThreadPoolBuilder::new().num_threads(j).build().map_err(|e| Failure::runtime(format!("--jobs {j}: {e}")))?),
     };
-    let ran = plan.run(Progress::Auto, out.as_mut().map(|w| w.as_mut() as &mut dyn std::io::Write), &STOP, pool.as_ref());
+    let ran = plan.run_to(Progress::Auto, out.as_mut().map(|w| w.as_mut() as &mut dyn std::io::Write), pq.as_mut(), &STOP, pool.as_ref());
+    // The Parquet footer is written on every ending: the rows so far are a valid file.
+    let finished = pq.as_mut().map(ParquetRows::finish).transpose();
     let csv_path = args.csv.clone().unwrap_or_default();
-    let report = ran.map_err(|e| output::write_error(&csv_path, &e))?;
+    let report = ran.map_err(|e| output::write_error(if pq.as_ref().is_some_and(ParquetRows::failed) { &parquet_path } else { &csv_path }, &e))?;
+    finished.map_err(|e| output::write_error(&parquet_path, &e))?;
     if let Some(w) = out.as_mut() {
         w.flush().map_err(|e| output::write_error(&csv_path, &e))?;
     }
     let wall = t0.elapsed().as_secs_f64();
     output::note(&format!(
-        "{} samples in {:.2} s ({} threads, {:.0} samples/s){}",
+        "{} samples in {:.2} s ({} threads, {:.0} samples/s){}{}",
         report.drawn,
         wall,
         args.jobs.unwrap_or_else(rayon::current_num_threads),
         report.drawn as f64 / wall.max(1e-9),
-        args.csv.as_ref().filter(|p| !output::is_stdout(p)).map_or(String::new(), |p| format!("; csv {}", p.display()))
+        args.csv.as_ref().filter(|p| !output::is_stdout(p)).map_or(String::new(), |p| format!("; csv {}", p.display())),
+        match (&args.parquet, &pq) {
+            (Some(p), Some(w)) => format!("; parquet {} ({} row groups)", p.display(), w.groups().len()),
+            _ => String::new(),
+        }
     ));
     print(args, &report)?;
     if STOP.load(Ordering::SeqCst) {
-        return Err(Failure::interrupted(format!("interrupted after {} samples: the report and the CSV cover samples {}..{}", report.drawn, plan.range.0, plan.range.0 + report.drawn)));
+        let covered = match (args.csv.is_some(), args.parquet.is_some()) {
+            (true, true) => "the report, the CSV and the Parquet file cover",
+            (true, false) => "the report and the CSV cover",
+            (false, true) => "the report and the Parquet file cover",
+            (false, false) => "the report covers",
+        };
+        return Err(Failure::interrupted(format!("interrupted after {} samples: {covered} samples {}..{}", report.drawn, plan.range.0, plan.range.0 + report.drawn)));
     }
     if report.ran == 0 && report.refused > 0 {
         return Err(Failure::bad_input(format!("the validator refused all {} samples; the first: {}", report.refused, report.refusals.first().map_or("", |g| g.first_reason.as_str()))));

@@ -108,14 +108,24 @@ impl Dist {
         }
     }
 
-    /// As written on the command line (numbers in Rust's shortest round-trip form).
+    /// As written on the command line (numbers in Rust's shortest round-trip form, [`num`]).
     pub fn spec(&self) -> String {
         match *self {
-            Dist::Normal { mean, sd } => format!("normal:{mean}:{sd}"),
-            Dist::LogNormal { mu, sigma } => format!("lognormal:{mu}:{sigma}"),
-            Dist::Uniform { lo, hi } => format!("uniform:{lo}:{hi}"),
-            Dist::Triangular { lo, mode, hi } => format!("triangular:{lo}:{mode}:{hi}"),
+            Dist::Normal { mean, sd } => format!("normal:{}:{}", num(mean), num(sd)),
+            Dist::LogNormal { mu, sigma } => format!("lognormal:{}:{}", num(mu), num(sigma)),
+            Dist::Uniform { lo, hi } => format!("uniform:{}:{}", num(lo), num(hi)),
+            Dist::Triangular { lo, mode, hi } => format!("triangular:{}:{}:{}", num(lo), num(mode), num(hi)),
         }
+    }
+}
+
+/// A number of a spec, shortest round-trip: `0.016`, `200`; with an exponent beyond [1e-5, 1e16)
+/// in magnitude (`1e308`, not a 309-digit number in a message; `2.5e-7`).
+pub fn num(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-5..1e16).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }
 
@@ -205,7 +215,7 @@ impl VarySpec {
     /// As written (canonical numbers).
     pub fn spec(&self) -> String {
         match self.bounds {
-            Some((lo, hi)) => format!("{}={}:{lo}:{hi}", self.key, self.dist.spec()),
+            Some((lo, hi)) => format!("{}={}:{}:{}", self.key, self.dist.spec(), num(lo), num(hi)),
             None => format!("{}={}", self.key, self.dist.spec()),
         }
     }

@@ -17,6 +17,7 @@
 
 pub mod cli;
 mod dist;
+pub mod parquet_file;
 mod report;
 pub mod stats;
 
@@ -214,6 +215,14 @@ impl Plan {
         let mut vary = Vec::new();
         for spec in parsed {
             let info = key_info(&template.base, &spec.key);
+            if let Some(i) = info.as_ref().filter(|i| i.integer) {
+                return err(format!(
+                    "--vary {}: {} takes {}, and every distribution here is continuous: no draw would be whole, every sample would be refused (vary it with `flinch sweep`, or give it in the scene)",
+                    spec.spec(),
+                    spec.key,
+                    i.range
+                ));
+            }
             let mut within = spec.bounds;
             if truncate {
                 if let Some(i) = &info {
@@ -236,8 +245,10 @@ impl Plan {
             if let Some((a, b)) = within {
                 if a >= b || kept.is_nan() || kept <= 1e-12 {
                     return err(format!(
-                        "--vary {}: the distribution has no probability in [{a}, {b}]{}",
+                        "--vary {}: the distribution has no probability in [{}, {}] (less than 1e-12 of it lies there: no draw can be made){}",
                         spec.spec(),
+                        num(a),
+                        num(b),
                         info.as_ref().filter(|_| truncate).map_or(String::new(), |i| format!(" (with --truncate, the accepted range of {} is {})", spec.key, i.range))
                     ));
                 }
@@ -309,6 +320,13 @@ impl Plan {
     /// [`BLOCK`], writing each block's rows to `csv` in index order; stops after the block in
     /// which `stop` is raised. The report covers the samples that ran.
     pub fn run(&self, progress: Progress, csv: Option<&mut dyn Write>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
+        self.run_to(progress, csv, None, stop, pool)
+    }
+
+    /// As [`Plan::run`], also handing every row to `parquet` (`--parquet`). The caller finishes
+    /// the Parquet file ([`parquet_file::ParquetRows::finish`]) whatever this returns: on an error
+    /// writing the CSV, the Parquet file then holds the rows written before it.
+    pub fn run_to(&self, progress: Progress, csv: Option<&mut dyn Write>, mut parquet: Option<&mut parquet_file::ParquetRows>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
         let body = self.body();
         let mut w = csv.map(csv::Writer::from_writer);
         if let Some(w) = w.as_mut() {
@@ -316,9 +334,14 @@ impl Plan {
         }
         let report = self.run_rows(
             progress,
-            &mut |r: &Row| match w.as_mut() {
-                Some(w) => w.write_record(r.record_with(body)).map_err(io::Error::from),
-                None => Ok(()),
+            &mut |r: &Row| {
+                if let Some(w) = w.as_mut() {
+                    w.write_record(r.record_with(body)).map_err(io::Error::from)?;
+                }
+                match parquet.as_deref_mut() {
+                    Some(p) => p.push(r),
+                    None => Ok(()),
+                }
             },
             stop,
             pool,

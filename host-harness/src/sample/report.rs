@@ -143,6 +143,22 @@ impl SampleReport {
             .collect();
     }
 
+    /// The sample indices of the study [0, samples) this report does not cover, as ranges.
+    pub fn missing(&self) -> Vec<[u64; 2]> {
+        let mut out = Vec::new();
+        let mut at = 0;
+        for r in &self.ranges {
+            if r[0] > at {
+                out.push([at, r[0]]);
+            }
+            at = at.max(r[1]);
+        }
+        if at < self.samples {
+            out.push([at, self.samples]);
+        }
+        out
+    }
+
     /// What the human summary prints.
     pub fn human(&self) -> String {
         let mut t = format!("{}\n", self.scene);
@@ -227,6 +243,18 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
         }
         let names_of = |r: &SampleReport| r.estimates.iter().map(|e| e.failure.clone()).collect::<Vec<_>>().join(", ");
         same("failures estimated", names_of(first), names_of(r))?;
+        // Counts that add up: a report edited by hand, or cut short, is not merged.
+        let bad = |what: String| err(format!("--merge {}: not a consistent `flinch sample --json` report: {what}", name(i)));
+        let covered: u64 = r.ranges.iter().map(|x| x[1].saturating_sub(x[0])).sum();
+        if let Some(x) = r.ranges.iter().find(|x| x[0] >= x[1] || x[1] > r.samples) {
+            return bad(format!("its range {}..{} is not within 0..{}", x[0], x[1], r.samples));
+        }
+        if covered != r.drawn || r.ran + r.refused + r.solver_failed != r.drawn {
+            return bad(format!("its ranges cover {covered} samples, it drew {}, and ran + refused + solver_failed = {}", r.drawn, r.ran + r.refused + r.solver_failed));
+        }
+        if let Some(e) = r.estimates.iter().find(|e| e.runs != r.ran || e.failures > e.runs) {
+            return bad(format!("{}: {} failures of {} runs, and {} samples ran", e.failure, e.failures, e.runs, r.ran));
+        }
     }
     let mut ranges: Vec<([u64; 2], usize)> = reports.iter().enumerate().flat_map(|(i, r)| r.ranges.iter().map(move |x| (*x, i))).collect();
     ranges.sort();
