@@ -381,3 +381,29 @@ fn the_worst_case_bound_counts_the_probability_the_truncation_cut_off() {
         assert!(e.high_if_unrun_failed >= 1.0 - k, "{e:?}");
     }
 }
+
+/// A stop (Ctrl-C) takes effect within the samples under way, not after the block of 2,048 (24.8 s
+/// after SIGINT on table11_z_prototype): the rows and the report cover a prefix of the range, in
+/// index order.
+#[test]
+fn a_stop_takes_effect_within_a_block_and_keeps_a_prefix() {
+    let p = plan("table11_z_prototype.toml", &["motion.dead_time=uniform:0.01:0.02"], 1, sample::BLOCK as u64, None, false);
+    let stop = std::sync::Arc::new(AtomicBool::new(false));
+    let raise = stop.clone();
+    let t = std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        raise.store(true, std::sync::atomic::Ordering::SeqCst);
+    });
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let mut csv = Vec::new();
+    let r = p.run(Progress::Hidden, Some(&mut csv), &stop, Some(&pool)).unwrap();
+    t.join().unwrap();
+    let csv = String::from_utf8(csv).unwrap();
+    assert!(r.drawn > 0 && r.drawn < sample::BLOCK as u64, "{} samples: the stop waited for the block", r.drawn);
+    assert!(!r.complete && r.ranges == vec![[0, r.drawn]], "{:?}", r.ranges);
+    let idx: Vec<u64> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert_eq!(idx, (0..r.drawn).collect::<Vec<_>>());
+    // The last row kept is the sample's own, as any run computes it.
+    let last = p.run_one(r.drawn - 1).record();
+    assert_eq!(csv.lines().last().unwrap(), last.join(","));
+}

@@ -98,6 +98,7 @@ fn ctrl_c_stops_with_complete_rows_and_a_report_of_what_ran() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(130), "{e}");
     assert!(e.contains("interrupted after"), "{e}");
+    assert!(e.contains("interrupted: finishing the samples under way"), "the note on the first Ctrl-C: {e}");
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let drawn = v["drawn"].as_u64().unwrap();
     assert!(drawn > 0 && drawn < 10_000_000 && v["complete"] == false, "{drawn}");

@@ -135,7 +135,11 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
             ));
         }
     }
-    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    let _ = ctrlc::set_handler(|| {
+        if !STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("\ninterrupted: finishing the samples under way, then writing the rows and the report of the samples before them");
+        }
+    });
     let mut out = match &args.csv {
         Some(p) => Some(output::create(p)?),
         None => None,

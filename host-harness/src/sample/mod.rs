@@ -352,7 +352,9 @@ impl Plan {
 
     /// Runs the plan's range on `pool` (None: the global rayon pool, all cores), in blocks of
     /// [`BLOCK`], writing each block's rows to `csv` in index order; stops after the block in
-    /// which `stop` is raised. The report covers the samples that ran.
+    /// which `stop` is raised, keeping the samples before the first one that saw it (each sample
+    /// checks `stop` before it starts): the CSV and the report cover exactly those, a prefix of
+    /// the range in index order.
     pub fn run(&self, progress: Progress, csv: Option<&mut dyn Write>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
         let body = self.body();
         let mut w = csv.map(csv::Writer::from_writer);
@@ -393,17 +395,23 @@ impl Plan {
         let mut at = first;
         while at < end && !stop.load(Ordering::SeqCst) {
             let len = (end - at).min(BLOCK as u64) as usize;
-            let block = || (0..len).into_par_iter().map(|j| self.run_one(at + j as u64)).collect::<Vec<Row>>();
+            // A sample that starts after `stop` is raised is not run (None): the block is kept up
+            // to the first such sample, so a Ctrl-C takes effect within one sample per thread.
+            let block = || (0..len).into_par_iter().map(|j| (!stop.load(Ordering::SeqCst)).then(|| self.run_one(at + j as u64))).collect::<Vec<Option<Row>>>();
             let rows = match pool {
                 Some(p) => p.install(block),
                 None => block(),
             };
-            for r in &rows {
+            let done = rows.iter().take_while(|r| r.is_some()).count();
+            for r in rows.iter().flatten().take(done) {
                 sink(r)?;
                 tally.add(r);
             }
-            at += len as u64;
-            bar.inc(len as u64);
+            at += done as u64;
+            bar.inc(done as u64);
+            if done < len {
+                break;
+            }
         }
         bar.finish_and_clear();
         Ok(self.report(tally, (first, at)))

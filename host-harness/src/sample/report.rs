@@ -404,6 +404,7 @@ pub fn schema() -> (String, Vec<String>) {
     (text, missing)
 }
 
-/// Raised by Ctrl-C (installed by the command line): the run stops after the current block.
+/// Raised by Ctrl-C (installed by the command line): no sample starts after it; the run keeps the
+/// samples before the first that did not start.
 pub static STOP: AtomicBool = AtomicBool::new(false);
 
