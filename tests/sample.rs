@@ -342,3 +342,169 @@ fn far_tail_truncations_draw_within_their_bounds() {
         assert!(close > 8_000, "{spec}: {close} of 10000 within 3 of {near}");
     }
 }
+
+/// A dead time longer than the run (`duration` = 0.6 s in tables5-7_bistable, dead times up to
+/// 0.7 s): the robot has not stopped when the run ends, so whether the stroke runs out is not
+/// known. Such a sample once counted as a run without failure ("stroke_exhausted 0 of 1000"; with
+/// the duration lengthened to 3 s it is 445 of 1000). It is `inconclusive`: a failure for
+/// `not_safe`, left out of the runs of the other estimates and counted in their worst case.
+#[test]
+fn samples_that_end_before_the_robot_stops_are_inconclusive_not_safe_runs() {
+    let keys = ["motion.dead_time=uniform:0.2:0.7"];
+    let n = 200;
+    let p = plan("tables5-7_bistable.toml", &keys, 1, n, None, false);
+    let (csv, r) = run(&p, 2);
+    let late = (0..n).filter(|&i| p.draw(i)[0] > 0.55).count() as u64;
+    assert!(r.inconclusive >= late && late > 20, "{} inconclusive, {late} dead times beyond 0.55 s", r.inconclusive);
+    assert_eq!(r.ran, n);
+    let first = r.inconclusive_first.as_ref().expect("the first inconclusive sample");
+    assert!(first.first_reason.starts_with("not concluded") && first.first_reason.contains("lengthen duration"), "{}", first.first_reason);
+    let by = |name: &str| r.estimates.iter().find(|e| e.failure == name).unwrap().clone();
+    let (se, m3, ns) = (by("stroke_exhausted"), by("mode_3"), by("not_safe"));
+    assert_eq!(se.runs, n - r.inconclusive, "an inconclusive run is no evidence about the stroke");
+    assert_eq!(m3.runs, n - r.inconclusive);
+    assert_eq!(ns.runs, n);
+    assert!(ns.failures >= r.inconclusive, "an inconclusive run is not safe: {} of {}", ns.failures, ns.runs);
+    assert!(se.high_if_unrun_failed >= stats::clopper_pearson(se.failures + r.inconclusive, n, 0.05).1 - 1e-12);
+    let modes = r.modes.mode_1 + r.modes.mode_2 + r.modes.mode_3 + r.modes.no_mode;
+    assert_eq!(modes, n - r.inconclusive, "an inconclusive run has no working mode yet");
+    // The rows say so, with the stroke and the mode unknown (empty), and not safe.
+    let rows: Vec<&str> = csv.lines().filter(|l| l.contains(",inconclusive,")).collect();
+    assert_eq!(rows.len() as u64, r.inconclusive);
+    for l in &rows {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!((f[2], f[3], f[7]), ("", "", "0"), "{l}");
+    }
+    let human = r.human();
+    assert!(human.contains(&format!("NOT CONCLUDED: {} samples ended before the robot stopped: lengthen duration", r.inconclusive)) && human.contains("counting them as failures"), "{human}");
+    // Chunks merge with the inconclusive counts.
+    let c1 = run(&plan("tables5-7_bistable.toml", &keys, 1, n, Some((1, 2)), false), 1).1;
+    let c2 = run(&plan("tables5-7_bistable.toml", &keys, 1, n, Some((2, 2)), false), 1).1;
+    assert_eq!(merge(&[c2, c1], &[]).unwrap(), r);
+
+    // With the duration long enough, every sample concludes, and the stroke runs out in many.
+    let path = scene_path("tables5-7_bistable.toml");
+    let text = std::fs::read_to_string(&path).unwrap().replace("duration = 0.6 ", "duration = 3.0 ");
+    let t = Template::from_text(&text, "long.toml").unwrap();
+    let long = Plan::new(t, &text, &keys.map(String::from), 1, n, None, false).unwrap();
+    let r3 = run(&long, 2).1;
+    assert_eq!(r3.inconclusive, 0);
+    let se3 = r3.estimates.iter().find(|e| e.failure == "stroke_exhausted").unwrap();
+    assert!(se3.failures > 50, "{se3:?}");
+}
+
+/// The summaries' warnings reach the report, grouped by their text with the numbers masked (a
+/// dead time beyond the run: every run warns that t_brake and t_stop are after its end, each with
+/// its own time).
+#[test]
+fn the_runs_warnings_are_kept() {
+    let n = 30;
+    let p = plan("tables5-7_bistable.toml", &["motion.dead_time=uniform:0.7:0.8"], 1, n, None, false);
+    let r = run(&p, 1).1;
+    let first = p.template.with(&[("motion.dead_time", p.draw(0)[0])]).unwrap();
+    let warned = flinch_harness::sim::run(&first, false).unwrap().0.warnings;
+    assert!(warned.iter().any(|w| w.contains("t_stop")), "{warned:?}");
+    assert_eq!(r.warnings.iter().map(|w| w.text.clone()).collect::<Vec<_>>(), warned, "the first sample's warnings");
+    for w in &r.warnings {
+        assert_eq!((w.count, w.first_sample), (n, 0), "{w:?}");
+        assert!(w.kind.contains("= # s") && r.human().contains(&format!("warning in {n} runs, first sample 0: {}", w.text)), "{w:?}");
+    }
+    assert_eq!(r.warnings_not_listed, 0);
+}
+
+/// Review of issue 14: keys and distributions that once passed `Plan::new` and went wrong later.
+#[test]
+fn bad_studies_found_in_review_are_refused_before_anything_runs() {
+    let refuse = |scene: &str, keys: &[&str]| -> String {
+        let path = scene_path(scene);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let t = Template::from_text(&text, scene).unwrap();
+        let keys: Vec<String> = keys.iter().map(|s| s.to_string()).collect();
+        match Plan::new(t, &text, &keys, 1, 10, None, false) {
+            Ok(_) => panic!("{keys:?} accepted"),
+            Err(e) => e.0,
+        }
+    };
+    // Two spellings of one array element: both columns were written, one value ran.
+    for (a, b) in [("2", "02"), ("1", "+1"), ("01", "1")] {
+        let e = refuse("tables5-7_bistable_stopping_table.toml", &[&format!("motion.stopping.distance.{a}=uniform:0.01:0.02"), &format!("motion.stopping.distance.{b}=uniform:0.01:0.02")]);
+        assert!(e.contains("given twice") && e.contains("the same key"), "{a} {b}: {e}");
+    }
+    assert_eq!(sample::canonical_key("motion.stopping.distance.02"), "motion.stopping.distance.2");
+    // A continuous distribution on a whole-number key: every sample was refused.
+    let e = refuse("tables5-7_bistable.toml", &["decoupler.springs=uniform:1:4"]);
+    assert!(e.contains("whole numbers") && e.contains("flinch sweep"), "{e}");
+    // Widths beyond the largest number drew -inf, and the report could not be merged.
+    for bad in ["motion.speed=triangular:-1e308:0:1e308", "motion.speed=uniform:-1e308:1e308", "motion.speed=normal:0:1e308", "motion.speed=lognormal:709:1"] {
+        let e = refuse("tables5-7_bistable.toml", &[bad]);
+        assert!(e.contains("largest number"), "{bad}: {e}");
+    }
+}
+
+/// A truncated upper tail drawn through F rounded to a few thousand values (`normal:200:10:270:280`
+/// gave 3,406 distinct values in 4,000 draws; its mirror `120:130` gave 4,000): it is drawn through
+/// the survival function.
+#[test]
+fn a_truncated_upper_tail_keeps_its_precision() {
+    for (keys, lo, hi) in [("decoupler.spring_rate=normal:200:10:270:280", 270.0, 280.0), ("decoupler.spring_rate=normal:200:10:120:130", 120.0, 130.0)] {
+        let p = plan("tables5-7_bistable.toml", &[keys], 1, 4000, None, false);
+        let mut v: Vec<f64> = (0..4000).map(|i| p.draw(i)[0]).collect();
+        assert!(v.iter().all(|&x| (lo..=hi).contains(&x)), "{keys}");
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        assert_eq!(v.len(), 4000, "{keys}: distinct draws");
+    }
+    // The numbers are the exact truncated distribution's: the median of N(200, 10) on [270, 280].
+    let p = plan("tables5-7_bistable.toml", &["decoupler.spring_rate=normal:200:10:270:280"], 1, 1, None, false);
+    let d = p.vary[0].spec.dist;
+    let m = p.vary[0].value(0.5);
+    let (sa, sb) = (d.sf(270.0), d.sf(280.0));
+    close(d.sf(m), 0.5 * (sa + sb), 1e-12 * sa, "median of the truncated tail");
+    // Tiny parameters print with an exponent, not 300 zeros.
+    let p = plan("tables5-7_bistable.toml", &["motion.speed=normal:0.05:1e-300"], 1, 1, None, false);
+    assert_eq!(p.vary[0].spec.spec(), "motion.speed=normal:0.05:1e-300");
+}
+
+/// `--truncate` cuts off probability, often the dangerous tail; `high_if_unrun_failed` counts it as
+/// failing: 1 - K (1 - h), K the product of the keys' kept probabilities.
+#[test]
+fn the_worst_case_bound_counts_the_probability_the_truncation_cut_off() {
+    let keys = ["motion.speed=normal:0.028:0.0001", "motion.dead_time=normal:0.5:0.3"];
+    let p = plan("tables5-7_bistable.toml", &keys, 1, 50, None, true);
+    let k: f64 = p.vary.iter().map(|v| v.kept).product();
+    assert!(k < 0.95 && k > 0.5, "{k}");
+    let r = run(&p, 2).1;
+    close(r.kept_probability(), k, 1e-15, "K");
+    for e in &r.estimates {
+        let unrun = if e.failure == "not_safe" { r.refused + r.solver_failed } else { r.refused + r.solver_failed + r.inconclusive };
+        let h = stats::clopper_pearson(e.failures + unrun, e.runs + unrun, 0.05).1;
+        close(e.high_if_unrun_failed, 1.0 - k * (1.0 - h), 1e-12, &e.failure);
+        assert!(e.high_if_unrun_failed >= 1.0 - k, "{e:?}");
+    }
+}
+
+/// A stop (Ctrl-C) takes effect within the samples under way, not after the block of 2,048 (24.8 s
+/// after SIGINT on table11_z_prototype): the rows and the report cover a prefix of the range, in
+/// index order.
+#[test]
+fn a_stop_takes_effect_within_a_block_and_keeps_a_prefix() {
+    let p = plan("table11_z_prototype.toml", &["motion.dead_time=uniform:0.01:0.02"], 1, sample::BLOCK as u64, None, false);
+    let stop = std::sync::Arc::new(AtomicBool::new(false));
+    let raise = stop.clone();
+    let t = std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        raise.store(true, std::sync::atomic::Ordering::SeqCst);
+    });
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let mut csv = Vec::new();
+    let r = p.run(Progress::Hidden, Some(&mut csv), &stop, Some(&pool)).unwrap();
+    t.join().unwrap();
+    let csv = String::from_utf8(csv).unwrap();
+    assert!(r.drawn > 0 && r.drawn < sample::BLOCK as u64, "{} samples: the stop waited for the block", r.drawn);
+    assert!(!r.complete && r.ranges == vec![[0, r.drawn]], "{:?}", r.ranges);
+    let idx: Vec<u64> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert_eq!(idx, (0..r.drawn).collect::<Vec<_>>());
+    // The last row kept is the sample's own, as any run computes it.
+    let last = p.run_one(r.drawn - 1).record();
+    assert_eq!(csv.lines().last().unwrap(), last.join(","));
+}

@@ -105,7 +105,8 @@ fn the_parquet_file_holds_the_csv_rows_value_for_value() {
     for c in ["stroke_exhausted", "mode", "peak_contact_force_n", "peak_robot_force_n", "safe", "body_limits_pass"] {
         assert!(nulls[c] as u64 >= r.refused, "{c}: {} nulls, {} refused", nulls[c], r.refused);
     }
-    assert_eq!(nulls["reason"] as u64, r.ran);
+    // (an inconclusive sample, one that ran but ended before the robot stopped, has its reason)
+    assert_eq!(nulls["reason"] as u64, r.ran - r.inconclusive);
     assert_eq!(nulls["status"] + nulls["sample"] + nulls["motion.speed_mps"], 0);
     let pass: Vec<&Field> = rows.iter().map(|row| &row.iter().find(|(n, _)| n == "body_limits_pass").unwrap().1).collect();
     assert!(pass.contains(&&Field::Bool(true)) && pass.contains(&&Field::Bool(false)), "body_limits_pass takes both values");
@@ -214,4 +215,20 @@ fn a_file_finished_early_holds_the_rows_before_it() {
 #[test]
 fn the_command_lines_row_group_is_whole_blocks() {
     assert_eq!(ROW_GROUP % sample::BLOCK, 0);
+}
+
+/// Samples that end before the robot stops (`inconclusive`, review of issue 14): the Parquet file
+/// has the CSV's cells for them too, the stroke, the mode and the body limits null (unknown), the
+/// status `inconclusive` with its reason.
+#[test]
+fn inconclusive_samples_are_the_csvs_in_the_parquet_file() {
+    let p = plan("tables5-7_bistable.toml", &["motion.dead_time=uniform:0.2:0.7"], 1, 60, None);
+    let path = tmp("inconclusive.parquet");
+    let (csv, r, _) = run(&p, true, &path, 256);
+    assert!(r.inconclusive > 10 && r.inconclusive < 60, "the study must mix inconclusive and concluded samples: {} inconclusive", r.inconclusive);
+    let (rows, _) = read(&path);
+    let nulls = assert_same(&csv, &rows);
+    assert_eq!(nulls["stroke_exhausted"] as u64, r.inconclusive, "the stroke is unknown exactly where the run did not conclude");
+    let statuses: Vec<String> = rows.iter().map(|row| format!("{}", row.iter().find(|(n, _)| n == "status").unwrap().1)).collect();
+    assert_eq!(statuses.iter().filter(|s| s.contains("inconclusive")).count() as u64, r.inconclusive);
 }

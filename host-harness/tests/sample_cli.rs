@@ -107,6 +107,7 @@ fn ctrl_c_stops_with_complete_rows_and_a_report_of_what_ran() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(130), "{e}");
     assert!(e.contains("interrupted after"), "{e}");
+    assert!(e.contains("interrupted: finishing the samples under way"), "the note on the first Ctrl-C: {e}");
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let drawn = v["drawn"].as_u64().unwrap();
     assert!(drawn > 0 && drawn < 10_000_000 && v["complete"] == false, "{drawn}");
@@ -179,5 +180,83 @@ fn a_write_error_leaves_a_complete_parquet_file_and_names_the_file() {
         assert!(e.contains(says), "{extra:?}: {e}");
     }
     assert!(!d.join("x.out").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `flinch sample --csv - | head` and `flinch sweep ... | head`: the reader goes away; exit 141,
+/// quiet (docs/conventions.md). A CSV writer's error once hid the broken pipe's kind: exit 3,
+/// "Broken pipe (os error 32)".
+#[test]
+fn a_reader_that_goes_away_ends_quietly_with_141() {
+    use std::io::{BufRead, BufReader};
+    let d = tmp("pipe");
+    for args in [
+        vec!["sample", "tables5-7_bistable", "--samples", "1e5", "--csv", "-", "--vary", "motion.dead_time=uniform:0.016:0.032"],
+        vec!["sweep", "tables5-7_bistable", "--vary", "motion.speed=0.01:0.3:3000"],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_flinch")).args(&args).current_dir(&d).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        let mut out = BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        out.read_line(&mut line).unwrap();
+        assert!(line.contains("motion."), "{args:?}: {line}");
+        drop(out);
+        let o = child.wait_with_output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(141), "{args:?}: {e}");
+        assert!(!e.contains("Broken pipe") && !e.contains("error"), "{args:?}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The merge guard covers the files a scene refers to (its URDF edited between chunks) and the
+/// version of flinch that ran each chunk.
+#[test]
+fn chunks_of_a_scene_whose_urdf_changed_do_not_merge() {
+    let d = tmp("urdf");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    std::fs::create_dir_all(d.join("robots")).unwrap();
+    std::fs::copy(root.join("robot_two_link.toml"), d.join("scene.toml")).unwrap();
+    let urdf = std::fs::read_to_string(root.join("robots/two_link.urdf")).unwrap();
+    std::fs::write(d.join("robots/two_link.urdf"), &urdf).unwrap();
+    let chunk = |k: &str, out: &str| {
+        let o = flinch(&["sample", "scene.toml", "--samples", "6", "--json", "--chunk", k, "--vary", "motion.dead_time=uniform:0.016:0.032"], &d);
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::write(d.join(out), &o.stdout).unwrap();
+    };
+    chunk("1/2", "c1.json");
+    chunk("2/2", "c2.json");
+    let o = flinch(&["sample", "--merge", "c1.json", "c2.json"], &d);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    // The URDF edited (a comment is enough: the text is hashed), then the second chunk again.
+    std::fs::write(d.join("robots/two_link.urdf"), urdf.replacen("<robot", "<!-- edited -->\n<robot", 1)).unwrap();
+    chunk("2/2", "c2.json");
+    let o = flinch(&["sample", "--merge", "c1.json", "c2.json"], &d);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("referenced files"), "{e}");
+    // Another version of flinch: refused, naming it.
+    let c1 = std::fs::read_to_string(d.join("c1.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&c1).unwrap();
+    assert_eq!(v["flinch_version"], env!("CARGO_PKG_VERSION"));
+    std::fs::write(d.join("old.json"), c1.replace(&format!("\"flinch_version\": \"{}\"", env!("CARGO_PKG_VERSION")), "\"flinch_version\": \"0.0.1\"")).unwrap();
+    let o = flinch(&["sample", "--merge", "c1.json", "old.json"], &d);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("flinch version"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A lognormal's MU is of ln X: `lognormal:0.05:0.01` on motion.speed is a median of 1.05 m/s, 21x
+/// the scene's 0.05 m/s. The note says so before the run, the summary shows the median.
+#[test]
+fn a_lognormal_far_from_the_scene_s_value_is_noted() {
+    let d = tmp("lognormal");
+    let o = flinch(&["sample", "tables5-7_bistable", "--samples", "2", "--vary", "motion.speed=lognormal:0.05:0.01"], &d);
+    let (out, e) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(e.contains("median exp(MU) = 1.0513e0, 21.025x the scene's value 0.05"), "{e}");
+    assert!(out.contains("motion.speed ~ lognormal:0.05:0.01 (median 1.0512710963760241 m/s)"), "{out}");
+    // Close to the scene's value: no note.
+    let o = flinch(&["sample", "tables5-7_bistable", "--samples", "2", "--vary", "motion.speed=lognormal:-3:0.01"], &d);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("median exp(MU)"));
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -142,7 +142,29 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
             ));
         }
     }
-    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    for v in &plan.vary {
+        // A lognormal's MU is of ln X: lognormal:0.05:0.01 is a median of 1.05, not 0.05.
+        let (Some(file), median) = (plan.template.value(&v.spec.key), v.spec.dist.median()) else { continue };
+        let lognormal = matches!(v.spec.dist, super::Dist::LogNormal { .. });
+        if lognormal && file != 0.0 && median.is_finite() && (median / file > 10.0 || median / file < 0.1) {
+            output::note(&format!(
+                "note: {} ~ {} has median exp(MU) = {:.4e}, {:.3}x the scene's value {} (lognormal's MU and SIGMA are of ln X: for a median of {} give MU = ln({}) = {:.4e})",
+                v.spec.key,
+                v.spec.dist.spec(),
+                median,
+                median / file,
+                super::num(file),
+                super::num(file),
+                super::num(file),
+                file.ln()
+            ));
+        }
+    }
+    let _ = ctrlc::set_handler(|| {
+        if !STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("\ninterrupted: finishing the samples under way, then writing the rows and the report of the samples before them");
+        }
+    });
     if args.parquet.is_some() && plan.range.1 > i64::MAX as u64 {
         return Err(Failure::bad_input(format!("--parquet: sample indices above {} do not fit Parquet's INT64 column `sample`", i64::MAX)));
     }

@@ -91,6 +91,33 @@ impl Dist {
         }
     }
 
+    /// The survival function 1 - F(x), computed without the cancellation of `1 - cdf` in the upper
+    /// tail.
+    pub fn sf(&self, x: f64) -> f64 {
+        match *self {
+            Dist::Normal { mean, sd } => stats::normal_cdf(-(x - mean) / sd),
+            Dist::LogNormal { mu, sigma } => {
+                if x <= 0.0 {
+                    1.0
+                } else {
+                    stats::normal_cdf(-(x.ln() - mu) / sigma)
+                }
+            }
+            _ => 1.0 - self.cdf(x),
+        }
+    }
+
+    /// The inverse survival function: the x with 1 - F(x) = q, q in (0, 1); exact in the upper
+    /// tail where `quantile(1 - q)` would round q away.
+    pub fn isf(&self, q: f64) -> f64 {
+        match *self {
+            Dist::Normal { mean, sd } => mean - sd * stats::normal_quantile(q),
+            Dist::LogNormal { mu, sigma } => (mu - sigma * stats::normal_quantile(q)).exp(),
+            Dist::Uniform { lo, hi } => hi - (hi - lo) * q,
+            Dist::Triangular { .. } => self.quantile(1.0 - q),
+        }
+    }
+
     /// The quantile (inverse distribution function) at u in (0, 1).
     pub fn quantile(&self, u: f64) -> f64 {
         match *self {
@@ -108,7 +135,7 @@ impl Dist {
         }
     }
 
-    /// As written on the command line (numbers in Rust's shortest round-trip form, [`num`]).
+    /// As written on the command line (numbers in the shortest round-trip form, [`num`]).
     pub fn spec(&self) -> String {
         match *self {
             Dist::Normal { mean, sd } => format!("normal:{}:{}", num(mean), num(sd)),
@@ -117,17 +144,26 @@ impl Dist {
             Dist::Triangular { lo, mode, hi } => format!("triangular:{}:{}:{}", num(lo), num(mode), num(hi)),
         }
     }
-}
 
-/// A number of a spec, shortest round-trip: `0.016`, `200`; with an exponent beyond [1e-5, 1e16)
-/// in magnitude (`1e308`, not a 309-digit number in a message; `2.5e-7`).
-pub fn num(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-5..1e16).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
+    /// The median, for a lognormal exp(MU) (the parameters are of ln X).
+    pub fn median(&self) -> f64 {
+        self.quantile(0.5)
     }
 }
+
+/// A number for people and specs: the shortest form that reads back to the same f64, with an
+/// exponent when it is tiny or huge (`1e-300`, not 300 zeros; `0.05` stays `0.05`).
+pub fn num(x: f64) -> String {
+    if x == 0.0 || (1e-5..1e16).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// The extreme uniform numbers a draw's finiteness is checked at: [`uniform01`]'s smallest,
+/// 0.5 / 2^53, and the largest f64 below 1, 1 - 2^-53.
+pub const U_EXTREMES: (f64, f64) = (0.5 / 9_007_199_254_740_992.0, 1.0 - 1.0 / 9_007_199_254_740_992.0);
 
 /// The forms `--vary` accepts, for messages.
 pub const FORMS: &str = "normal:MEAN:SD, lognormal:MU:SIGMA (of ln X; median exp(MU)), uniform:LO:HI, triangular:LO:MODE:HI; normal and lognormal may end in :LO:HI to truncate them to [LO, HI]";
@@ -208,6 +244,16 @@ impl VarySpec {
             if lo >= hi {
                 return err(format!("--vary {spec:?}: the truncation LO must be below HI, got {lo} >= {hi}"));
             }
+        }
+        // Every draw must be a finite number: a width beyond the largest f64 (uniform or
+        // triangular from -1e308 to 1e308) or a spread whose extreme quantiles overflow draws inf.
+        let (u0, u1) = U_EXTREMES;
+        let width_ok = match dist {
+            Dist::Uniform { lo, hi } | Dist::Triangular { lo, hi, .. } => (hi - lo).is_finite(),
+            _ => true,
+        };
+        if !width_ok || !dist.quantile(u0).is_finite() || !dist.quantile(u1).is_finite() || !dist.isf(u0).is_finite() {
+            return err(format!("--vary {spec:?}: the distribution reaches beyond the largest number (1.8e308): some draws would be infinite; give a narrower one"));
         }
         Ok(Self { key: key.to_string(), dist, bounds })
     }

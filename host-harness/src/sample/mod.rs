@@ -137,8 +137,12 @@ pub struct Varied {
     pub within: Option<(f64, f64)>,
     /// F(within.hi) - F(within.lo): the probability the truncation keeps (1 without one).
     pub kept: f64,
-    /// F at the lower end of `within` (0 without one).
+    /// F at the lower end of `within` (0 without one); in the upper tail (`upper`), the survival
+    /// function 1 - F there instead.
     f_lo: f64,
+    /// `within` lies in the upper tail (F at its lower end above 1/2): draws invert the survival
+    /// function, whose small values keep their precision where F's round to 1.
+    upper: bool,
     /// Without truncation: the probability of a draw outside the key's accepted range (those
     /// samples will be refused and counted).
     pub outside: f64,
@@ -147,15 +151,27 @@ pub struct Varied {
 impl Varied {
     /// The value of this key for uniform number u.
     pub fn value(&self, u: f64) -> f64 {
-        self.spec.dist.quantile(self.f_lo + u * self.kept)
+        if self.upper {
+            self.spec.dist.isf(self.f_lo - u * self.kept)
+        } else {
+            self.spec.dist.quantile(self.f_lo + u * self.kept)
+        }
     }
+}
+
+/// A dotted key as the scene reads it: an array index is a number, so `stopping.distance.02`,
+/// `.+2` and `.2` are one key (each segment that parses as an index is written without sign or
+/// leading zeros).
+pub fn canonical_key(key: &str) -> String {
+    key.split('.').map(|s| s.trim().parse::<usize>().map_or_else(|_| s.trim().to_string(), |i| i.to_string())).collect::<Vec<_>>().join(".")
 }
 
 /// A sample study: the scene, the keys, the seed, N and the chunk this process runs.
 pub struct Plan {
     /// The scene's template.
     pub template: Template,
-    /// FNV-1a 64 of the scene's text (merging refuses chunks of different scenes).
+    /// FNV-1a 64 of the scene's text and of every file it refers to (its URDF): merging refuses
+    /// chunks of different scenes.
     pub scene_hash: String,
     /// The varied keys, in `--vary` order (also the order of the draws).
     pub vary: Vec<Varied>,
@@ -177,6 +193,17 @@ pub fn fnv1a64(text: &str) -> String {
         h = h.wrapping_mul(0x0100_0000_01b3);
     }
     format!("{h:016x}")
+}
+
+/// The study's scene hash: FNV-1a 64 of the scene's text alone when it refers to no file (as
+/// before), else of the text followed, for each file it refers to, by a NUL, the file's text.
+pub fn scene_hash(text: &str, file: &str) -> String {
+    let mut all = text.to_string();
+    for (_, t) in crate::scene::referenced_files(text, file) {
+        all.push('\0');
+        all.push_str(&t);
+    }
+    fnv1a64(&all)
 }
 
 /// Parses `K/M`: chunk K (1-based) of M.
@@ -208,8 +235,9 @@ impl Plan {
         }
         let parsed: Vec<VarySpec> = specs.iter().map(|s| VarySpec::parse(s)).collect::<Result<_, _>>()?;
         for (i, a) in parsed.iter().enumerate() {
-            if parsed[..i].iter().any(|b| b.key == a.key) {
-                return err(format!("--vary {} is given twice: each key is drawn once", a.key));
+            if let Some(b) = parsed[..i].iter().find(|b| canonical_key(&b.key) == canonical_key(&a.key)) {
+                let same = if b.key == a.key { String::new() } else { format!(" (as {} and {}, the same key)", b.key, a.key) };
+                return err(format!("--vary {} is given twice{same}: each key is drawn once", canonical_key(&a.key)));
             }
         }
         let mut vary = Vec::new();
@@ -217,10 +245,11 @@ impl Plan {
             let info = key_info(&template.base, &spec.key);
             if let Some(i) = info.as_ref().filter(|i| i.integer) {
                 return err(format!(
-                    "--vary {}: {} takes {}, and every distribution here is continuous: no draw would be whole, every sample would be refused (vary it with `flinch sweep`, or give it in the scene)",
+                    "--vary {}: {} takes {}, and every distribution of flinch sample is continuous (its draws are never whole): vary it with flinch sweep --vary {}=START:STOP:N (whole values), or run one study per value of it",
                     spec.spec(),
                     spec.key,
-                    i.range
+                    i.range,
+                    spec.key
                 ));
             }
             let mut within = spec.bounds;
@@ -235,12 +264,17 @@ impl Plan {
                 }
             }
             let d = spec.dist;
-            let (f_lo, kept) = match within {
+            let (f_lo, kept, upper) = match within {
                 Some((a, b)) => {
                     let (fa, fb) = (d.cdf(a), d.cdf(b));
-                    (fa, fb - fa)
+                    if fa > 0.5 {
+                        let (sa, sb) = (d.sf(a), d.sf(b));
+                        (sa, sa - sb, true)
+                    } else {
+                        (fa, fb - fa, false)
+                    }
                 }
-                None => (0.0, 1.0),
+                None => (0.0, 1.0, false),
             };
             if let Some((a, b)) = within {
                 if a >= b || kept.is_nan() || kept <= 1e-12 {
@@ -254,9 +288,12 @@ impl Plan {
                 }
             }
             let outside = match (&info, within) {
-                (Some(i), None) => d.cdf(i.lo.unwrap_or(f64::NEG_INFINITY)) + (1.0 - d.cdf(i.hi.unwrap_or(f64::INFINITY))),
+                (Some(i), None) => d.cdf(i.lo.unwrap_or(f64::NEG_INFINITY)) + d.sf(i.hi.unwrap_or(f64::INFINITY)),
                 _ => 0.0,
             };
+            if !kept.is_finite() || !outside.is_finite() {
+                return err(format!("--vary {}: the distribution's probabilities are not finite numbers (kept {kept}, outside the accepted range {outside}); give finite, narrower parameters", spec.spec()));
+            }
             if outside >= 1.0 - 1e-12 {
                 return err(format!(
                     "--vary {}: every draw lies outside the accepted range of {} ({}): every sample would be refused",
@@ -267,7 +304,7 @@ impl Plan {
             }
             let unit = info.as_ref().map_or("", |i| i.unit.as_str());
             let column = column(&spec.key, unit);
-            let v = Varied { spec, column, info, within, kept, f_lo, outside };
+            let v = Varied { spec, column, info, within, kept, f_lo, upper, outside };
             // The key must be settable, as for a sweep; probe it at the median draw.
             template.check_key(&v.spec.key, v.value(0.5))?;
             vary.push(v);
@@ -276,7 +313,7 @@ impl Plan {
             Some((k, m)) => chunk_range(samples, k, m),
             None => (0, samples),
         };
-        Ok(Self { template, scene_hash: fnv1a64(scene_text), vary, seed, samples, range, truncate })
+        Ok(Self { scene_hash: scene_hash(scene_text, template.file()), template, vary, seed, samples, range, truncate })
     }
 
     /// The values of sample `index`, in `--vary` order.
@@ -318,7 +355,9 @@ impl Plan {
 
     /// Runs the plan's range on `pool` (None: the global rayon pool, all cores), in blocks of
     /// [`BLOCK`], writing each block's rows to `csv` in index order; stops after the block in
-    /// which `stop` is raised. The report covers the samples that ran.
+    /// which `stop` is raised, keeping the samples before the first one that saw it (each sample
+    /// checks `stop` before it starts): the CSV and the report cover exactly those, a prefix of
+    /// the range in index order.
     pub fn run(&self, progress: Progress, csv: Option<&mut dyn Write>, stop: &AtomicBool, pool: Option<&rayon::ThreadPool>) -> io::Result<SampleReport> {
         self.run_to(progress, csv, None, stop, pool)
     }
@@ -330,13 +369,13 @@ impl Plan {
         let body = self.body();
         let mut w = csv.map(csv::Writer::from_writer);
         if let Some(w) = w.as_mut() {
-            w.write_record(self.header())?;
+            w.write_record(self.header()).map_err(crate::sweep::csv_io)?;
         }
         let report = self.run_rows(
             progress,
             &mut |r: &Row| {
                 if let Some(w) = w.as_mut() {
-                    w.write_record(r.record_with(body)).map_err(io::Error::from)?;
+                    w.write_record(r.record_with(body)).map_err(crate::sweep::csv_io)?;
                 }
                 match parquet.as_deref_mut() {
                     Some(p) => p.push(r),
@@ -371,17 +410,23 @@ impl Plan {
         let mut at = first;
         while at < end && !stop.load(Ordering::SeqCst) {
             let len = (end - at).min(BLOCK as u64) as usize;
-            let block = || (0..len).into_par_iter().map(|j| self.run_one(at + j as u64)).collect::<Vec<Row>>();
+            // A sample that starts after `stop` is raised is not run (None): the block is kept up
+            // to the first such sample, so a Ctrl-C takes effect within one sample per thread.
+            let block = || (0..len).into_par_iter().map(|j| (!stop.load(Ordering::SeqCst)).then(|| self.run_one(at + j as u64))).collect::<Vec<Option<Row>>>();
             let rows = match pool {
                 Some(p) => p.install(block),
                 None => block(),
             };
-            for r in &rows {
+            let done = rows.iter().take_while(|r| r.is_some()).count();
+            for r in rows.iter().flatten().take(done) {
                 sink(r)?;
                 tally.add(r);
             }
-            at += len as u64;
-            bar.inc(len as u64);
+            at += done as u64;
+            bar.inc(done as u64);
+            if done < len {
+                break;
+            }
         }
         bar.finish_and_clear();
         Ok(self.report(tally, (first, at)))
@@ -413,6 +458,7 @@ impl Plan {
             scene: self.template.base.name.clone(),
             scene_file: self.template.file().to_string(),
             scene_fnv1a64: self.scene_hash.clone(),
+            flinch_version: env!("CARGO_PKG_VERSION").to_string(),
             seed: self.seed,
             samples: self.samples,
             truncate: self.truncate,
@@ -426,6 +472,10 @@ impl Plan {
             modes: t.modes,
             refusals: t.refusals,
             solver_failures: t.solver_failures,
+            inconclusive: t.inconclusive.as_ref().map_or(0, |x| x.count),
+            inconclusive_first: t.inconclusive,
+            warnings: t.warnings,
+            warnings_not_listed: t.warnings_not_listed,
             confidence: CONFIDENCE,
             estimates: Vec::new(),
         };
@@ -448,6 +498,10 @@ pub struct FailureKind {
     pub test: fn(&Summary) -> bool,
     /// True when the failure can happen in this scene (estimated only then).
     pub applies: fn(&Scene) -> bool,
+    /// True when a run that ended before the robot stopped (not concluded) is known to have it:
+    /// only `not_safe` (such a run is not safe). For the others what happened after the end is
+    /// unknown: such a run is left out of their `runs` and counted in their `high_if_unrun_failed`.
+    pub known_if_not_concluded: bool,
 }
 
 fn always(_: &Scene) -> bool {
@@ -458,14 +512,15 @@ fn always(_: &Scene) -> bool {
 /// for a scene whose target is a body region (elsewhere it cannot happen, and "0 of N" would read
 /// as evidence).
 pub const FAILURES: &[FailureKind] = &[
-    FailureKind { name: "stroke_exhausted", what: "stroke exhausted (the tool in the back end-stop while touching the target; docs/verdicts.md)", test: |s| s.stroke_exhausted, applies: always },
-    FailureKind { name: "mode_3", what: "working mode 3 (the tool hits the back end-stop while the robot still brakes; Fig. 46)", test: |s| s.mode == Some(3), applies: always },
-    FailureKind { name: "not_safe", what: "not safe by the one definition (docs/verdicts.md: the summary's `failures` is not empty)", test: |s| !s.safe, applies: always },
+    FailureKind { name: "stroke_exhausted", what: "stroke exhausted (the tool in the back end-stop while touching the target; docs/verdicts.md)", test: |s| s.stroke_exhausted, applies: always, known_if_not_concluded: false },
+    FailureKind { name: "mode_3", what: "working mode 3 (the tool hits the back end-stop while the robot still brakes; Fig. 46)", test: |s| s.mode == Some(3), applies: always, known_if_not_concluded: false },
+    FailureKind { name: "not_safe", what: "not safe by the one definition (docs/verdicts.md: the summary's `failures` is not empty)", test: |s| !s.safe, applies: always, known_if_not_concluded: true },
     FailureKind {
         name: "body_limit_exceeded",
         what: "a body-region limit exceeded (ISO/TS 15066 Table A.2 force or pressure, or a transient contact the TS does not permit; the summary's body_limits_pass is false)",
         test: |s| s.body_limits_pass == Some(false),
         applies: |sc| matches!(sc.target.kind, TargetKind::BodyRegion(_)),
+        known_if_not_concluded: false,
     },
 ];
 
@@ -488,6 +543,12 @@ pub struct Brief {
     pub body_limits_pass: Option<bool>,
     /// Per [`FAILURES`].
     pub failed: Vec<bool>,
+    /// The run ended before the robot stopped (`Summary::concluded` false): the summary's
+    /// "not concluded" failure text. Such a sample is `inconclusive`: what happened after the end
+    /// is not simulated.
+    pub not_concluded: Option<String>,
+    /// The summary's warnings (things the user should know about the run).
+    pub warnings: Vec<String>,
 }
 
 impl Brief {
@@ -501,6 +562,8 @@ impl Brief {
             safe: s.safe,
             body_limits_pass: s.body_limits_pass,
             failed: FAILURES.iter().map(|f| (f.test)(s)).collect(),
+            not_concluded: (!s.concluded).then(|| s.failures.iter().find(|f| f.starts_with("not concluded")).cloned().unwrap_or_else(|| "not concluded: the run ended before the robot stopped: lengthen duration".into())),
+            warnings: s.warnings.clone(),
         }
     }
 }
@@ -550,18 +613,24 @@ impl Row {
         r.extend(self.values.iter().map(f64::to_string));
         match &self.outcome {
             Outcome::Ran(b) => {
+                // Not concluded: the stroke, the mode and the body limits after the end are
+                // unknown (empty cells); the peaks and the stroke left are up to the end.
+                let known = b.not_concluded.is_none();
                 r.extend([
-                    bit(b.stroke_exhausted),
-                    b.mode.map_or(String::new(), |m| m.to_string()),
+                    if known { bit(b.stroke_exhausted) } else { String::new() },
+                    b.mode.filter(|_| known).map_or(String::new(), |m| m.to_string()),
                     b.peak_contact_force_n.to_string(),
                     b.peak_robot_force_n.to_string(),
                     b.stroke_left_min_m.map_or(String::new(), |x| x.to_string()),
                     bit(b.safe),
                 ]);
                 if body {
-                    r.push(b.body_limits_pass.map_or(String::new(), bit));
+                    r.push(b.body_limits_pass.filter(|_| known).map_or(String::new(), bit));
                 }
-                r.extend(["ok".into(), String::new()]);
+                match &b.not_concluded {
+                    None => r.extend(["ok".into(), String::new()]),
+                    Some(why) => r.extend(["inconclusive".into(), why.clone()]),
+                }
             }
             Outcome::Refused { reason, .. } => {
                 r.extend((0..blanks).map(|_| String::new()));
@@ -615,9 +684,64 @@ pub struct Modes {
     pub no_mode: u64,
 }
 
+/// Samples that ran but ended before the robot stopped (`inconclusive` rows).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct Inconclusive {
+    /// How many.
+    pub count: u64,
+    /// The first one's index.
+    pub first_sample: u64,
+    /// Its "not concluded" failure text.
+    pub first_reason: String,
+}
+
+/// A warning of the runs' summaries (docs/verdicts.md), grouped by its text with the numbers
+/// masked (`t_stop = # s is after ...`): how many runs gave it, the first one and its text.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct WarningGroup {
+    /// The warning with every number written `#`: what groups it.
+    pub kind: String,
+    /// The first such run's warning, as its summary says it.
+    pub text: String,
+    /// Runs that gave it.
+    pub count: u64,
+    /// The first such sample's index.
+    pub first_sample: u64,
+}
+
+/// A warning's text with each number written `#` (`t_stop = 0.71 s` -> `t_stop = # s`).
+pub fn warning_kind(text: &str) -> String {
+    let mut out = String::new();
+    let mut it = text.chars().peekable();
+    while let Some(c) = it.next() {
+        if c.is_ascii_digit() {
+            let mut last = c;
+            while let Some(&d) = it.peek() {
+                if d.is_ascii_digit() || d == '.' || d == 'e' || d == '-' && last == 'e' {
+                    last = d;
+                    it.next();
+                } else {
+                    break;
+                }
+            }
+            out.push('#');
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// At most this many distinct warning kinds are kept (first samples first); the report says how
+/// many runs gave a text beyond them (`warnings_not_listed`).
+pub const MAX_WARNINGS: usize = 32;
+
 #[derive(Debug, Default)]
 struct Tally {
     ran: u64,
+    inconclusive: Option<Inconclusive>,
+    warnings: Vec<WarningGroup>,
+    warnings_not_listed: u64,
     refused: u64,
     solver_failed: u64,
     failures: Vec<u64>,
@@ -634,6 +758,16 @@ impl Tally {
         match &r.outcome {
             Outcome::Ran(b) => {
                 self.ran += 1;
+                for w in &b.warnings {
+                    self.warnings_not_listed += add_warning(&mut self.warnings, WarningGroup { kind: warning_kind(w), text: w.clone(), count: 1, first_sample: r.index });
+                }
+                if let Some(why) = &b.not_concluded {
+                    add_inconclusive(&mut self.inconclusive, Inconclusive { count: 1, first_sample: r.index, first_reason: why.clone() });
+                    for ((n, &f), k) in self.failures.iter_mut().zip(&b.failed).zip(FAILURES) {
+                        *n += u64::from(f && k.known_if_not_concluded);
+                    }
+                    return;
+                }
                 for (n, &f) in self.failures.iter_mut().zip(&b.failed) {
                     *n += u64::from(f);
                 }
@@ -668,6 +802,41 @@ fn add_refusal(groups: &mut Vec<RefusalGroup>, g: RefusalGroup) {
         None => groups.push(g),
     }
     groups.sort_by_key(|x| x.first_sample);
+}
+
+fn add_inconclusive(f: &mut Option<Inconclusive>, g: Inconclusive) {
+    match f {
+        Some(x) => {
+            x.count += g.count;
+            if g.first_sample < x.first_sample {
+                x.first_sample = g.first_sample;
+                x.first_reason = g.first_reason;
+            }
+        }
+        None => *f = Some(g),
+    }
+}
+
+/// Adds a warning group; returns the runs it could not list (a new text beyond [`MAX_WARNINGS`]).
+fn add_warning(groups: &mut Vec<WarningGroup>, g: WarningGroup) -> u64 {
+    let full = groups.len() >= MAX_WARNINGS;
+    let not_listed = match groups.iter_mut().find(|x| x.kind == g.kind) {
+        Some(x) => {
+            x.count += g.count;
+            if g.first_sample < x.first_sample {
+                x.first_sample = g.first_sample;
+                x.text = g.text;
+            }
+            0
+        }
+        None if !full => {
+            groups.push(g);
+            0
+        }
+        None => g.count,
+    };
+    groups.sort_by_key(|x| x.first_sample);
+    not_listed
 }
 
 fn add_failure(f: &mut Option<SolverFailures>, g: SolverFailures) {

@@ -65,8 +65,8 @@ pub struct ParquetRows {
     reason: Nullable<ByteArray>,
     groups: Vec<usize>,
     failed: bool,
-    /// `ok`, `refused`, `failed`: cloned per row (a reference count, not an allocation).
-    statuses: [ByteArray; 3],
+    /// `ok`, `refused`, `failed`, `inconclusive`: cloned per row (a reference count, not an allocation).
+    statuses: [ByteArray; 4],
 }
 
 fn pq(e: parquet::errors::ParquetError) -> io::Error {
@@ -146,7 +146,7 @@ impl ParquetRows {
             reason: Nullable::default(),
             groups: Vec::new(),
             failed: false,
-            statuses: ["ok", "refused", "failed"].map(ByteArray::from),
+            statuses: ["ok", "refused", "failed", "inconclusive"].map(ByteArray::from),
         })
     }
 
@@ -193,17 +193,23 @@ impl ParquetRows {
             Outcome::Ran(b) => Some(b),
             _ => None,
         };
-        self.stroke_exhausted.push(ran.map(|b| b.stroke_exhausted));
-        self.mode.push(ran.and_then(|b| b.mode).map(i32::from));
+        // Not concluded: the stroke, the mode and the body limits after the run's end are unknown
+        // (null, as the CSV's empty cells); the peaks and the stroke left are up to the end.
+        let known = ran.filter(|b| b.not_concluded.is_none());
+        self.stroke_exhausted.push(known.map(|b| b.stroke_exhausted));
+        self.mode.push(known.and_then(|b| b.mode).map(i32::from));
         self.peak_contact_force_n.push(ran.map(|b| b.peak_contact_force_n));
         self.peak_robot_force_n.push(ran.map(|b| b.peak_robot_force_n));
         self.stroke_left_min_m.push(ran.and_then(|b| b.stroke_left_min_m));
         self.safe.push(ran.map(|b| b.safe));
         if self.body {
-            self.body_limits_pass.push(ran.and_then(|b| b.body_limits_pass));
+            self.body_limits_pass.push(known.and_then(|b| b.body_limits_pass));
         }
         let (status, reason) = match &r.outcome {
-            Outcome::Ran(_) => (0, None),
+            Outcome::Ran(b) => match &b.not_concluded {
+                None => (0, None),
+                Some(why) => (3, Some(why.as_str())),
+            },
             Outcome::Refused { reason, .. } => (1, Some(reason.as_str())),
             Outcome::Failed(why) => (2, Some(why.as_str())),
         };

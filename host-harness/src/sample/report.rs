@@ -38,7 +38,9 @@ pub struct Estimate {
     pub what: String,
     /// Runs with it.
     pub failures: u64,
-    /// Runs (samples that ran: not refused, not failed in the solver).
+    /// Runs counted: samples that ran (not refused, not failed in the solver), less the
+    /// inconclusive ones for every failure but `not_safe` (after the end of such a run it is
+    /// unknown whether the stroke ran out; for `not_safe` an inconclusive run is a failure).
     pub runs: u64,
     /// failures / runs; null with no run.
     pub p: Option<f64>,
@@ -56,8 +58,10 @@ pub struct Estimate {
     pub clopper_pearson_low: f64,
     /// Clopper-Pearson exact interval, upper end.
     pub clopper_pearson_high: f64,
-    /// The Clopper-Pearson upper end if every refused or solver-failed sample were a failure
-    /// (over all samples drawn): the bound that does not rest on the accepted range.
+    /// The bound that rests on nothing left out: the Clopper-Pearson upper end `h` if every
+    /// refused, solver-failed or (for a failure other than `not_safe`) inconclusive sample were a
+    /// failure (over all samples drawn), and, with truncated draws, `1 - K (1 - h)` where K is the
+    /// product of the keys' `kept_probability`: the probability cut off counted as failing.
     pub high_if_unrun_failed: f64,
 }
 
@@ -95,8 +99,11 @@ pub struct SampleReport {
     pub scene: String,
     /// The scene as given.
     pub scene_file: String,
-    /// FNV-1a 64 of the scene's text.
+    /// FNV-1a 64 of the scene's text and of the files it refers to (its URDF).
     pub scene_fnv1a64: String,
+    /// The version of flinch that ran it (merging refuses reports of different versions: the
+    /// model may differ).
+    pub flinch_version: String,
     /// Seed.
     pub seed: u64,
     /// N of the whole study.
@@ -123,6 +130,18 @@ pub struct SampleReport {
     pub refusals: Vec<RefusalGroup>,
     /// Solver failures, if any.
     pub solver_failures: Option<SolverFailures>,
+    /// Samples that ran (counted in `ran`) but ended before the robot stopped: the run's
+    /// `duration` is too short for them (the summary's "not concluded" failure). They are failures
+    /// for `not_safe`, unknown for the other failures (not in their `runs`; failures in their
+    /// `high_if_unrun_failed`), and in no working mode.
+    pub inconclusive: u64,
+    /// The first inconclusive sample and its reason, if any.
+    pub inconclusive_first: Option<Inconclusive>,
+    /// The runs' warnings (the summary's `warnings`), grouped by their text with the numbers
+    /// masked, first sample ascending; at most 32 groups.
+    pub warnings: Vec<WarningGroup>,
+    /// Warnings of a group beyond the 32 listed.
+    pub warnings_not_listed: u64,
     /// Two-sided confidence of the intervals.
     pub confidence: f64,
     /// One per failure.
@@ -135,11 +154,20 @@ impl SampleReport {
     pub(super) fn finish(&mut self, failures: &[u64], applies: &[bool]) {
         self.complete = self.ranges.len() == 1 && self.ranges[0] == [0, self.samples];
         let unrun = self.refused + self.solver_failed;
+        let kept = self.kept_probability();
+        let (ran, inconclusive) = (self.ran, self.inconclusive);
         self.estimates = FAILURES
             .iter()
             .enumerate()
             .filter(|(i, _)| applies.get(*i).copied().unwrap_or(false))
-            .map(|(i, k)| estimate(k, failures.get(i).copied().unwrap_or(0), self.ran, unrun))
+            .map(|(i, k)| {
+                let f = failures.get(i).copied().unwrap_or(0);
+                let mut e = if k.known_if_not_concluded { estimate(k, f, ran, unrun) } else { estimate(k, f, ran - inconclusive, unrun + inconclusive) };
+                if kept < 1.0 {
+                    e.high_if_unrun_failed = 1.0 - kept * (1.0 - e.high_if_unrun_failed);
+                }
+                e
+            })
             .collect();
     }
 
@@ -159,6 +187,12 @@ impl SampleReport {
         out
     }
 
+    /// K, the probability the truncations keep: the product of the keys' `kept_probability`
+    /// (the keys are drawn independently).
+    pub fn kept_probability(&self) -> f64 {
+        self.vary.iter().map(|v| v.kept_probability).product()
+    }
+
     /// What the human summary prints.
     pub fn human(&self) -> String {
         let mut t = format!("{}\n", self.scene);
@@ -170,14 +204,19 @@ impl SampleReport {
                 (None, None) => String::new(),
                 (lo, hi) => format!(
                     " within [{}, {}] (keeps {})",
-                    lo.map_or("-inf".into(), |x| x.to_string()),
-                    hi.map_or("+inf".into(), |x| x.to_string()),
+                    lo.map_or("-inf".into(), num),
+                    hi.map_or("+inf".into(), num),
                     pct(v.kept_probability)
                 ),
             };
             // Only when it matters at this N: an expected 0.01 refused samples or more.
             let outside = if v.outside_probability * self.samples as f64 >= 0.01 { format!("; {} of draws outside the accepted range {} (refused)", pct(v.outside_probability), v.accepted_range.clone().unwrap_or_default()) } else { String::new() };
-            t.push_str(&format!("  {} ~ {}{within}{outside}\n", v.key, v.dist));
+            // A lognormal's parameters are of ln X: its median exp(MU) said in the key's unit.
+            let median = match VarySpec::parse(&format!("{}={}", v.key, v.dist)).map(|s| s.dist) {
+                Ok(d @ Dist::LogNormal { .. }) => format!(" (median {}{})", num(d.median()), v.unit.as_deref().filter(|u| !u.is_empty()).map_or(String::new(), |u| format!(" {u}"))),
+                _ => String::new(),
+            };
+            t.push_str(&format!("  {} ~ {}{median}{within}{outside}\n", v.key, v.dist));
         }
         t.push_str(&format!("  probability (95 % interval, over the {} runs):\n", self.ran));
         let width = self.estimates.iter().map(|e| e.failure.len()).max().unwrap_or(0).max(17);
@@ -192,12 +231,36 @@ impl SampleReport {
         if let Some(f) = &self.solver_failures {
             t.push_str(&format!("  SOLVER FAILED {}, first sample {}: {}\n", f.count, f.first_sample, f.first_reason));
         }
-        let unrun = self.refused + self.solver_failed;
-        if unrun > 0 {
+        let bounds = || self.estimates.iter().map(|e| format!("{} {}", e.failure, sig(e.high_if_unrun_failed))).collect::<Vec<_>>().join(", ");
+        if let Some(x) = &self.inconclusive_first {
             t.push_str(&format!(
-                "  the estimates are over the samples that ran; if the {unrun} that did not were failures, the upper ends would be: {}\n",
-                self.estimates.iter().map(|e| format!("{} {}", e.failure, sig(e.high_if_unrun_failed))).collect::<Vec<_>>().join(", ")
+                "  NOT CONCLUDED: {} samples ended before the robot stopped: lengthen duration (first sample {}: {})\n  counting them as failures{}{}, the upper ends are: {}\n",
+                x.count,
+                x.first_sample,
+                x.first_reason,
+                if self.refused + self.solver_failed > 0 { format!(", and the {} samples that did not run", self.refused + self.solver_failed) } else { String::new() },
+                if self.kept_probability() < 1.0 { format!(", and every draw the truncation cut off ({} of the probability)", pct(1.0 - self.kept_probability())) } else { String::new() },
+                bounds()
             ));
+        }
+        for w in &self.warnings {
+            t.push_str(&format!("  warning in {} runs, first sample {}: {}\n", w.count, w.first_sample, w.text));
+        }
+        if self.warnings_not_listed > 0 {
+            t.push_str(&format!("  warning: {} more warnings not listed (more than {MAX_WARNINGS} kinds)\n", self.warnings_not_listed));
+        }
+        let unrun = self.refused + self.solver_failed;
+        let kept = self.kept_probability();
+        // The truncation matters when the bound counting the cut-off probability as failing is
+        // materially above the conditional one (by more than a tenth of it).
+        let truncation_matters = kept < 1.0 && self.estimates.iter().any(|e| e.high_if_unrun_failed > 1.1 * e.high);
+        if self.inconclusive == 0 && (unrun > 0 || truncation_matters) {
+            let what = match (unrun > 0, kept < 1.0) {
+                (true, true) => format!("if the {unrun} samples that did not run were failures, and so was every draw the truncation cut off ({} of the probability)", pct(1.0 - kept)),
+                (true, false) => format!("if the {unrun} that did not were failures"),
+                (false, _) => format!("with the truncation the estimates are conditional on the kept draws; if every draw it cut off ({} of the probability) were a failure", pct(1.0 - kept)),
+            };
+            t.push_str(&format!("  the estimates are over the samples that ran; {what}, the upper ends would be: {}\n", bounds()));
         }
         t
     }
@@ -232,7 +295,8 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
             return err(format!("--merge {}: schema_version {} is not {SCHEMA_VERSION}", name(i), r.schema_version));
         }
         let same = |what: &str, a: String, b: String| if a == b { Ok(()) } else { err(format!("--merge {}: another study: its {what} is {b}, {}'s is {a}", name(i), name(0))) };
-        same("scene text (FNV-1a 64)", first.scene_fnv1a64.clone(), r.scene_fnv1a64.clone())?;
+        same("flinch version", first.flinch_version.clone(), r.flinch_version.clone())?;
+        same("scene text and referenced files (FNV-1a 64)", first.scene_fnv1a64.clone(), r.scene_fnv1a64.clone())?;
         same("seed", first.seed.to_string(), r.seed.to_string())?;
         same("--samples", first.samples.to_string(), r.samples.to_string())?;
         same("--truncate", first.truncate.to_string(), r.truncate.to_string())?;
@@ -279,6 +343,10 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
     out.modes = Modes::default();
     out.refusals = Vec::new();
     out.solver_failures = None;
+    out.inconclusive = reports.iter().map(|r| r.inconclusive).sum();
+    out.inconclusive_first = None;
+    out.warnings = Vec::new();
+    out.warnings_not_listed = reports.iter().map(|r| r.warnings_not_listed).sum();
     let mut failures = vec![0u64; FAILURES.len()];
     for r in reports {
         out.modes.mode_1 += r.modes.mode_1;
@@ -290,6 +358,12 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
         }
         if let Some(f) = &r.solver_failures {
             add_failure(&mut out.solver_failures, f.clone());
+        }
+        if let Some(f) = &r.inconclusive_first {
+            add_inconclusive(&mut out.inconclusive_first, f.clone());
+        }
+        for w in &r.warnings {
+            out.warnings_not_listed += add_warning(&mut out.warnings, w.clone());
         }
         for (i, k) in FAILURES.iter().enumerate() {
             failures[i] += r.estimates.iter().find(|e| e.failure == k.name).map_or(0, |e| e.failures);
@@ -306,7 +380,7 @@ const UNITS: &[(&str, &str)] = &[
     ("schema_version", "1"), ("seed", "1"), ("samples", "1"), ("drawn", "1"), ("ran", "1"), ("refused", "1"), ("solver_failed", "1"),
     ("count", "1"), ("first_sample", "1"), ("mode_1", "1"), ("mode_2", "1"), ("mode_3", "1"), ("no_mode", "1"), ("confidence", "1"),
     ("failures", "1"), ("runs", "1"), ("p", "1"), ("low", "1"), ("high", "1"), ("wilson_low", "1"), ("wilson_high", "1"),
-    ("clopper_pearson_low", "1"), ("clopper_pearson_high", "1"), ("high_if_unrun_failed", "1"), ("kept_probability", "1"),
+    ("clopper_pearson_low", "1"), ("inconclusive", "1"), ("warnings_not_listed", "1"), ("clopper_pearson_high", "1"), ("high_if_unrun_failed", "1"), ("kept_probability", "1"),
     ("outside_probability", "1"), ("within_lo", "the key's unit, given in `unit`"), ("within_hi", "the key's unit, given in `unit`"),
 ];
 
@@ -358,6 +432,7 @@ pub fn schema() -> (String, Vec<String>) {
     (text, missing)
 }
 
-/// Raised by Ctrl-C (installed by the command line): the run stops after the current block.
+/// Raised by Ctrl-C (installed by the command line): no sample starts after it; the run keeps the
+/// samples before the first that did not start.
 pub static STOP: AtomicBool = AtomicBool::new(false);
 

@@ -99,7 +99,7 @@ pub use check::{Bound, Key, KeyTable, Need, SceneError, SceneIssue, Span, Ty};
 pub use decoupler::end_stop::DEFAULT_BACK_STOP_LAW;
 pub use decoupler::hydraulic::{DEFAULT_ADIABATIC_EXPONENT, DEFAULT_HYDRAULIC_FRICTION_V0};
 pub use model::*;
-pub use robot::{urdf_robot, UrdfRobot, DAMPING as ROBOT_DAMPING, MASS as ROBOT_MASS, STIFFNESS as ROBOT_STIFFNESS};
+pub use robot::{referenced_files, urdf_robot, UrdfRobot, DAMPING as ROBOT_DAMPING, MASS as ROBOT_MASS, STIFFNESS as ROBOT_STIFFNESS};
 pub use solver::{
     DEFAULT_ATOL, DEFAULT_MAX_STEP, DEFAULT_METHOD, DEFAULT_OUTPUT_INTERVAL, DEFAULT_RTOL,
     FAST_ATOL, FAST_RTOL, REFERENCE_ATOL, REFERENCE_RTOL,

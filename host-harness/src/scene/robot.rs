@@ -119,6 +119,15 @@ pub fn urdf_robot(text: &str, file: &str) -> Result<Option<UrdfRobot>, SceneErro
     }
 }
 
+/// The files a scene's text refers to, as (name, text): its URDF, read as a run reads it (none
+/// when the scene names none, or it cannot be read: the validator then refuses the scene). What a
+/// study's hash must cover with the scene's text (`flinch sample --merge`).
+pub fn referenced_files(text: &str, file: &str) -> Vec<(String, String)> {
+    let Ok(doc) = ImDocument::parse(text) else { return Vec::new() };
+    let rel = doc.as_table().get("robot").and_then(Item::as_table_like).and_then(|t| t.get(URDF.name)).and_then(Item::as_str).map(str::to_string);
+    rel.and_then(|r| read_urdf(file, &r).ok()).into_iter().collect()
+}
+
 /// Where `urdf` points: relative to the scene file's folder, else, for a shipped scene run by name
 /// only (its file name ends in " (shipped)"), the shipped URDF. A user's scene whose URDF is
 /// missing is refused, never given the project's stand-in robot in its place. Returns the name for

@@ -757,6 +757,19 @@ fn csv_cell(v: &Json) -> String {
     }
 }
 
+/// A CSV writer's error as the I/O error it wraps, keeping its kind: `io::Error::from(csv::Error)`
+/// has kind Other, so a closed reader (`| head`) was reported as an error, exit 3, instead of the
+/// quiet exit 141 of docs/conventions.md.
+pub fn csv_io(e: csv::Error) -> io::Error {
+    if !matches!(e.kind(), csv::ErrorKind::Io(_)) {
+        return io::Error::other(e);
+    }
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        k => io::Error::other(format!("{k:?}")),
+    }
+}
+
 impl SweepResult {
     /// Writes the CSV (the `csv` crate quotes): the swept keys, every `Summary` field, then
     /// `status` (ok, refused, failed) and `reason` (the validator's or the solver's message).
@@ -767,7 +780,7 @@ impl SweepResult {
         header.extend(names.iter().cloned());
         header.push("status".into());
         header.push("reason".into());
-        w.write_record(&header)?;
+        w.write_record(&header).map_err(csv_io)?;
         for p in &self.points {
             let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
             match &p.outcome {
@@ -783,7 +796,7 @@ impl SweepResult {
                     row.push(e.clone());
                 }
             }
-            w.write_record(&row)?;
+            w.write_record(&row).map_err(csv_io)?;
         }
         w.flush()
     }
