@@ -238,7 +238,7 @@ class Sample:
         return _flinch.sample_human(json.dumps(self.report))
 
 
-_STATUS = pd.CategoricalDtype(["ok", "refused", "failed"])
+_STATUS = pd.CategoricalDtype(["ok", "refused", "failed", "inconclusive"])
 
 
 def _frame(cols: Dict[str, Any]) -> pd.DataFrame:

@@ -199,14 +199,23 @@ impl Columns {
         let f = |col: &mut Vec<u8>, x: f64| col.extend_from_slice(&x.to_le_bytes());
         match &r.outcome {
             Outcome::Ran(b) => {
-                self.stroke_exhausted.push(tri(Some(b.stroke_exhausted)));
+                // Not concluded (the robot had not stopped by the run's end): the stroke, the mode
+                // and the body limits are unknown (<NA>), as the CSV's empty cells.
+                let known = b.not_concluded.is_none();
+                self.stroke_exhausted.push(tri(Some(b.stroke_exhausted).filter(|_| known)));
                 self.safe.push(tri(Some(b.safe)));
-                self.body_limits_pass.push(tri(b.body_limits_pass));
-                self.mode.push(b.mode.unwrap_or(0));
+                self.body_limits_pass.push(tri(b.body_limits_pass.filter(|_| known)));
+                self.mode.push(b.mode.filter(|_| known).unwrap_or(0));
                 f(&mut self.peak_contact_force_n, b.peak_contact_force_n);
                 f(&mut self.peak_robot_force_n, b.peak_robot_force_n);
                 f(&mut self.stroke_left_min_m, b.stroke_left_min_m.unwrap_or(f64::NAN));
-                self.status.push(0);
+                match &b.not_concluded {
+                    None => self.status.push(0),
+                    Some(why) => {
+                        self.status.push(3);
+                        self.reasons.push((self.len, why.clone()));
+                    }
+                }
             }
             Outcome::Refused { reason, .. } | Outcome::Failed(reason) => {
                 for c in [&mut self.stroke_exhausted, &mut self.safe, &mut self.body_limits_pass, &mut self.mode] {

@@ -24,11 +24,19 @@ def specs(vary):
     return flinch._sample_specs(vary)
 
 
-def test_the_report_and_rows_are_the_command_lines(tmp_path, cli):
-    n = 300
-    r = flinch.sample(SCENE, n, FOUR, seed=5)
-    args = ["sample", SCENE, "--samples", n, "--seed", 5, "--json", "--csv", tmp_path / "rows.csv"]
-    for s in specs(FOUR):
+# Dead times up to 0.7 s in a 0.6 s run: some samples end before the robot stops (inconclusive).
+LATE = {"motion.dead_time": "uniform:0.2:0.7"}
+
+
+@pytest.mark.parametrize("scene,vary,n", [(SCENE, FOUR, 300), ("tables5-7_bistable", LATE, 40)])
+def test_the_report_and_rows_are_the_command_lines(tmp_path, cli, scene, vary, n):
+    r = flinch.sample(scene, n, vary, seed=5)
+    if vary is LATE:
+        assert 0 < r.report["inconclusive"] < n
+        late = r.rows["status"] == "inconclusive"
+        assert late.sum() == r.report["inconclusive"] and r.rows["stroke_exhausted"][late].isna().all()
+    args = ["sample", scene, "--samples", n, "--seed", 5, "--json", "--csv", tmp_path / "rows.csv"]
+    for s in specs(vary):
         args += ["--vary", s]
     code, out, err = cli(*args)
     assert code == 0, err
