@@ -37,7 +37,7 @@ fn main() {
         let outcome = if i % 50 == 0 {
             Outcome::Refused { keys: vec!["motion.speed".into()], reason: format!("motion.speed = {}: the scene validator refuses it", v[3]) }
         } else {
-            Outcome::Ran(Brief { stroke_exhausted: i % 7 == 0, mode: Some((i % 3) as u8 + 1), peak_contact_force_n: v[1] * 1.1, peak_robot_force_n: v[1], stroke_left_min_m: Some(v[2]), safe: i % 7 != 0, body_limits_pass: None, failed: vec![false; 4] })
+            Outcome::Ran(Brief { stroke_exhausted: i % 7 == 0, mode: Some((i % 3) as u8 + 1), peak_contact_force_n: v[1] * 1.1, peak_robot_force_n: v[1], stroke_left_min_m: Some(v[2]), safe: i % 7 != 0, body_limits_pass: None, failed: vec![false; 4], not_concluded: None, warnings: Vec::new() })
         };
         w.push(&Row { index: i, values: v, outcome }).expect("push");
         if n >= 4 && i > 0 && i % (n / 4) == 0 {
