@@ -291,7 +291,7 @@ fn bad_studies_are_refused_before_anything_runs() {
         ("motion.speed=lognormal:-3:0.1:-2:-1", "no probability"),
         // A continuous distribution for a whole-number key: no draw could be whole.
         ("decoupler.springs=uniform:1:5", "decoupler.springs takes whole numbers"),
-        ("decoupler.springs=normal:3:0.5", "every sample would be refused"),
+        ("decoupler.springs=normal:3:0.5", "every distribution of flinch sample is continuous"),
         // Huge magnitudes, named readably in the message (not as a 309-digit number).
         ("motion.speed=uniform:0.04:1e308", "uniform:0.04:1e308: every draw lies outside"),
         ("motion.speed=lognormal:700:1", "every sample would be refused"),
@@ -361,20 +361,21 @@ fn samples_that_end_before_the_robot_stops_are_inconclusive_not_safe_runs() {
     assert!(first.first_reason.starts_with("not concluded") && first.first_reason.contains("lengthen duration"), "{}", first.first_reason);
     let by = |name: &str| r.estimates.iter().find(|e| e.failure == name).unwrap().clone();
     let (se, m3, ns) = (by("stroke_exhausted"), by("mode_3"), by("not_safe"));
-    assert_eq!(se.runs, n - r.inconclusive, "an inconclusive run is no evidence about the stroke");
-    assert_eq!(m3.runs, n - r.inconclusive);
+    // The rows say so, not safe, with the stroke and the mode unknown (empty) unless their
+    // failure was already seen before the end (1, 3).
+    let rows: Vec<Vec<&str>> = csv.lines().filter(|l| l.contains(",inconclusive,")).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len() as u64, r.inconclusive);
+    for f in &rows {
+        assert!(matches!(f[2], "" | "1") && matches!(f[3], "" | "3") && f[7] == "0", "{f:?}");
+    }
+    let unknown = |col: usize| rows.iter().filter(|f| f[col].is_empty()).count() as u64;
+    assert_eq!(se.runs, n - unknown(2), "an inconclusive run without the stroke exhausted yet is no evidence about the stroke");
+    assert_eq!(m3.runs, n - unknown(3));
     assert_eq!(ns.runs, n);
     assert!(ns.failures >= r.inconclusive, "an inconclusive run is not safe: {} of {}", ns.failures, ns.runs);
-    assert!(se.high_if_unrun_failed >= stats::clopper_pearson(se.failures + r.inconclusive, n, 0.05).1 - 1e-12);
+    assert!(se.high_if_unrun_failed >= stats::clopper_pearson(se.failures + unknown(2), n, 0.05).1 - 1e-12);
     let modes = r.modes.mode_1 + r.modes.mode_2 + r.modes.mode_3 + r.modes.no_mode;
     assert_eq!(modes, n - r.inconclusive, "an inconclusive run has no working mode yet");
-    // The rows say so, with the stroke and the mode unknown (empty), and not safe.
-    let rows: Vec<&str> = csv.lines().filter(|l| l.contains(",inconclusive,")).collect();
-    assert_eq!(rows.len() as u64, r.inconclusive);
-    for l in &rows {
-        let f: Vec<&str> = l.split(',').collect();
-        assert_eq!((f[2], f[3], f[7]), ("", "", "0"), "{l}");
-    }
     let human = r.human();
     assert!(human.contains(&format!("NOT CONCLUDED: {} samples ended before the robot stopped: lengthen duration", r.inconclusive)) && human.contains("counting them as failures"), "{human}");
     // Chunks merge with the inconclusive counts.
@@ -391,6 +392,33 @@ fn samples_that_end_before_the_robot_stops_are_inconclusive_not_safe_runs() {
     assert_eq!(r3.inconclusive, 0);
     let se3 = r3.estimates.iter().find(|e| e.failure == "stroke_exhausted").unwrap();
     assert!(se3.failures > 50, "{se3:?}");
+}
+
+/// Review of the merge (2026-11-26): a failure already seen in a run that ended before the robot
+/// stopped is a failure (a stroke exhausted stays exhausted after the end). At 0.2 m/s with dead
+/// times up to 0.5 s in a 0.6 s run, most samples end before the robot stops with the tool already
+/// pushed into the back end-stop; they used to be left out of `stroke_exhausted` (18 of 46 where
+/// 172 of 200 had exhausted it). And chunks of such a study merge into the whole run's report
+/// (the merge's consistency check refused them).
+#[test]
+fn a_failure_seen_before_an_inconclusive_end_counts_and_such_chunks_merge() {
+    let keys = ["motion.dead_time=uniform:0.016:0.5"];
+    let n = 120;
+    let text = std::fs::read_to_string(scene_path("tables5-7_bistable.toml")).unwrap().replace("speed = 0.05 ", "speed = 0.2 ").replace("gap = 0.01 ", "gap = 0.05 ");
+    let study = |chunk| Plan::new(Template::from_text(&text, "fast.toml").unwrap(), &text, &keys.map(String::from), 1, n, chunk, false).unwrap();
+    let (csv, r) = run(&study(None), 2);
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let seen = rows.iter().filter(|f| f[8] == "inconclusive" && f[2] == "1").count() as u64;
+    let exhausted = rows.iter().filter(|f| f[2] == "1").count() as u64;
+    assert!(r.inconclusive > 20 && seen > 20, "the case needs inconclusive runs that exhausted the stroke: {} inconclusive, {seen} of them exhausted", r.inconclusive);
+    // Every exhausted row, inconclusive or not, has a negative stroke left while touching.
+    assert!(rows.iter().filter(|f| f[2] == "1").all(|f| f[6].parse::<f64>().unwrap() < 0.0));
+    let se = r.estimates.iter().find(|e| e.failure == "stroke_exhausted").unwrap();
+    assert_eq!(se.failures, exhausted, "every exhausted run counts, the inconclusive ones too");
+    assert_eq!(se.runs, n - rows.iter().filter(|f| f[2].is_empty()).count() as u64);
+    let c1 = run(&study(Some((1, 2))), 1).1;
+    let c2 = run(&study(Some((2, 2))), 1).1;
+    assert_eq!(merge(&[c1, c2], &[]).expect("chunks with inconclusive samples merge"), r);
 }
 
 /// The summaries' warnings reach the report, grouped by their text with the numbers masked (a

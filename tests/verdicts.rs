@@ -83,6 +83,35 @@ fn a_run_that_ends_before_the_robot_stops_is_not_safe() {
     }
 }
 
+/// Review of the merge (2026-11-26): a soft arm (k_r = 1,000 N/m, undamped) stopped at 0.27 s
+/// rings on and runs out of stroke at about 0.37 s; a run cut at 0.35 s (after t_stop) was
+/// called concluded and SAFE by run, check and hil, and `flinch sample` counted such runs safe.
+#[test]
+fn a_compliant_arm_still_ringing_at_the_end_is_not_concluded() {
+    let text = std::fs::read_to_string(scene_path("tables5-7_bistable.toml"))
+        .unwrap()
+        .replace("speed = 0.05 ", "speed = 0.2 ")
+        .replace("decel = 2.0 ", "decel = 20.0 ")
+        .replace("stiffness = 2.3e5 ", "stiffness = 1000.0 ")
+        .replace("damping = 71.0 ", "damping = 0.0 ");
+    let t = Template::from_text(&text, "soft_arm.toml").unwrap();
+    let mut sc = t.base.clone();
+    sc.duration_s = 0.35;
+    let (short, _) = sim::run(&sc, false).unwrap();
+    assert!(short.t_stop.unwrap() < 0.35 && !short.stroke_exhausted, "the case: stopped before the end, stroke not yet exhausted: {:?}", short.t_stop);
+    assert!(!short.concluded && !short.safe, "{:?}", short.failures);
+    assert!(short.failures[0].contains("had not settled") && short.flange_reach_after_end_m > 0.01, "{:?}", short.failures);
+    if let Ok(c) = check(&sc) {
+        assert!(!c.safe, "check called the cut-off run safe");
+    }
+    // The same arm run on: the stroke runs out.
+    sc.duration_s = 0.6;
+    assert!(sim::run(&sc, false).unwrap().0.stroke_exhausted);
+    // The shipped arm (Table 7: 2.3e5 N/m, 71 N s/m, a 38 ms period) settles within the run.
+    let (ok, _) = sim::run(&scene("tables5-7_bistable.toml"), false).unwrap();
+    assert!(ok.concluded && ok.safe && ok.flange_reach_after_end_m < 1e-4, "{:?} {}", ok.failures, ok.flange_reach_after_end_m);
+}
+
 #[test]
 fn a_rigid_tool_is_not_safe() {
     let (s, _) = sim::run(&scene("tables5-7_rigid.toml"), false).unwrap();

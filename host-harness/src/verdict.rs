@@ -56,15 +56,41 @@ pub fn ms(x: f64) -> String {
 /// still driving the tool into the target when the simulation ended, and the stroke can run out
 /// after the end: a run that ends there says nothing about safety (a long dead time with a short
 /// `duration` used to be reported SAFE).
-pub fn concluded(t_contact: Option<f64>, t_stop: Option<f64>, duration: f64) -> bool {
-    t_contact.is_none() || t_stop.is_some_and(|t| t <= duration)
+///
+/// A compliant robot keeps moving after its command stopped (its mass rings on k_r): the run is
+/// concluded only if the flange's further advance towards the target, bounded by the robot's
+/// energy at the end (`flange_reach_m`, see `sim`), cannot use up the stroke left at the end
+/// (`stroke_left_end_m`, None without a back end-stop), and, against a body region, stays within
+/// [`BODY_REACH_TOL_M`] (further advance presses the body harder, and the limits are on force).
+///
+/// The energy bound counts the robot only (not the decoupler's own stored energy: a bi-stable
+/// spring past its dead centre drives the tool back by itself), so the run must also last one
+/// period of the robot's compliance after the stop (`settle_s`, 2 pi sqrt(m_r / k_r)): the arm's
+/// largest advance after a stop comes within half a period, and damping only shrinks the later
+/// ones. A soft arm (k_r = 1,000 N/m, 8.4 kg: 0.58 s) stopped at 0.27 s ran out of stroke at
+/// 0.37 s, after a 0.35 s run had been called SAFE (review, 2026-11-26).
+pub fn concluded(t_contact: Option<f64>, t_stop: Option<f64>, duration: f64, settle_s: f64, flange_reach_m: f64, stroke_left_end_m: Option<f64>, body: bool) -> bool {
+    t_contact.is_none()
+        || (t_stop.is_some_and(|t| t + settle_s <= duration)
+            // (a stroke already used up at the end is answered: exhausted)
+            && stroke_left_end_m.is_none_or(|l| l <= 0.0 || flange_reach_m < l)
+            && (!body || flange_reach_m <= BODY_REACH_TOL_M))
 }
+
+/// How far a compliant robot may still advance into a body region after the run's end for the
+/// run to count as concluded, m: 0.1 mm (against the hand's 75 N/mm of ISO/TS 15066 Table A.3,
+/// 7.5 N; the run must otherwise be lengthened).
+pub const BODY_REACH_TOL_M: f64 = 1e-4;
 
 /// Every reason a run is not safe (empty: safe). The one definition; see the module docs.
 pub fn failures(s: &Summary) -> Vec<String> {
     let mut f = Vec::new();
     if !s.concluded {
         f.push(match s.t_stop {
+            Some(t) if t <= s.t_end_s => format!(
+                "not concluded: the robot's command stopped at t_stop = {t} s, but its compliant arm had not settled by the run's end (one period of its compliance after the stop, and an advance of up to {} still possible by its energy at the end), which is not simulated: lengthen duration",
+                mm(s.flange_reach_after_end_m)
+            ),
             Some(t) => format!("not concluded: the robot was still moving into the target when the run ended (it stands still at t_stop = {t} s); the stroke can still run out after the end, which is not simulated: lengthen duration"),
             None => "not concluded: the robot was never commanded to stop (the contact was not detected), so nothing stops it driving on after the run's end".to_string(),
         });

@@ -200,12 +200,13 @@ impl Columns {
         match &r.outcome {
             Outcome::Ran(b) => {
                 // Not concluded (the robot had not stopped by the run's end): the stroke, the mode
-                // and the body limits are unknown (<NA>), as the CSV's empty cells.
+                // and the body limits are unknown (<NA>) unless their failure was already seen.
+                // A failure seen before the end is known (as the CSV's cells).
                 let known = b.not_concluded.is_none();
-                self.stroke_exhausted.push(tri(Some(b.stroke_exhausted).filter(|_| known)));
+                self.stroke_exhausted.push(tri(Some(b.stroke_exhausted).filter(|&x| known || x)));
                 self.safe.push(tri(Some(b.safe)));
-                self.body_limits_pass.push(tri(b.body_limits_pass.filter(|_| known)));
-                self.mode.push(b.mode.filter(|_| known).unwrap_or(0));
+                self.body_limits_pass.push(tri(b.body_limits_pass.filter(|&p| known || !p)));
+                self.mode.push(b.mode.filter(|&m| known || m == 3).unwrap_or(0));
                 f(&mut self.peak_contact_force_n, b.peak_contact_force_n);
                 f(&mut self.peak_robot_force_n, b.peak_robot_force_n);
                 f(&mut self.stroke_left_min_m, b.stroke_left_min_m.unwrap_or(f64::NAN));

@@ -163,15 +163,17 @@ impl<R: Real> SafeController<R> {
     pub fn new(params: SsmParams<R>) -> Self {
         let half = R::ONE.div(R::from_int(2));
         // ISO 13855:2010 6.2, formula (1): K = 2.0 m/s (or the configured v_h if faster) where the
-        // resulting separation is at most 0.5 m; else the far-field v_h, the separation at least
-        // 0.5 m.
+        // resulting separation is at most 0.5 m (and then at least 0.1 m); else the far-field v_h,
+        // the separation at least 0.5 m.
         let t = params.reaction_time_s.add(params.stopping_time_s);
         let two = R::from_int(2);
         // NaN-safe: a NaN v_h stays NaN (far field, K NaN: every step stops).
         let near_k = if params.human_speed_mps <= two { two } else { params.human_speed_mps };
         let near = near_k.mul(t).add(params.margin_m);
+        // ... and S not less than 100 mm (ISO 13855:2010 6.2, formula (1)).
+        let tenth = R::ONE.div(R::from_int(10));
         let (approach_mps, stop_separation_m) = if near <= half {
-            (near_k, near)
+            (near_k, if near > tenth { near } else { tenth })
         } else {
             let far = params.human_speed_mps.mul(t).add(params.margin_m);
             // NaN-safe: anything not above 0.5 m is 0.5 m (a NaN parameter: 0.5 m, and the NaN
@@ -422,6 +424,8 @@ mod tests {
             ((1.6, 0.2, 0.15), (1.6, 0.5)),
             // 1.6 * 0.4 + 0.1 = 0.74: beyond 0.5 m either way.
             ((1.6, 0.4, 0.1), (1.6, 0.74)),
+            // 2.0 * 0.02 + 0 = 0.04: raised to ISO 13855's 100 mm minimum.
+            ((1.6, 0.02, 0.0), (2.0, 0.1)),
         ];
         for ((v_h, t, m), (k, stop)) in cases {
             let c = with(v_h, t, m);

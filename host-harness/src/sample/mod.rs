@@ -479,7 +479,7 @@ impl Plan {
             confidence: CONFIDENCE,
             estimates: Vec::new(),
         };
-        r.finish(&t.failures, &self.applies());
+        r.finish(&t.failures, &t.unknown, &self.applies());
         r
     }
 }
@@ -499,8 +499,10 @@ pub struct FailureKind {
     /// True when the failure can happen in this scene (estimated only then).
     pub applies: fn(&Scene) -> bool,
     /// True when a run that ended before the robot stopped (not concluded) is known to have it:
-    /// only `not_safe` (such a run is not safe). For the others what happened after the end is
-    /// unknown: such a run is left out of their `runs` and counted in their `high_if_unrun_failed`.
+    /// only `not_safe` (such a run is not safe). For the others a failure already seen in such a
+    /// run counts (they only grow: a stroke exhausted, a mode 3, a limit exceeded stay so after
+    /// the end); one not seen is unknown: the run is left out of that failure's `runs` and counted
+    /// in its `high_if_unrun_failed`.
     pub known_if_not_concluded: bool,
 }
 
@@ -613,19 +615,20 @@ impl Row {
         r.extend(self.values.iter().map(f64::to_string));
         match &self.outcome {
             Outcome::Ran(b) => {
-                // Not concluded: the stroke, the mode and the body limits after the end are
-                // unknown (empty cells); the peaks and the stroke left are up to the end.
+                // Not concluded: a failure seen before the end is known (stroke exhausted 1,
+                // mode 3, body limits 0); otherwise the cell is empty (unknown). The peaks and
+                // the stroke left are up to the end.
                 let known = b.not_concluded.is_none();
                 r.extend([
-                    if known { bit(b.stroke_exhausted) } else { String::new() },
-                    b.mode.filter(|_| known).map_or(String::new(), |m| m.to_string()),
+                    if known || b.stroke_exhausted { bit(b.stroke_exhausted) } else { String::new() },
+                    b.mode.filter(|&m| known || m == 3).map_or(String::new(), |m| m.to_string()),
                     b.peak_contact_force_n.to_string(),
                     b.peak_robot_force_n.to_string(),
                     b.stroke_left_min_m.map_or(String::new(), |x| x.to_string()),
                     bit(b.safe),
                 ]);
                 if body {
-                    r.push(b.body_limits_pass.filter(|_| known).map_or(String::new(), bit));
+                    r.push(b.body_limits_pass.filter(|&p| known || !p).map_or(String::new(), bit));
                 }
                 match &b.not_concluded {
                     None => r.extend(["ok".into(), String::new()]),
@@ -745,6 +748,8 @@ struct Tally {
     refused: u64,
     solver_failed: u64,
     failures: Vec<u64>,
+    /// Per failure, the inconclusive runs in which it was not seen (unknown).
+    unknown: Vec<u64>,
     modes: Modes,
     refusals: Vec<RefusalGroup>,
     solver_failures: Option<SolverFailures>,
@@ -754,6 +759,7 @@ impl Tally {
     fn add(&mut self, r: &Row) {
         if self.failures.is_empty() {
             self.failures = vec![0; FAILURES.len()];
+            self.unknown = vec![0; FAILURES.len()];
         }
         match &r.outcome {
             Outcome::Ran(b) => {
@@ -763,8 +769,13 @@ impl Tally {
                 }
                 if let Some(why) = &b.not_concluded {
                     add_inconclusive(&mut self.inconclusive, Inconclusive { count: 1, first_sample: r.index, first_reason: why.clone() });
-                    for ((n, &f), k) in self.failures.iter_mut().zip(&b.failed).zip(FAILURES) {
-                        *n += u64::from(f && k.known_if_not_concluded);
+                    // A failure seen before the end is a failure; one not seen is unknown.
+                    for (((n, u), &f), k) in self.failures.iter_mut().zip(self.unknown.iter_mut()).zip(&b.failed).zip(FAILURES) {
+                        if f {
+                            *n += 1;
+                        } else if !k.known_if_not_concluded {
+                            *u += 1;
+                        }
                     }
                     return;
                 }

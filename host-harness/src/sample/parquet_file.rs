@@ -193,17 +193,18 @@ impl ParquetRows {
             Outcome::Ran(b) => Some(b),
             _ => None,
         };
-        // Not concluded: the stroke, the mode and the body limits after the run's end are unknown
-        // (null, as the CSV's empty cells); the peaks and the stroke left are up to the end.
-        let known = ran.filter(|b| b.not_concluded.is_none());
-        self.stroke_exhausted.push(known.map(|b| b.stroke_exhausted));
-        self.mode.push(known.and_then(|b| b.mode).map(i32::from));
+        // Not concluded: a failure seen before the run's end is known, else the stroke, the mode
+        // and the body limits are unknown (null, as the CSV's empty cells); the peaks and the
+        // stroke left are up to the end.
+        let concluded = |b: &&super::Brief| b.not_concluded.is_none();
+        self.stroke_exhausted.push(ran.filter(|b| concluded(b) || b.stroke_exhausted).map(|b| b.stroke_exhausted));
+        self.mode.push(ran.filter(|b| concluded(b) || b.mode == Some(3)).and_then(|b| b.mode).map(i32::from));
         self.peak_contact_force_n.push(ran.map(|b| b.peak_contact_force_n));
         self.peak_robot_force_n.push(ran.map(|b| b.peak_robot_force_n));
         self.stroke_left_min_m.push(ran.and_then(|b| b.stroke_left_min_m));
         self.safe.push(ran.map(|b| b.safe));
         if self.body {
-            self.body_limits_pass.push(known.and_then(|b| b.body_limits_pass));
+            self.body_limits_pass.push(ran.filter(|b| concluded(b) || b.body_limits_pass == Some(false)).and_then(|b| b.body_limits_pass));
         }
         let (status, reason) = match &r.outcome {
             Outcome::Ran(b) => match &b.not_concluded {

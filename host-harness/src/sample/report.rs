@@ -151,18 +151,20 @@ pub struct SampleReport {
 impl SampleReport {
     /// Sets `complete` and the estimates from the failure counts (per [`FAILURES`]) of the kinds
     /// that `applies`.
-    pub(super) fn finish(&mut self, failures: &[u64], applies: &[bool]) {
+    pub(super) fn finish(&mut self, failures: &[u64], unknown: &[u64], applies: &[bool]) {
         self.complete = self.ranges.len() == 1 && self.ranges[0] == [0, self.samples];
         let unrun = self.refused + self.solver_failed;
         let kept = self.kept_probability();
-        let (ran, inconclusive) = (self.ran, self.inconclusive);
+        let ran = self.ran;
         self.estimates = FAILURES
             .iter()
             .enumerate()
             .filter(|(i, _)| applies.get(*i).copied().unwrap_or(false))
             .map(|(i, k)| {
                 let f = failures.get(i).copied().unwrap_or(0);
-                let mut e = if k.known_if_not_concluded { estimate(k, f, ran, unrun) } else { estimate(k, f, ran - inconclusive, unrun + inconclusive) };
+                // Inconclusive runs in which this failure was not seen are unknown: not runs.
+                let u = if k.known_if_not_concluded { 0 } else { unknown.get(i).copied().unwrap_or(0) };
+                let mut e = estimate(k, f, ran - u, unrun + u);
                 if kept < 1.0 {
                     e.high_if_unrun_failed = 1.0 - kept * (1.0 - e.high_if_unrun_failed);
                 }
@@ -316,8 +318,9 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
         if covered != r.drawn || r.ran + r.refused + r.solver_failed != r.drawn {
             return bad(format!("its ranges cover {covered} samples, it drew {}, and ran + refused + solver_failed = {}", r.drawn, r.ran + r.refused + r.solver_failed));
         }
-        if let Some(e) = r.estimates.iter().find(|e| e.runs != r.ran || e.failures > e.runs) {
-            return bad(format!("{}: {} failures of {} runs, and {} samples ran", e.failure, e.failures, e.runs, r.ran));
+        // A failure's runs are the samples that ran less the inconclusive ones it was not seen in.
+        if let Some(e) = r.estimates.iter().find(|e| e.runs > r.ran || e.runs + r.inconclusive < r.ran || e.failures > e.runs) {
+            return bad(format!("{}: {} failures of {} runs, and {} samples ran, {} of them inconclusive", e.failure, e.failures, e.runs, r.ran, r.inconclusive));
         }
     }
     let mut ranges: Vec<([u64; 2], usize)> = reports.iter().enumerate().flat_map(|(i, r)| r.ranges.iter().map(move |x| (*x, i))).collect();
@@ -348,6 +351,7 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
     out.warnings = Vec::new();
     out.warnings_not_listed = reports.iter().map(|r| r.warnings_not_listed).sum();
     let mut failures = vec![0u64; FAILURES.len()];
+    let mut unknown = vec![0u64; FAILURES.len()];
     for r in reports {
         out.modes.mode_1 += r.modes.mode_1;
         out.modes.mode_2 += r.modes.mode_2;
@@ -366,11 +370,14 @@ pub fn merge(reports: &[SampleReport], names: &[String]) -> Result<SampleReport,
             out.warnings_not_listed += add_warning(&mut out.warnings, w.clone());
         }
         for (i, k) in FAILURES.iter().enumerate() {
-            failures[i] += r.estimates.iter().find(|e| e.failure == k.name).map_or(0, |e| e.failures);
+            if let Some(e) = r.estimates.iter().find(|e| e.failure == k.name) {
+                failures[i] += e.failures;
+                unknown[i] += r.ran - e.runs;
+            }
         }
     }
     let applies: Vec<bool> = FAILURES.iter().map(|k| first.estimates.iter().any(|e| e.failure == k.name)).collect();
-    out.finish(&failures, &applies);
+    out.finish(&failures, &unknown, &applies);
     Ok(out)
 }
 

@@ -945,7 +945,14 @@ impl Run {
             stroke_left_min_m_null_reason: left_null,
             target_deformation_max_m: s.deformation_max,
             closest_approach_m: s.closest_min,
-            concluded: crate::verdict::concluded(s.t_contact, s.plant.motion.t_stop(), self.duration),
+            concluded: {
+                let (reach, left) = self.after_end();
+                // One period of the robot's compliance (0 for a rigid robot).
+                let settle = s.plant.robot.map_or(0.0, |r| if r.stiffness > 0.0 { std::f64::consts::TAU * (r.mass / r.stiffness).sqrt() } else { f64::INFINITY });
+                crate::verdict::concluded(s.t_contact, s.plant.motion.t_stop(), self.duration, settle, reach, left, s.body.is_some())
+            },
+            t_end_s: self.duration,
+            flange_reach_after_end_m: self.after_end().0,
             safe: false,
             failures: Vec::new(),
             body_region: None,
@@ -1006,6 +1013,27 @@ pub fn recorded_rows(duration: f64, dt: f64) -> u64 {
         }
     }
     k + 1
+}
+
+impl Run {
+    /// At the run's end: how far the flange can still advance towards the target (m; see
+    /// `Summary::flange_reach_after_end_m`), and the stroke left (m; None without a back
+    /// end-stop or for a rigid tool).
+    fn after_end(&self) -> (f64, Option<f64>) {
+        let y = &self.driver.y;
+        let k = self.sim.plant.kinematics(self.duration, y);
+        let reach = match self.sim.plant.robot {
+            Some(r) if r.stiffness > 0.0 => {
+                let amp = ((k.xr - k.xc).powi(2) + r.mass * k.vr * k.vr / r.stiffness).sqrt();
+                (k.xc + amp - k.xr).max(0.0)
+            }
+            Some(_) => f64::INFINITY,
+            None => 0.0,
+        };
+        // A rigid tool is exhausted on contact: no stroke to keep.
+        let left = if self.sim.plant.decoupler.is_rigid() { None } else { self.sim.plant.decoupler.back_stop().map(|b| -b.penetration(k.s)) };
+        (if reach.is_nan() { f64::INFINITY } else { reach }, left)
+    }
 }
 
 /// The longest run [`run_to_conclusion`] makes, s: the validator's largest `duration`.

@@ -146,10 +146,18 @@ pub struct Summary {
     /// undeformed surface without the tool bottoming. Informative; `safe` does not use it.
     pub closest_approach_m: Option<f64>,
     /// False when the tool touched the target and the robot had not come to a standstill by the
-    /// end of the run (`t_stop` after `duration`, or never commanded): what happened after the end
-    /// is not simulated, the stroke could still run out, so the run is not safe (a failure in
-    /// `failures`; lengthen `duration`). True otherwise, and for a run without contact.
+    /// end of the run (`t_stop` after `duration`, or never commanded), or its compliant arm could
+    /// still advance far enough to use up the stroke left (`flange_reach_after_end_m`): what
+    /// happened after the end is not simulated, so the run is not safe (a failure in `failures`;
+    /// lengthen `duration`). True otherwise, and for a run without contact.
     pub concluded: bool,
+    /// The run's end (the scene's `duration`), s.
+    pub t_end_s: f64,
+    /// How far the flange can still advance towards the target after the run's end, bounded by a
+    /// compliant robot's energy at the end, m: `x_c + sqrt((x_r - x_c)^2 + m_r x_r'^2 / k_r) - x_r`
+    /// with the command stopped (damping and the tool's push back only shorten it); 0 for a rigid
+    /// robot (the flange is the command) and the command's remaining travel if it has not stopped.
+    pub flange_reach_after_end_m: f64,
     /// The verdict (crate::verdict, one definition for every command): no entry in `failures`.
     pub safe: bool,
     /// Every reason the run is not safe, for people (empty when safe).
