@@ -516,11 +516,17 @@ fn the_worst_case_bound_counts_the_probability_the_truncation_cut_off() {
 /// index order.
 #[test]
 fn a_stop_takes_effect_within_a_block_and_keeps_a_prefix() {
-    let p = plan("table11_z_prototype.toml", &["motion.dead_time=uniform:0.01:0.02"], 1, sample::BLOCK as u64, None, false);
+    // Samples made slow by a 1 us step limit (about 0.1 s each), so that the stop, raised after
+    // 1 s, falls inside the first block on any machine: the block alone would take about 100 s
+    // on two threads. (With table11's own steps an idle machine ran the whole block in under
+    // 0.3 s, and this test failed in CI.)
+    let text = std::fs::read_to_string(scene_path("table11_z_prototype.toml")).unwrap() + "\n[solver]\nmax_step = 1e-6\n";
+    let keys = ["motion.dead_time=uniform:0.01:0.02".to_string()];
+    let p = Plan::new(Template::from_text(&text, "slow.toml").unwrap(), &text, &keys, 1, sample::BLOCK as u64, None, false).unwrap();
     let stop = std::sync::Arc::new(AtomicBool::new(false));
     let raise = stop.clone();
     let t = std::thread::spawn(move || {
-        std::thread::sleep(std::time::Duration::from_millis(300));
+        std::thread::sleep(std::time::Duration::from_millis(1000));
         raise.store(true, std::sync::atomic::Ordering::SeqCst);
     });
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
