@@ -7,6 +7,13 @@ use std::process::{Command, Stdio};
 use std::thread::sleep;
 use std::time::{Duration, Instant};
 
+/// What a stage of `cargo xtask test` came to.
+pub enum Outcome {
+    Pass(String),
+    Fail(String),
+    Skip(String),
+}
+
 pub const TARGET: &str = "thumbv7em-none-eabihf";
 pub const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
 

@@ -50,11 +50,12 @@ mod host;
 mod python;
 mod qemu;
 mod size;
+mod structure;
 
 use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_avoid_cost};
 use board::{check_board_corrupt, check_board_edge, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
 use board_serial::board_serial;
-use common::{elf_path, which, TARGET};
+use common::{elf_path, which, Outcome, TARGET};
 use firmware::{build_board_qemu_clock, build_board_qemu_io, build_firmware, firmware_clippy, target_installed};
 use host::{host_tests, loader_fuzz, no_fontconfig};
 use python::python_stage;
@@ -96,6 +97,17 @@ fn main() -> ExitCode {
             }
             Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
         }),
+        Some("structure") => single(|| {
+            let root = common::repo_root();
+            let mut failed = Vec::new();
+            for r in [structure::import_cycles(&root, |_| true), structure::layer_order(&root), structure::file_lengths(&root)] {
+                match r {
+                    Ok(m) => println!("{m}"),
+                    Err(e) => failed.push(e),
+                }
+            }
+            if failed.is_empty() { Ok(()) } else { Err(failed.join("\n")) }
+        }),
         Some("size") => single(|| {
             build_firmware()?;
             let s = elf_size(&elf_path("board"))?;
@@ -103,7 +115,7 @@ fn main() -> ExitCode {
             check_size(&s)
         }),
         _ => {
-            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|python>");
+            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|python|structure>");
             ExitCode::from(2)
         }
     }
@@ -119,15 +131,34 @@ fn single(f: impl FnOnce() -> Result<(), String>) -> ExitCode {
     }
 }
 
-enum Outcome {
-    Pass(String),
-    Fail(String),
-    Skip(String),
+/// The stage "structure": no import circle in any crate, no crate depending on one above it
+/// (`structure.rs`, docs/architecture.md).
+fn structure_stage() -> Outcome {
+    let root = common::repo_root();
+    match (structure::import_cycles(&root, |c| !structure::FIRMWARE_CRATES.contains(&c)), structure::layer_order(&root)) {
+        (Ok(a), Ok(b)) => Outcome::Pass(format!("{a}; {b}")),
+        (a, b) => Outcome::Fail([a.err(), b.err()].into_iter().flatten().collect::<Vec<_>>().join("\n")),
+    }
+}
+
+/// The stage "structure (firmware, hal-sim)": the same import check on the firmware's crates.
+fn firmware_structure_stage() -> Outcome {
+    match structure::import_cycles(&common::repo_root(), |c| structure::FIRMWARE_CRATES.contains(&c)) {
+        Ok(m) => Outcome::Pass(m),
+        Err(e) => Outcome::Fail(e),
+    }
 }
 
 fn test() -> ExitCode {
     let mut results: Vec<(&str, Outcome)> = Vec::new();
 
+    // Cheap, and a circle or an upward dependency is better named before the long stages run.
+    results.push(("structure", structure_stage()));
+    results.push(("structure (firmware, hal-sim)", firmware_structure_stage()));
+    results.push(("file length", match structure::file_lengths(&common::repo_root()) {
+        Ok(m) => Outcome::Pass(m),
+        Err(e) => Outcome::Fail(e),
+    }));
     results.push(("host tests", host_tests()));
     results.push(("loader fuzz", loader_fuzz()));
 
