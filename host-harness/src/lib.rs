@@ -17,7 +17,8 @@ pub mod sample;
 pub mod scene;
 pub mod shipped;
 pub mod sim;
-pub mod solver;
 pub mod sweep;
 pub mod validate;
 pub mod verdict;
+
+pub use flinch_solver as solver;

@@ -3,15 +3,15 @@
 //! command writes them (docs/conventions.md).
 
 pub mod csv;
-pub mod figure;
-pub mod font;
 pub mod html;
 pub mod measured;
-pub mod output;
 pub mod plot;
 pub mod schema;
 pub mod stream;
 pub mod trace;
+
+pub use flinch_output::json::{to_json, Versioned, CHECK_SCHEMA_VERSION, SCHEMA_VERSION};
+pub use flinch_output::{figure, font, output};
 
 use crate::hil::HilReport;
 use crate::sim::Summary;
@@ -19,14 +19,6 @@ use measured::Comparison;
 use schemars::JsonSchema;
 use serde::Serialize;
 use std::fmt::Write;
-
-/// The version of every JSON document Flinch writes (`schema_version`): raised when a field is
-/// renamed, removed or changes meaning; adding a field does not raise it.
-pub const SCHEMA_VERSION: u32 = 1;
-
-/// `flinch check --json`'s version: 2 since its lengths carry their unit (`margin` became
-/// `margin_m`, `stroke` `stroke_m`, ...; docs/schema/check.json).
-pub const CHECK_SCHEMA_VERSION: u32 = 2;
 
 fn ms(t: Option<f64>) -> String {
     t.map_or("-".into(), |t| format!("{:.1} ms", t * 1e3))
@@ -122,36 +114,6 @@ pub struct HilJson<'a> {
     /// The run's summary and the firmware's figures.
     #[serde(flatten)]
     pub report: &'a HilReport,
-}
-
-/// A JSON document with its schema version in front: `flinch check --json` and `flinch design
-/// --json` (docs/schema/check.json, design.json).
-#[derive(Debug, Clone, Serialize, JsonSchema)]
-pub struct Versioned<'a, T: JsonSchema> {
-    /// Version of this document's schema.
-    pub schema_version: u32,
-    /// The document.
-    #[serde(flatten)]
-    pub doc: &'a T,
-}
-
-impl<'a, T: JsonSchema> Versioned<'a, T> {
-    /// `doc` at the current [`SCHEMA_VERSION`].
-    pub fn new(doc: &'a T) -> Self {
-        Self { schema_version: SCHEMA_VERSION, doc }
-    }
-
-    /// `doc` at its own schema version.
-    pub fn at(schema_version: u32, doc: &'a T) -> Self {
-        Self { schema_version, doc }
-    }
-}
-
-/// A JSON document, pretty-printed, with a trailing newline.
-pub fn to_json<T: Serialize>(doc: &T) -> String {
-    let mut s = serde_json::to_string_pretty(doc).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
-    s.push('\n');
-    s
 }
 
 /// The `--json` summary, one object.

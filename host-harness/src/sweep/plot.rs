@@ -6,7 +6,7 @@
 
 use super::{Spacing, Status, SweepResult};
 use crate::report::figure::{self, with_backend, DrawResult};
-pub use crate::report::figure::{finite_range, fmt_num, Series, Style, XAxis, PALETTE};
+pub use crate::report::figure::{finite_range, fmt_num, ticks, Series, Style, XAxis, PALETTE};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -99,42 +99,6 @@ fn edges(ax: &XAxis, v: &[f64]) -> Vec<f64> {
     }
     e.push(u[n - 1] + 0.5 * (u[n - 1] - u[n - 2]));
     e.into_iter().map(back).collect()
-}
-
-/// Round tick values over [lo, hi]: 1-2-5 steps, or 1-2-5 per decade on a log scale.
-pub fn ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
-    if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
-        return vec![lo];
-    }
-    if log && lo > 0.0 {
-        // The sparsest of 1 / 1-2-5 / 1-2-3-5-7 / 1..9 per decade that labels at least two values
-        // (1 alone only over more than four decades); within less than a decade, linear round
-        // values.
-        let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
-        let sets: [&[f64]; 4] = [&[1.0], &[1.0, 2.0, 5.0], &[1.0, 2.0, 3.0, 5.0, 7.0], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]];
-        let first = if b - a > 4 { 0 } else { 1 };
-        for per in &sets[first..] {
-            let mut out = Vec::new();
-            for e in a..=b {
-                for m in per.iter() {
-                    let v = m * 10f64.powi(e);
-                    if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
-                        out.push(v);
-                    }
-                }
-            }
-            if out.len() >= 2 {
-                return out;
-            }
-        }
-        let lin = ticks(lo, hi, false);
-        return if lin.len() >= 2 { lin } else { vec![lo, hi] };
-    }
-    let raw = (hi - lo) / 6.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(10.0 * mag);
-    let first = (lo / step).ceil() * step;
-    (0..).map(|k| first + k as f64 * step).take_while(|v| *v <= hi + step * 1e-9).map(|v| if v.abs() < step * 1e-9 { 0.0 } else { v }).collect()
 }
 
 /// Draws a heat map into `path`.

@@ -7,7 +7,7 @@
 //! `[[I_c - m [c]x^2, m [c]x], [m [c]x^T, m 1]]` (kinetic energy `½ Vᵀ I V`). The composite
 //! inertia `I^c_i` of joint i is the sum over the links that move with it (body >= i), and
 //! `M_ij = s_iᵀ I^c_max(i,j) s_j` (Featherstone, *Rigid Body Dynamics Algorithms*, 2008, §6.2).
-use super::chain::{Chain, JointKind, Placement};
+use crate::chain::{Chain, JointKind, Placement};
 use nalgebra::{DMatrix, Matrix3, Matrix6, Vector3, Vector6};
 
 fn skew(c: &Vector3<f64>) -> Matrix3<f64> {

@@ -2,7 +2,7 @@
 //! Euler. Both interpolate inside a step with a cubic Hermite on the end values and slopes, so
 //! events are located the same way as with the adaptive method.
 
-use super::{Stepper, System};
+use crate::system::{Stepper, System};
 
 /// Which fixed-step method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,13 +1,5 @@
-//! Integrators for the plant: adaptive Dormand-Prince 5(4) with dense output, and fixed-step RK4
-//! and semi-implicit Euler for the speed/accuracy study. One [`driver`] runs them all, steps onto
-//! breakpoints (where the motion law's acceleration jumps) and locates events on each step's
-//! interpolant to a time tolerance, so contact onsets and threshold crossings are found, not
-//! sampled. State is a stack array; nothing is allocated per step, and the right-hand side is
-//! called through generics (no dynamic dispatch in the inner loop: `docs/accuracy.md`).
-
-pub mod dopri5;
-pub mod driver;
-pub mod fixed;
+//! What a plant and an integration method implement ([`System`], [`Stepper`]), and the two step-size
+//! helpers every method shares: the scaled error norm and HINIT's initial step.
 
 /// A first-order system y' = f(t, y) of N states.
 pub trait System<const N: usize> {
@@ -33,53 +25,6 @@ pub trait Stepper<const N: usize> {
     /// Tolerances (rtol, atol) of an adaptive method, for the initial-step estimate.
     fn tolerances(&self) -> (f64, f64) {
         (1e-6, 1e-9)
-    }
-}
-
-/// Every method the simulator offers, as one type so a run picks it at run time without boxing.
-#[derive(Debug, Clone)]
-pub enum AnyStepper<const N: usize> {
-    /// Adaptive Dormand-Prince 5(4).
-    Dopri5(dopri5::Dopri5<N>),
-    /// A fixed-step method.
-    Fixed(fixed::Fixed<N>),
-}
-
-impl<const N: usize> Stepper<N> for AnyStepper<N> {
-    #[inline]
-    fn step<S: System<N> + ?Sized>(&mut self, sys: &S, t: f64, y: &[f64; N], f0: &[f64; N], h: f64) -> ([f64; N], f64) {
-        match self {
-            Self::Dopri5(s) => s.step(sys, t, y, f0, h),
-            Self::Fixed(s) => s.step(sys, t, y, f0, h),
-        }
-    }
-    fn f_end(&self) -> Option<[f64; N]> {
-        match self {
-            Self::Dopri5(s) => s.f_end(),
-            Self::Fixed(s) => s.f_end(),
-        }
-    }
-    #[inline]
-    fn dense(&self, theta: f64) -> [f64; N] {
-        match self {
-            Self::Dopri5(s) => s.dense(theta),
-            Self::Fixed(s) => s.dense(theta),
-        }
-    }
-    fn adaptive(&self) -> bool {
-        matches!(self, Self::Dopri5(_))
-    }
-    fn order(&self) -> f64 {
-        match self {
-            Self::Dopri5(s) => s.order(),
-            Self::Fixed(s) => s.order(),
-        }
-    }
-    fn tolerances(&self) -> (f64, f64) {
-        match self {
-            Self::Dopri5(s) => s.tolerances(),
-            Self::Fixed(s) => s.tolerances(),
-        }
     }
 }
 

@@ -12,7 +12,7 @@
 //! child link's frame is the joint frame turned by `q` about `<axis>` (revolute) or moved by `q`
 //! along it (prismatic); `<inertial><origin>` places the centre of mass and the axes in which
 //! `<inertia>` is written.
-use super::KinError;
+use crate::error::KinError;
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -101,7 +101,7 @@ impl Chain {
     /// Builds the chain from URDF text; `file` names it in messages.
     pub fn from_urdf_str(text: &str, file: &str, base_link: &str, tip_link: &str) -> Result<Chain, KinError> {
         let robot = urdf_rs::read_from_string(text)
-            .map_err(|e| match super::urdf_diag::diagnose(text) {
+            .map_err(|e| match crate::urdf_diag::diagnose(text) {
                 Some((element, what)) => KinError::new(file, element, format!("is not a URDF that parses: {what}")),
                 None => KinError::new(file, "<robot>", format!("is not a URDF that parses: {e}")),
             })?;

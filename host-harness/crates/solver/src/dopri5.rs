@@ -1,7 +1,7 @@
 //! Dormand-Prince 5(4) (Hairer, Norsett, Wanner, "Solving ODEs I", DOPRI5) with its 4th-order
 //! continuous extension, FSAL: six new RHS evaluations per step.
 
-use super::{error_norm, Stepper, System};
+use crate::system::{error_norm, Stepper, System};
 
 const C2: f64 = 1.0 / 5.0;
 const C3: f64 = 3.0 / 10.0;

@@ -6,10 +6,10 @@
 //!
 //! Step-size control of the adaptive method (Hairer, Norsett, Wanner, "Solving ODEs I", II.4 and
 //! their DOPRI5 code): a PI controller (beta = 0.04), steps grow at most 10x and shrink at most 5x,
-//! never grow right after a rejection, and restart from the HINIT estimate ([`super::initial_step`])
+//! never grow right after a rejection, and restart from the HINIT estimate ([`crate::initial_step`])
 //! at the start and after each event, where the right-hand side has just changed.
 
-use super::{initial_step, Stepper, System};
+use crate::system::{initial_step, Stepper, System};
 use std::fmt;
 
 /// Which zero crossing of an event function counts. "Inside" means g > 0.
@@ -345,8 +345,8 @@ fn locate(g: impl Fn(f64) -> f64, g0: f64, g1: f64, dir: Crossing, theta_tol: f6
 
 #[cfg(test)]
 mod tests {
-    use super::super::dopri5::Dopri5;
-    use super::super::fixed::{Fixed, FixedKind};
+    use crate::dopri5::Dopri5;
+    use crate::fixed::{Fixed, FixedKind};
     use super::*;
 
     /// A ball falling onto a floor at x = 0 (event), reflected with restitution 0.5.
@@ -384,7 +384,7 @@ mod tests {
 
     #[test]
     fn events_are_located_not_sampled() {
-        use crate::solver::AnyStepper;
+        use crate::AnyStepper;
         for mut stepper in [AnyStepper::Dopri5(Dopri5::<2>::new(1e-9, 1e-12)), AnyStepper::Fixed(Fixed::<2>::new(FixedKind::Rk4))] {
             let mut ball = Ball { bounces: vec![], breakpoint: None };
             let mut d = Driver::<2, 1>::new(&ball, 0.0, [1.0, 0.0], Settings { max_step: 0.1, ..Default::default() });

@@ -29,9 +29,9 @@
 //! and no one-degree-of-freedom compliant robot describes it. Flinch refuses a configuration where
 //! the tip's mobility along `u`, `|Jᵀ u| / |J_v|` (J_v: the translational rows; 1 = every joint
 //! moves the tip along `u` as much as it moves it at all), is below [`MIN_MOBILITY`].
-use super::chain::Chain;
-use super::dynamics::{jacobian, mass_matrix};
-use super::KinError;
+use crate::chain::Chain;
+use crate::dynamics::{jacobian, mass_matrix};
+use crate::error::KinError;
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// The least mobility `|Jᵀ u| / |J_v|_F` accepted. Below it the reduced mass and stiffness are
