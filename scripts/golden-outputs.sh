@@ -35,9 +35,12 @@
 #      time) is not kept.
 #   2. The absolute path of the scratch directory and of the repository in messages ("wrote ...")
 #      are replaced by $SCRATCH and $REPO.
-#   3. The binary's own name in clap's usage lines: the binary is run through a symlink named
+#   3. The wall time in the progress messages on standard error of `sweep` and `sample` ("30
+#      points in 0.06 s (2 threads)", "200 samples in 1.02 s (2 threads, 196 samples/s)"): the
+#      seconds become "T" and the rate "R".
+#   4. The binary's own name in clap's usage lines: the binary is run through a symlink named
 #      `flinch`, so nothing to filter.
-#   4. PNG files are not kept (plotters' bitmap encoder is deterministic, but the SVG of the same
+#   5. PNG files are not kept (plotters' bitmap encoder is deterministic, but the SVG of the same
 #      plot carries the same data and diffs readably); SVGs are kept byte for byte.
 # Nothing else is filtered: two runs of the same binary give identical trees (checked by running
 # this script twice with one binary and diffing).
@@ -64,6 +67,8 @@ export PATH="$SCRATCH/bin:$PATH"
 
 # NONDET 2: absolute paths in messages.
 scrub() { sed -e "s#$SCRATCH#\$SCRATCH#g" -e "s#$REPO#\$REPO#g" "$@"; }
+# NONDET 3: wall time in progress messages.
+untime() { sed -E -e 's/ in [0-9.]+ s \(([0-9]+ threads?)/ in T s (\1/' -e 's/[0-9.]+ samples\/s/R samples\/s/' "$@"; }
 
 # g NAME CMD...: runs CMD in the scratch directory, keeps its stdout, stderr and exit status.
 g() {
@@ -74,7 +79,7 @@ g() {
     "$@" >"$OUT/$name.out" 2>"$OUT/$name.err.raw"
     echo $? >"$OUT/$name.rc"
     set -e
-    scrub "$OUT/$name.err.raw" >"$OUT/$name.err"
+    scrub "$OUT/$name.err.raw" | untime >"$OUT/$name.err"
     rm "$OUT/$name.err.raw"
     scrub -i "$OUT/$name.out"
     echo "$name: exit $(cat "$OUT/$name.rc")" >&2
