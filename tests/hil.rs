@@ -436,7 +436,7 @@ fn a_category_0_power_removal_lands_at_its_instant_whatever_the_step_grid() {
     let t_brake = plain.summary.t_brake.unwrap();
     let at = t_brake + 7.3e-3;
     assert!(at + lat < plain.summary.t_stop.unwrap(), "inside the controlled stop");
-    let brake = ctl0.brake();
+    let brake = flinch_harness::plant::brake::PowerOffBrake::of(&ctl0);
     let mut stops = Vec::new();
     for max_step in [1e-2, 1e-3, 2.7e-4] {
         for tick in [1e-4, 1e-3] {

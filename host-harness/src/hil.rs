@@ -253,10 +253,7 @@ pub fn parse_reset_policy(spec: &str) -> Result<ResetPolicy, String> {
     }
 }
 
-/// True when `x` seconds is a whole number of microseconds (the firmware's clock counts them).
-pub fn whole_us(x: f64) -> bool {
-    ((x * 1e6) - (x * 1e6).round()).abs() <= 1e-6 * (x * 1e6).abs().max(1.0)
-}
+pub use crate::scene::whole_us;
 
 fn describe_filter(f: Filter) -> String {
     match f {
@@ -819,7 +816,7 @@ fn cat0_brake(scene: &Scene, ctl: &Controller) -> (PowerOffBrake, String) {
             return (PowerOffBrake { delay: e.dead_time, decel: e.decel }, format!("motion.stopping (category 0) at {} m/s: delay {} s, {} m/s^2", scene.motion.speed, e.dead_time, e.decel));
         }
     }
-    let b = ctl.brake();
+    let b = PowerOffBrake::of(ctl);
     let default = b.delay == crate::plant::brake::DEFAULT_DELAY_S && b.decel == crate::plant::brake::DEFAULT_DECEL_MPS2;
     (b, format!("[controller] brake_delay {} s, brake_decel {} m/s^2{}", b.delay, b.decel, if default { " (defaults, plant/brake.rs)" } else { "" }))
 }

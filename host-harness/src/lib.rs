@@ -5,7 +5,6 @@
 //! what a run produced; `avoid` is collision avoidance (Ch. 5); `bench` is the speed/accuracy study (`flinch bench`).
 pub mod avoid;
 pub mod bench;
-pub mod body;
 pub mod body_design;
 pub mod check;
 pub mod design;
@@ -14,11 +13,10 @@ pub mod kinematics;
 pub mod plant;
 pub mod report;
 pub mod sample;
-pub mod scene;
-pub mod shipped;
 pub mod sim;
 pub mod sweep;
 pub mod validate;
 pub mod verdict;
 
 pub use flinch_solver as solver;
+pub use flinch_model::{body, scene, shipped};

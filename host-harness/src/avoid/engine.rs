@@ -231,7 +231,7 @@ impl<R: Real, G: fw::Gauss<R>> StepEngine for FwEngine<R, G> {
 /// The firmware gains of a scene.
 pub fn gains<R: Real>(scene: &Avoid) -> Result<Gains<R>, String> {
     Ok(Gains {
-        repulsion: scene.repulsion_law()?,
+        repulsion: repulsion_law(scene)?,
         k_att: R::from_f64(scene.speed_mps),
         k_rep: R::from_f64(scene.k_rep),
         capture_radius_m: R::from_f64(scene.capture_radius_m),
@@ -239,5 +239,21 @@ pub fn gains<R: Real>(scene: &Avoid) -> Result<Gains<R>, String> {
         slow_height_m: R::from_f64(scene.slow_height_m),
         stop_height_m: R::from_f64(scene.stop_height_m),
         bounded: scene.safety.on(),
+    })
+}
+
+/// The repulsion law named by `repulsion`.
+pub fn repulsion_law(scene: &Avoid) -> Result<flinch_firmware::avoidance::Repulsion, String> {
+    use flinch_firmware::avoidance::Repulsion;
+    Ok(match scene.repulsion.as_str() {
+        "vortex" => Repulsion::Vortex { sign: 0 },
+        "vortex_cw" => Repulsion::Vortex { sign: 1 },
+        "vortex_ccw" => Repulsion::Vortex { sign: -1 },
+        "gradient" => Repulsion::Gradient,
+        other => {
+            return Err(format!(
+                "avoid.repulsion = {other:?}: expected \"vortex\", \"vortex_cw\", \"vortex_ccw\" or \"gradient\""
+            ))
+        }
     })
 }

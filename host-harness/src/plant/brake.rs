@@ -17,22 +17,14 @@
 //!
 //! # Defaults (`[controller] brake_delay`, `brake_decel`)
 //!
-//! * [`DEFAULT_DELAY_S`] = 80 ms: the brake engagement time of the Pilz PRBT 6 arm, "from the
-//!   moment the STO signal on the robot arm is reset until the moment at which all brakes are
-//!   engaged" (Pilz, System Description Service Robotics Modules 1004870-EN-05, 4.12).
-//! * [`DEFAULT_DECEL_MPS2`] = 5 m/s^2: the Universal Robots UR5/CB3 manual's category-0 stop of
-//!   joint 1 (shoulder, the slowest of the three listed), 183 deg/s to rest in 530 ms (Appendix A.1,
-//!   v3.4.5): a mean 6.0 rad/s^2, 5.1 m/s^2 at the arm's 0.85 m reach, rounded down. Those 530 ms
-//!   include the brakes' own engagement, so adding the 80 ms delay counts it twice: the default
-//!   stops later than that robot, not sooner.
+//! [`DEFAULT_DELAY_S`] and [`DEFAULT_DECEL_MPS2`], with their sources, are the scene loader's
+//! (`flinch_model::scene::controller`): a scene without them gets them there.
 //!
 //! With the robot's own category-0 stopping data (`motion.stopping` with `category = 0`) the
 //! plant uses that table's equivalent delay and deceleration at v_0 instead (plant/stopping.rs).
 
-/// Default brake engagement delay, s (Pilz PRBT 6, see the module docs).
-pub const DEFAULT_DELAY_S: f64 = 0.08;
-/// Default braking deceleration once engaged, m/s^2 (UR5/CB3 joint 1, see the module docs).
-pub const DEFAULT_DECEL_MPS2: f64 = 5.0;
+pub use flinch_model::scene::{DEFAULT_BRAKE_DECEL_MPS2 as DEFAULT_DECEL_MPS2, DEFAULT_BRAKE_DELAY_S as DEFAULT_DELAY_S};
+use flinch_model::scene::Controller;
 
 /// The brakes that stop the arm once drive power is removed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,6 +42,11 @@ impl Default for PowerOffBrake {
 }
 
 impl PowerOffBrake {
+    /// The brakes of a category-0 stop as the scene's `[controller]` gives them.
+    pub fn of(ctl: &Controller) -> Self {
+        Self { delay: ctl.brake_delay, decel: ctl.brake_decel }
+    }
+
     /// Displacement, velocity and acceleration `tau` >= 0 s after power removal from speed `v0` >= 0.
     pub fn after(&self, v0: f64, tau: f64) -> (f64, f64, f64) {
         let tau = tau.max(0.0);

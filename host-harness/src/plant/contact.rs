@@ -11,10 +11,7 @@
 use super::damping_law;
 use crate::scene::ContactDamping;
 
-/// Approach velocities below this are raised to it when chi is computed, m/s. chi = alpha k / v_in
-/// grows without bound as v_in -> 0 (a grazing or resting contact); the floor keeps the damping
-/// finite, and only weakens it for contacts that approach slower than 1 mm/s.
-pub const V_IN_MIN: f64 = 1e-3;
+pub use super::damping_law::V_IN_MIN;
 
 /// One contact pair: its stiffness and how its damping is set.
 #[derive(Debug, Clone, Copy)]
@@ -51,7 +48,7 @@ impl Contact {
     /// chi for a contact that began with approach velocity `v_in` (m/s).
     pub fn chi(&self, v_in: f64) -> f64 {
         match self.damping {
-            Damping::Alpha(a) => a * self.stiffness / v_in.abs().max(V_IN_MIN),
+            Damping::Alpha(a) => damping_law::chi(a, self.stiffness, v_in),
             Damping::Chi(chi) => chi,
         }
     }

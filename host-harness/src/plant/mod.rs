@@ -9,13 +9,13 @@
 
 pub mod brake;
 pub mod contact;
-pub mod damping_law;
+pub use flinch_model::damping_law;
 pub mod decoupler;
 pub mod friction;
 pub mod motion_law;
 pub mod robot;
 pub mod sensor;
-pub mod stopping;
+pub use flinch_model::stopping;
 pub mod target;
 
 use crate::scene::Scene;

@@ -1,9 +1,10 @@
 //! The module graph of one crate, from what `scan.rs` read: each path a file names is resolved to
 //! the module that defines its item (following `use` aliases and re-exports, globs included), an
 //! edge joins the two files, and the strongly connected components of more than one file are the
-//! import circles (Tarjan's algorithm).
+//! import circles (Tarjan's algorithm). Importing a module (`use crate::scene;`) is not an edge by
+//! itself, each path used through it is; a glob import (`use super::*;`) is one.
 
-use super::scan::{CrateSource, Module};
+use super::scan::{CrateSource, Module, RefKind};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
@@ -117,7 +118,12 @@ fn walk(cs: &CrateSource, mut m: Vec<String>, rest: &[String], depth: usize) -> 
 pub fn cycles(cs: &CrateSource) -> Vec<Cycle> {
     let mut edges: BTreeMap<PathBuf, Vec<Edge>> = BTreeMap::new();
     for r in &cs.references {
-        let Some((target, _)) = resolve(cs, &r.scope, &r.path, DEPTH) else { continue };
+        let Some((target, complete)) = resolve(cs, &r.scope, &r.path, DEPTH) else { continue };
+        // `use a::b;` of a module depends on nothing by itself: each path through it (`b::x`) is
+        // an edge to where `x` is defined. A glob brings names in unseen, so it is an edge.
+        if complete && r.kind == RefKind::Use {
+            continue;
+        }
         let Some(to) = module(cs, &target).map(|m| m.file.clone()) else { continue };
         if to == r.file || to.as_os_str().is_empty() {
             continue;

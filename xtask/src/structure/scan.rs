@@ -181,6 +181,16 @@ pub struct Reference {
     pub path: Vec<String>,
     pub file: PathBuf,
     pub line: usize,
+    /// What wrote it: a path in code, a `use` of one name, or a glob `use`.
+    pub kind: RefKind,
+}
+
+/// Where a [`Reference`] was written.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RefKind {
+    Code,
+    Use,
+    Glob,
 }
 
 /// A crate's module tree and every path its files name.
@@ -313,7 +323,8 @@ impl Parser<'_> {
                     let mut found = Vec::new();
                     self.use_tree(&mut Vec::new(), &mut found);
                     for (alias, path) in found {
-                        self.cs.references.push(Reference { scope: scope.to_vec(), path: path.clone(), file: self.file.to_path_buf(), line });
+                        let kind = if alias.is_none() { RefKind::Glob } else { RefKind::Use };
+                        self.cs.references.push(Reference { scope: scope.to_vec(), path: path.clone(), file: self.file.to_path_buf(), line, kind });
                         self.cs.modules.entry(scope.to_vec()).or_default().uses.push((alias, path));
                     }
                 }
@@ -333,7 +344,9 @@ impl Parser<'_> {
                 }
                 Tok::Ident(w) => {
                     // A path in code: `crate::a::b`, `super::x`, `self::y`, or `child::z`.
-                    if self.is_path(self.i + 1) && !(self.i > 0 && self.is_path(self.i - 1)) {
+                    // `pub(in super::super)` names a visibility, not a dependency.
+                    let visibility = self.i >= 2 && self.ident(self.i - 1) == Some("in") && self.is(self.i - 2, '(');
+                    if self.is_path(self.i + 1) && !(self.i > 0 && self.is_path(self.i - 1)) && !visibility {
                         let first = w.clone();
                         let mut path = vec![first];
                         let mut k = self.i + 1;
@@ -346,7 +359,7 @@ impl Parser<'_> {
                                 None => break,
                             }
                         }
-                        self.cs.references.push(Reference { scope: scope.to_vec(), path, file: self.file.to_path_buf(), line });
+                        self.cs.references.push(Reference { scope: scope.to_vec(), path, file: self.file.to_path_buf(), line, kind: RefKind::Code });
                         self.i = k;
                     } else {
                         self.i += 1;

@@ -1,26 +1,9 @@
-//! `[decoupler]`: what holds the tool on the flange (MODEL.md element 3, `plant/decoupler/`).
-//! `kind` picks the mechanism; each mechanism's keys are in its own file, named as its plant file.
-//! A rigid decoupler (the tool fastened to the flange) has no key but `kind`.
-pub mod bistable;
-pub mod end_stop;
-pub mod hydraulic;
-pub mod linear;
+//! Reads `[decoupler]`: `kind` picks the mechanism's reader (in its own file).
 
-use super::check::{Ctx, Key, Tab, Ty};
-use super::model::Decoupler;
-
-/// The `[decoupler]` table in the top level.
-pub const TABLE: Key = Key::of("decoupler", Ty::Table("what holds the tool on the flange"), "what holds the tool on the flange");
-
-/// The mechanism; a new decoupler adds its name here and its arm in [`decoupler`].
-pub const KIND: Key = Key::of(
-    "kind",
-    Ty::Choice(&["rigid", "linear", "bistable", "hydraulic"]),
-    "the mechanism: \"rigid\" (no decoupler), \"linear\" (eq 17, 23), \"bistable\" (eq 24-42), \"hydraulic\" (eq 46-56)",
-);
-
-/// The keys of a rigid decoupler.
-pub const RIGID_KEYS: &[Key] = &[KIND];
+use super::kind::{KIND, RIGID_KEYS};
+use super::{bistable, hydraulic, linear};
+use crate::scene::check::{Ctx, Tab};
+use crate::scene::model::Decoupler;
 
 #[derive(Clone, Copy)]
 enum DecKind {
@@ -30,9 +13,9 @@ enum DecKind {
     Hydraulic,
 }
 
-/// Reads `[decoupler]`; the tool mass converts a front-stop restitution to a damping, and the
+/// Reads `[decoupler]` (a new decoupler adds its arm here); the tool mass converts a front-stop restitution to a damping, and the
 /// tool's weight enters the bi-stable's rest check.
-pub(super) fn decoupler(
+pub(in crate::scene) fn decoupler(
     cx: &mut Ctx,
     t: &Tab,
     tool_mass: Option<f64>,

@@ -1,7 +1,12 @@
 //! `[controller]`: the robot controller of firmware-in-the-loop runs (`flinch hil`, `hil.rs`):
 //! inputs sampled once per scan cycle, the firmware ticking at its own period.
 use super::check::{Bound::*, Ctx, Key, Tab, Ty};
-use super::model::Controller;
+use super::model::{Controller, DEFAULT_BRAKE_DECEL_MPS2, DEFAULT_BRAKE_DELAY_S};
+
+/// True when `x` seconds is a whole number of microseconds (the firmware's clock counts them).
+pub fn whole_us(x: f64) -> bool {
+    ((x * 1e6) - (x * 1e6).round()).abs() <= 1e-6 * (x * 1e6).abs().max(1.0)
+}
 
 /// The `[controller]` table in the top level.
 pub const TABLE: Key = Key::of(
@@ -34,7 +39,7 @@ pub(super) fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
     let scan_cycle = cx.number(t, &SCAN_CYCLE);
     let phase = cx.number(t, &PHASE);
     let firmware_tick = cx.number(t, &FIRMWARE_TICK);
-    if let Some(x) = firmware_tick.filter(|&x| !crate::hil::whole_us(x)) {
+    if let Some(x) = firmware_tick.filter(|&x| !whole_us(x)) {
         cx.bad(t, FIRMWARE_TICK.name, format!("a whole number of microseconds (the firmware's clock counts them), got {x}"));
         return None;
     }
@@ -44,7 +49,7 @@ pub(super) fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
         scan_cycle: scan_cycle?,
         phase: phase?,
         firmware_tick: firmware_tick?,
-        brake_delay: brake_delay?.unwrap_or(crate::plant::brake::DEFAULT_DELAY_S),
-        brake_decel: brake_decel?.unwrap_or(crate::plant::brake::DEFAULT_DECEL_MPS2),
+        brake_delay: brake_delay?.unwrap_or(DEFAULT_BRAKE_DELAY_S),
+        brake_decel: brake_decel?.unwrap_or(DEFAULT_BRAKE_DECEL_MPS2),
     })
 }

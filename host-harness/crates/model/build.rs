@@ -23,7 +23,7 @@ fn collect(dir: &Path, prefix: &str, out: &mut Vec<(String, PathBuf)>) {
 }
 
 fn main() {
-    let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it")).join("..").join("scenes");
+    let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it")).join("../../..").join("scenes");
     let mut scenes = Vec::new();
     collect(&root, "", &mut scenes);
     let mut src = String::from("/// Every shipped scene: (name, TOML text), sorted by name.\npub const SCENES: &[(&str, &str)] = &[\n");

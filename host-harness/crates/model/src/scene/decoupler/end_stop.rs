@@ -4,7 +4,7 @@
 use super::super::check::{Bound::*, Ctx, Key, Tab, Ty};
 use super::super::contact::{self, contact_damping};
 use super::super::model::{DampingLaw, FrontStopLaw, LinearStop, NonlinearStop};
-use crate::plant::damping_law;
+use crate::damping_law;
 
 /// Damping law of the back end-stop when only a restitution is given (the thesis, eq 29/37).
 pub const DEFAULT_BACK_STOP_LAW: DampingLaw = DampingLaw::HuntCrossley;

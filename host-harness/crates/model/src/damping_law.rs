@@ -7,13 +7,35 @@
 //! integrates that dimensionless impact; `Exact` inverts it, so the requested e is what comes out.
 //! Eq 7 (Hunt-Crossley, as the thesis) cannot go below about 0.5 however small e is: MODEL.md.
 
-use crate::scene::DampingLaw;
+use crate::scene::{ContactDamping, DampingLaw};
 use std::sync::OnceLock;
 
 /// Largest alpha used: alpha grows without bound as e -> 0 for Flores, Gonthier and Exact. Capping
 /// it keeps the contact ODE integrable; at this cap the achieved restitution is already below 0.01
 /// (tested in `exact_reaches_small_restitution`).
 pub const ALPHA_MAX: f64 = 200.0;
+
+/// Approach velocities below this are raised to it when chi is computed, m/s. chi = alpha k / v_in
+/// grows without bound as v_in -> 0 (a grazing or resting contact); the floor keeps the damping
+/// finite, and only weakens it for contacts that approach slower than 1 mm/s.
+pub const V_IN_MIN: f64 = 1e-3;
+
+/// chi = alpha k / v_in for a contact of stiffness `k` that began with approach velocity `v_in`
+/// (m/s), v_in floored at [`V_IN_MIN`]; the plant's contacts (`plant/contact.rs`) and the loader's
+/// step estimate (`scene/budget.rs`) both use it.
+#[inline]
+pub fn chi(alpha: f64, stiffness: f64, v_in: f64) -> f64 {
+    alpha * stiffness / v_in.abs().max(V_IN_MIN)
+}
+
+/// chi of a contact given by the scene's damping specification (a restitution and its law, or a
+/// fixed chi), at approach velocity `v_in`.
+pub fn contact_chi(stiffness: f64, d: &ContactDamping, v_in: f64) -> f64 {
+    match *d {
+        ContactDamping::Restitution { restitution, law } => chi(alpha(law, restitution), stiffness, v_in),
+        ContactDamping::FixedChi(c) => c,
+    }
+}
 
 /// alpha(e) for a law; `e` in [0, 1].
 pub fn alpha(law: DampingLaw, e: f64) -> f64 {

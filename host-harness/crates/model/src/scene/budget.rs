@@ -4,7 +4,8 @@
 //! travel switch (a tool that starts past the switch would be detected at t = 0).
 use super::check::{approx, num, Ctx, Tab};
 use super::model::{Decoupler, Method, Scene, Sensor};
-use super::{solver, DURATION};
+use super::solver;
+use super::tables::DURATION;
 
 /// The largest number of steps a scene may need (estimated, see [`estimated_steps`]). A step of the
 /// adaptive solver costs about 0.5 us in release builds (docs/accuracy.md: Tables 5-7, 861 steps
@@ -83,8 +84,8 @@ pub fn pressed_steps(s: &Scene) -> Option<(f64, f64)> {
     let (kb, kc) = (b.back_stop.stiffness, s.target.stiffness);
     let db = d / (1.0 + (kb / kc).powf(2.0 / 3.0));
     let dc = d - db;
-    let chib = crate::plant::contact::Contact::new(kb, &b.back_stop.damping).chi(v);
-    let chic = crate::plant::contact::Contact::new(kc, &s.target.damping).chi(v);
+    let chib = crate::damping_law::contact_chi(kb, &b.back_stop.damping, v);
+    let chic = crate::damping_law::contact_chi(kc, &s.target.damping, v);
     let m = s.tool.mass;
     let k = 1.5 * (kb * db.sqrt() + kc * dc.sqrt());
     let c = chib * db.powf(1.5) + chic * dc.powf(1.5);

@@ -5,7 +5,7 @@ use super::super::check::{approx, num, Bound::*, Ctx, Key, Tab};
 use super::super::friction;
 use super::super::model::Bistable;
 use super::end_stop::{self, end_stops};
-use super::KIND;
+use super::kind::KIND;
 
 /// N.
 pub const SPRINGS: Key = Key::integer("springs", 1, 16, "1-2 springs in Tables 2-15; 16 fill the circumference of a hand-sized module", "N, the number of springs");

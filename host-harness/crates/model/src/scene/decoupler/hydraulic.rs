@@ -3,7 +3,7 @@
 use super::super::check::{approx, num, Bound::*, Ctx, Key, Tab};
 use super::super::model::Hydraulic;
 use super::end_stop::{self, end_stops};
-use super::KIND;
+use super::kind::KIND;
 
 /// Adiabatic exponent of air (eq 47).
 pub const DEFAULT_ADIABATIC_EXPONENT: f64 = 1.4;

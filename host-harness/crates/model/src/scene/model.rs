@@ -44,7 +44,7 @@ pub struct Motion {
     /// stop signal at the robot (the table's times include the robot's reaction).
     pub dead_time: f64,
     /// `motion.stopping`: the robot's own stopping table, instead of `decel`.
-    pub stopping: Option<crate::plant::stopping::StoppingTable>,
+    pub stopping: Option<crate::stopping::StoppingTable>,
     /// `motion.stopping.payload`, kg: the payload the table was measured with.
     pub stopping_payload: Option<f64>,
     /// m/s^2 along the approach direction (9.81 for a tool moving down), acts on the tool.
@@ -377,14 +377,24 @@ pub struct Controller {
     pub brake_decel: f64,
 }
 
+// The category-0 brake's defaults (`[controller] brake_delay`, `brake_decel`; plant/brake.rs models the brake):
+// * [`DEFAULT_BRAKE_DELAY_S`] = 80 ms: the brake engagement time of the Pilz PRBT 6 arm, "from the
+//   moment the STO signal on the robot arm is reset until the moment at which all brakes are
+//   engaged" (Pilz, System Description Service Robotics Modules 1004870-EN-05, 4.12).
+// * [`DEFAULT_BRAKE_DECEL_MPS2`] = 5 m/s^2: the Universal Robots UR5/CB3 manual's category-0 stop of
+//   joint 1 (shoulder, the slowest of the three listed), 183 deg/s to rest in 530 ms (Appendix A.1,
+//   v3.4.5): a mean 6.0 rad/s^2, 5.1 m/s^2 at the arm's 0.85 m reach, rounded down. Those 530 ms
+//   include the brakes' own engagement, so adding the 80 ms delay counts it twice: the default
+//   stops later than that robot, not sooner.
+//
+/// Default brake engagement delay, s (Pilz PRBT 6, see above).
+pub const DEFAULT_BRAKE_DELAY_S: f64 = 0.08;
+/// Default braking deceleration once engaged, m/s^2 (UR5/CB3 joint 1, see above).
+pub const DEFAULT_BRAKE_DECEL_MPS2: f64 = 5.0;
+
 impl Controller {
     /// A controller with the category-0 brake's defaults (`plant/brake.rs`).
     pub const fn new(scan_cycle: f64, phase: f64, firmware_tick: f64) -> Self {
-        Self { scan_cycle, phase, firmware_tick, brake_delay: crate::plant::brake::DEFAULT_DELAY_S, brake_decel: crate::plant::brake::DEFAULT_DECEL_MPS2 }
-    }
-
-    /// The brakes of a category-0 stop.
-    pub fn brake(&self) -> crate::plant::brake::PowerOffBrake {
-        crate::plant::brake::PowerOffBrake { delay: self.brake_delay, decel: self.brake_decel }
+        Self { scan_cycle, phase, firmware_tick, brake_delay: DEFAULT_BRAKE_DELAY_S, brake_decel: DEFAULT_BRAKE_DECEL_MPS2 }
     }
 }

@@ -8,7 +8,7 @@
 //! they must lie in the same ranges.
 use super::check::{approx, num, Bound::*, Ctx, Key, SceneError, SceneIssue, Span, Tab, Ty};
 use super::model::Robot;
-use crate::kinematics::{self, Chain, KinError, Reduced};
+use flinch_kinematics::{self as kinematics, Chain, KinError, Reduced};
 use std::path::{Path, PathBuf};
 use toml_edit::{ImDocument, Item, Value};
 
@@ -64,8 +64,8 @@ const URDF_KEYS: [&Key; 7] = [&URDF, &BASE_LINK, &TIP_LINK, &JOINTS, &DIRECTION,
 
 /// The URDFs shipped in `scenes/robots/`, embedded so the shipped scenes run from any directory.
 const SHIPPED_URDFS: &[(&str, &str)] = &[
-    ("robots/two_link.urdf", include_str!("../../../scenes/robots/two_link.urdf")),
-    ("robots/viper_s650_standin.urdf", include_str!("../../../scenes/robots/viper_s650_standin.urdf")),
+    ("robots/two_link.urdf", include_str!("../../../../../scenes/robots/two_link.urdf")),
+    ("robots/viper_s650_standin.urdf", include_str!("../../../../../scenes/robots/viper_s650_standin.urdf")),
 ];
 
 /// A `[robot]` given by its URDF: what `flinch robot` prints and sweeps.
@@ -106,7 +106,7 @@ pub fn urdf_robot(text: &str, file: &str) -> Result<Option<UrdfRobot>, SceneErro
     if !t.contains_key(URDF.name) {
         return Ok(None);
     }
-    let mut cx = Ctx { text, file, issues: Vec::new() };
+    let mut cx = Ctx { text, file, issues: Vec::new(), tables: &[] };
     let tab = Tab { path: "robot".into(), t, line: None };
     let spec = read_urdf_robot(&mut cx, &tab);
     match spec {

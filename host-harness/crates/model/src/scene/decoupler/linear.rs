@@ -2,7 +2,7 @@
 //! `plant/decoupler/linear.rs`). k_t = 0 with zeta = 0 is the free tool of Fig. 1b / 4b.
 use super::super::check::{Bound::*, Ctx, Key, Tab};
 use super::super::model::LinearDecoupler;
-use super::KIND;
+use super::kind::KIND;
 
 /// k_t.
 pub const STIFFNESS: Key = Key::number("stiffness", "N/m", Incl(0.0), Incl(1e7), "0 (a free tool, Fig. 1b) to 1e7 N/m, as stiff as the stiffest robot flange in range", "k_t, the spring between flange and tool (0: a free tool)");

@@ -262,7 +262,7 @@ case!(
 
 #[test]
 fn front_stop_hunt_crossley_keeps_k_and_matches_the_linear_restitution() {
-    use crate::plant::damping_law::{hunt_crossley_restitution, linear_restitution};
+    use crate::damping_law::{hunt_crossley_restitution, linear_restitution};
     let stop = |text: &str| {
         let s = parse(&mutate(BASE, "damping = 278.0 }", text), "hc.toml").unwrap();
         let Decoupler::Bistable(b) = s.decoupler else { panic!("not bistable") };

@@ -3,7 +3,7 @@
 //! brakes with). `{ category = 0 | 1, speed = [...], distance = [...], time = [...] }`, optionally
 //! `payload`: distance and time measured from the stop signal to standstill, reaction included.
 use super::check::{num, Bound::*, Ctx, Key, Span, Tab, Ty};
-use crate::plant::stopping::{StoppingTable, TableError, MAX_POINTS};
+use crate::stopping::{StoppingTable, TableError, MAX_POINTS};
 
 /// `motion.stopping`.
 pub const TABLE: Key = Key::of(
