@@ -10,7 +10,6 @@ pub mod check;
 pub mod design;
 pub mod hil;
 pub mod kinematics;
-pub mod plant;
 pub mod report;
 pub mod sample;
 pub mod sim;
@@ -20,3 +19,4 @@ pub mod verdict;
 
 pub use flinch_solver as solver;
 pub use flinch_model::{body, scene, shipped};
+pub use flinch_plant as plant;

@@ -20,6 +20,8 @@ use crate::solver::{AnyStepper, System};
 use std::cell::Cell;
 
 mod summary;
+#[cfg(test)]
+mod friction_tests;
 pub use summary::{achieved_restitution, detection_delay, reaction_time, Sample, Summary, RESTITUTION_SLACK};
 
 /// Number of event functions.

@@ -2,7 +2,7 @@
 //! `F = -k_t s - c_t s'` on the tool, c_t = 2 zeta sqrt(k_t m_t). No end-stops. Units: N/m, N s/m.
 //! k_t = 0 with zeta = 0 is the completely decoupled tool of Fig. 1b / 4b.
 
-use crate::scene::LinearDecoupler;
+use flinch_model::scene::LinearDecoupler;
 
 /// The spring-damper.
 #[derive(Debug, Clone, Copy)]

@@ -7,8 +7,8 @@
 //! deceleration at the speed commanded at that instant, so it covers the table's D(v) in T(v).
 
 use super::brake::PowerOffBrake;
-use super::stopping::StoppingTable;
-use crate::scene::Motion;
+use flinch_model::stopping::StoppingTable;
+use flinch_model::scene::Motion;
 
 /// The commanded flange motion, with the braking instant once it is known.
 #[derive(Debug, Clone, Copy)]
@@ -258,7 +258,7 @@ mod tests {
 
     #[test]
     fn power_removal_overrides_the_controlled_stop_with_the_brakes() {
-        use crate::plant::brake::PowerOffBrake;
+        use crate::brake::PowerOffBrake;
         let b = PowerOffBrake { delay: 0.08, decel: 5.0 };
         // Cruising at 0.05 m/s: coast 80 ms, then 10 ms of braking at 5 m/s^2.
         let mut m = law();

@@ -8,8 +8,8 @@
 //! thesis writes |x'| for the rate (eq 29, 37), which would damp during the rebound as well and
 //! pull the tool onto the stop: not copied (MODEL.md).
 
-use crate::plant::contact::{Contact, V_IN_MIN};
-use crate::scene::{FrontStopLaw, LinearStop, NonlinearStop};
+use crate::contact::{Contact, V_IN_MIN};
+use flinch_model::scene::{FrontStopLaw, LinearStop, NonlinearStop};
 
 /// Front end-stop, pushing only: eq 28/38's linear law `F = -k d - c d'`, d = s - s_front, or the
 /// Hunt-Crossley law `F = -k d^n - chi d^n d'`, chi = alpha k / v_in fixed at each landing from
@@ -101,7 +101,7 @@ impl BackStop {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{ContactDamping, DampingLaw};
+    use flinch_model::scene::{ContactDamping, DampingLaw};
 
     #[test]
     fn front_stop_pushes_only() {
@@ -116,8 +116,8 @@ mod tests {
     fn pair() -> (FrontStop, FrontStop) {
         let lin = LinearStop { stiffness: 1e6, damping: 235.0, law: FrontStopLaw::Linear };
         let zeta = 235.0 / (2.0 * (1e6_f64 * 0.5).sqrt());
-        let e = crate::plant::damping_law::linear_restitution(zeta);
-        let alpha = crate::plant::damping_law::hunt_crossley_alpha(e, 1.0);
+        let e = flinch_model::damping_law::linear_restitution(zeta);
+        let alpha = flinch_model::damping_law::hunt_crossley_alpha(e, 1.0);
         let hc = LinearStop { law: FrontStopLaw::HuntCrossley { exponent: 1.0, alpha, restitution: e }, ..lin };
         (FrontStop::new(0.0, &lin), FrontStop::new(0.0, &hc))
     }

@@ -6,8 +6,8 @@
 //! Units: m, N/m, N. s = 0 is the unstable equilibrium (the springs aligned).
 
 use super::end_stop::{BackStop, FrontStop};
-use crate::plant::friction::TanhFriction;
-use crate::scene::{Bistable, FrictionLaw};
+use crate::friction::TanhFriction;
+use flinch_model::scene::{Bistable, FrictionLaw};
 
 /// The slide's friction law.
 #[derive(Debug, Clone, Copy)]
@@ -104,13 +104,13 @@ impl BistableMechanism {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{ContactDamping, DampingLaw, LinearStop, NonlinearStop};
+    use flinch_model::scene::{ContactDamping, DampingLaw, LinearStop, NonlinearStop};
 
     fn table15() -> Bistable {
         Bistable {
             springs: 1, spring_rate: 490.0, free_length: 0.062, height: 0.053,
             front_stroke: 0.0235, back_stroke: 0.0235,
-            front_stop: LinearStop { stiffness: 2.25e6, damping: 235.0, law: crate::scene::FrontStopLaw::Linear },
+            front_stop: LinearStop { stiffness: 2.25e6, damping: 235.0, law: flinch_model::scene::FrontStopLaw::Linear },
             back_stop: NonlinearStop { stiffness: 2.25e6, damping: ContactDamping::Restitution { restitution: 0.3, law: DampingLaw::HuntCrossley } },
             friction: None,
         }

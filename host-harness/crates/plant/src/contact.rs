@@ -8,10 +8,10 @@
 //! chi is fixed per contact at its onset from the approach velocity v_in (eq 7 and the other laws
 //! in [`super::damping_law`]), or given directly (Table 12).
 
-use super::damping_law;
-use crate::scene::ContactDamping;
+use flinch_model::damping_law;
+use flinch_model::scene::ContactDamping;
 
-pub use super::damping_law::V_IN_MIN;
+pub use flinch_model::damping_law::V_IN_MIN;
 
 /// One contact pair: its stiffness and how its damping is set.
 #[derive(Debug, Clone, Copy)]
@@ -66,7 +66,7 @@ impl Contact {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::DampingLaw;
+    use flinch_model::scene::DampingLaw;
 
     fn c() -> Contact {
         Contact::new(1e8, &ContactDamping::Restitution { restitution: 0.65, law: DampingLaw::HuntCrossley })

@@ -6,7 +6,7 @@
 //! "Travel" is measured from the front stop's surface (s = C1, or s = 0 hydraulic); a linear
 //! decoupler has no stop, so from the tool's rest position.
 
-use crate::scene::Sensor;
+use flinch_model::scene::Sensor;
 
 /// The detector as the plant sees it: a signed distance to firing (fires when it crosses 0 up).
 #[derive(Debug, Clone, Copy)]

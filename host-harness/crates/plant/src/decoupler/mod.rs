@@ -7,7 +7,7 @@ pub mod end_stop;
 pub mod hydraulic;
 pub mod linear;
 
-use crate::scene::{self, Tool};
+use flinch_model::scene::{self, Tool};
 use bistable::BistableMechanism;
 use end_stop::{BackStop, FrontStop};
 use hydraulic::HydraulicCylinder;

@@ -4,8 +4,8 @@
 //! Annex A) is a free object of its effective mass m_H (transient contact) or an obstacle (clamped).
 
 use super::friction::TanhFriction;
-use crate::body::BodyContact;
-use crate::scene::TargetKind;
+use flinch_model::body::BodyContact;
+use flinch_model::scene::TargetKind;
 
 /// Standard gravity for the floor's normal force, m/s^2 (the floor is horizontal; the scene's
 /// `motion.gravity` is along the approach axis, a different direction).

@@ -6,7 +6,7 @@
 //! robot through the decoupler, so eq 44's separate -F_w on the robot is not added twice.
 
 use super::motion_law::Commanded;
-use crate::scene::Robot;
+use flinch_model::scene::Robot;
 
 /// The compliant robot's parameters.
 #[derive(Debug, Clone, Copy)]

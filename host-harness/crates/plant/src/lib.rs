@@ -9,16 +9,14 @@
 
 pub mod brake;
 pub mod contact;
-pub use flinch_model::damping_law;
 pub mod decoupler;
 pub mod friction;
 pub mod motion_law;
 pub mod robot;
 pub mod sensor;
-pub use flinch_model::stopping;
 pub mod target;
 
-use crate::scene::Scene;
+use flinch_model::scene::Scene;
 use contact::Contact;
 use decoupler::{Decoupler, DecouplerForce};
 use friction::Slide;
@@ -139,7 +137,7 @@ impl Plant {
             decoupler,
             contact: match scene.target.kind {
                 // ISO/TS 15066 Annex A: the body is an undamped linear spring.
-                crate::scene::TargetKind::BodyRegion(b) => Contact::linear(b.stiffness_n_per_m),
+                flinch_model::scene::TargetKind::BodyRegion(b) => Contact::linear(b.stiffness_n_per_m),
                 _ => Contact::new(scene.target.stiffness, &scene.target.damping),
             },
             target: Target::Obstacle { surface: 0.0 },

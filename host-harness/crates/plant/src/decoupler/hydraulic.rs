@@ -16,8 +16,8 @@
 //! evaluated when d = 0 (Tables 12 and 14): its `tanh` was 9 % of the run.
 
 use super::end_stop::{BackStop, FrontStop};
-use crate::plant::friction::TanhFriction;
-use crate::scene::Hydraulic;
+use crate::friction::TanhFriction;
+use flinch_model::scene::Hydraulic;
 use std::f64::consts::PI;
 
 /// The cylinder, orifice and gas spring, ready to evaluate.
@@ -101,14 +101,14 @@ impl HydraulicCylinder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{ContactDamping, DampingLaw, LinearStop, NonlinearStop};
+    use flinch_model::scene::{ContactDamping, DampingLaw, LinearStop, NonlinearStop};
 
     pub fn table12() -> Hydraulic {
         Hydraulic {
             stroke: 0.023, piston_radius: 0.020, orifice_radius: 0.008, gas_pressure: 1000.0,
             gas_volume: 7.63e-5, discharge_coefficient: 3.0, liquid_density: 900.0,
             dry_friction: 0.0, viscous_friction: 0.5, adiabatic_exponent: 1.4, friction_v0: 1e-3,
-            front_stop: LinearStop { stiffness: 1e6, damping: 235.0, law: crate::scene::FrontStopLaw::Linear },
+            front_stop: LinearStop { stiffness: 1e6, damping: 235.0, law: flinch_model::scene::FrontStopLaw::Linear },
             back_stop: NonlinearStop { stiffness: 1e6, damping: ContactDamping::Restitution { restitution: 0.3, law: DampingLaw::HuntCrossley } },
         }
     }
