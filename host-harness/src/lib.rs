@@ -12,11 +12,11 @@ pub mod hil;
 pub mod kinematics;
 pub mod report;
 pub mod sample;
-pub mod sim;
 pub mod sweep;
 pub mod validate;
-pub mod verdict;
 
 pub use flinch_solver as solver;
 pub use flinch_model::{body, scene, shipped};
 pub use flinch_plant as plant;
+pub use flinch_sim as sim;
+pub use flinch_sim::verdict;

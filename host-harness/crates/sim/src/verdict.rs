@@ -18,7 +18,7 @@
 //! **Safe** means the list of failures is empty. A failure is: a run that is not concluded (after
 //! a contact the robot had not stopped by the end of the run, so the rest is not simulated), the
 //! stroke exhausted, or, for a human
-//! body region target (ISO/TS 15066 Annex A, crate::body), the peak contact force or pressure over
+//! body region target (ISO/TS 15066 Annex A, flinch_model::body), the peak contact force or pressure over
 //! the region's limit, or a transient contact the TS does not permit. The budget of
 //! `flinch check` (`v DT + v^2/2d <= C - d_sw`) is a second, independent verdict; `check` and
 //! `design` are favourable only when both are. Where the budget and the simulation disagree,
@@ -28,8 +28,8 @@
 //! Human output rounds (lengths in mm to 0.01 mm, speeds in m/s to 1 mm/s, forces to 0.1 N); JSON
 //! keeps full precision.
 
-use crate::scene::{Scene, TargetKind};
-use crate::sim::Summary;
+use flinch_model::scene::{Scene, TargetKind};
+use crate::Summary;
 
 /// A length for people: mm, two decimals.
 pub fn mm(x: f64) -> String {
@@ -107,10 +107,10 @@ pub fn failures(s: &Summary) -> Vec<String> {
 }
 
 /// The body-region part of [`failures`]: the run's peak contact force and pressure against the
-/// limits of ISO/TS 15066 Table A.2 (crate::body), rebuilt from the summary's `body_*` fields so
+/// limits of ISO/TS 15066 Table A.2 (flinch_model::body), rebuilt from the summary's `body_*` fields so
 /// the verdict depends on the summary alone. Empty for a target that is not a body region.
 pub fn body_failures(s: &Summary) -> Vec<String> {
-    use crate::body::{BodyContact, BodyTarget};
+    use flinch_model::body::{BodyContact, BodyTarget};
     let (Some(name), Some(contact), Some(area), Some(m), Some(k), Some(peak)) = (
         s.body_region.as_deref(),
         s.body_contact.as_deref(),
@@ -121,18 +121,18 @@ pub fn body_failures(s: &Summary) -> Vec<String> {
     ) else {
         return Vec::new();
     };
-    let Some(region) = crate::body::preset(name) else {
+    let Some(region) = flinch_model::body::preset(name) else {
         return vec![format!("body region {name:?} unknown: no limits to hold the run against")];
     };
     let contact = if contact == "transient" { BodyContact::Transient } else { BodyContact::QuasiStatic };
     let b = BodyTarget { region, contact, area_m2: area, mass_kg: m, stiffness_n_per_m: k };
-    crate::body::check(&b, peak).failures
+    flinch_model::body::check(&b, peak).failures
 }
 
 /// One line stating the body-region check of a run, for people (None: not a body region).
 pub fn body_line(s: &Summary) -> Option<String> {
     let name = s.body_region.as_deref()?;
-    let label = crate::body::preset(name).map_or(name, |p| p.label);
+    let label = flinch_model::body::preset(name).map_or(name, |p| p.label);
     let contact = s.body_contact.as_deref().unwrap_or("-").replace('_', "-");
     let peak_f = s.body_peak_force_n?;
     let peak_p = s.body_peak_pressure_pa?;
@@ -187,7 +187,7 @@ pub fn explain(scene: &Scene, b: &Budget, s: &Summary) -> Vec<String> {
     let free_mass = match scene.target.kind {
         TargetKind::Object { mass, .. } => Some(mass),
         // ISO/TS 15066 transient contact: the body part is a free effective mass m_H.
-        TargetKind::BodyRegion(b) if b.contact == crate::body::BodyContact::Transient => Some(b.mass_kg),
+        TargetKind::BodyRegion(b) if b.contact == flinch_model::body::BodyContact::Transient => Some(b.mass_kg),
         _ => None,
     };
     if let Some(mass) = free_mass {

@@ -1,14 +1,14 @@
 //! The Karnopp slide (`flinch-plant`'s friction.rs) in whole runs: a stuck tool never drifts, it
 //! breaks away when the contact force reaches the limit, and it does not chatter.
 
-use crate::plant::friction::Slide;
-use crate::plant::{Plant, XR, XT};
-use crate::scene::{parse, Scene};
-use crate::sim::Run;
+use flinch_plant::friction::Slide;
+use flinch_plant::{Plant, XR, XT};
+use flinch_model::scene::{parse, Scene};
+use crate::Run;
 
 /// Table 8's paddle (stick-slip by default: v0 = 0), edited.
 fn table8(edit: &[(&str, &str)]) -> Scene {
-    let mut text = crate::shipped::get("table8_bistable").unwrap().to_string();
+    let mut text = flinch_model::shipped::get("table8_bistable").unwrap().to_string();
     for (from, to) in edit {
         assert!(text.contains(from), "{from}");
         text = text.replacen(from, to, 1);
@@ -42,8 +42,8 @@ fn a_stuck_tool_never_drifts() {
     assert_eq!(y[XR], 0.0);
 
     let mut reg = scene.clone();
-    if let crate::scene::Decoupler::Bistable(b) = &mut reg.decoupler {
-        b.friction.as_mut().unwrap().law = crate::scene::FrictionLaw::Regularised;
+    if let flinch_model::scene::Decoupler::Bistable(b) = &mut reg.decoupler {
+        b.friction.as_mut().unwrap().law = flinch_model::scene::FrictionLaw::Regularised;
     }
     let mut run = Run::new(&reg, true, true);
     run.advance_to(0.3).unwrap();
@@ -85,7 +85,7 @@ fn no_chattering_on_the_stick_slip_scenes() {
     // Every shipped scene with a Coulomb slide: a handful of switches, not thousands, and far
     // fewer steps than the regularised law needs.
     for name in ["table4_bistable_136g", "table4_bistable_246g", "table8_bistable", "table11_z_prototype", "table13_bistable_object", "table13_bistable_object_dt10"] {
-        let scene = parse(crate::shipped::get(name).unwrap(), name).unwrap();
+        let scene = parse(flinch_model::shipped::get(name).unwrap(), name).unwrap();
         let mut run = Run::new(&scene, false, false);
         run.finish().unwrap();
         let n = run.slide_switches().len();
@@ -104,7 +104,7 @@ fn a_force_oscillating_about_the_limit_switches_a_bounded_number_of_times() {
     // friction oscillate, and mu chosen so the limit sits inside that oscillation.
     for mu in ["0.02", "0.05", "0.12", "0.3"] {
         let mut scene = table8(&[("mu = 0.12, v0 = 0.0", &format!("mu = {mu}, v0 = 0.0"))]);
-        scene.robot = Some(crate::scene::Robot { mass: 8.4, stiffness: 2.3e5, damping: 71.0 });
+        scene.robot = Some(flinch_model::scene::Robot { mass: 8.4, stiffness: 2.3e5, damping: 71.0 });
         let mut run = Run::new(&scene, false, false);
         run.finish().unwrap();
         let n = run.slide_switches().len();
