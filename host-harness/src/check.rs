@@ -11,16 +11,8 @@ use crate::verdict;
 use flinch_firmware::stopping_distance_um;
 use serde::Serialize;
 
-/// Micro-units rounded up: for what lengthens the stopping distance (speed, dead time), so the
-/// integer budget never under-estimates it.
-pub(crate) fn um_up(x: f64) -> u32 {
-    (x * 1e6).ceil().clamp(0.0, u32::MAX as f64) as u32
-}
+pub use crate::hil::units::{um_down, um_up};
 
-/// Micro-units rounded down: for what shortens it or bounds it (deceleration, stroke).
-pub(crate) fn um_down(x: f64) -> u32 {
-    (x * 1e6).floor().clamp(0.0, u32::MAX as f64) as u32
-}
 
 /// Stopping distance after detection, m, rounded up to the micrometre: the firmware's formula
 /// `v DT + v^2 / (2 d)`, or with the robot's stopping table `v DT + D(v)`, D read from the table
