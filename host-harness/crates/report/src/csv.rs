@@ -3,8 +3,8 @@
 //! exist), written through the `csv` crate into a 64 KiB buffer: rows stream out as the solver
 //! makes them, so memory does not grow with the duration.
 
-use super::trace::Trace;
-use crate::sim::Sample;
+use crate::trace::Trace;
+use flinch_sim::Sample;
 use std::fmt::Write as _;
 use std::io::{self, Write};
 

@@ -8,8 +8,8 @@
 //! The simulated values are resampled onto a uniform grid over the measured span as the run
 //! streams (no history is kept), the measured ones are interpolated onto the same grid.
 
-use super::trace::Trace;
-use crate::sim::Sample;
+use crate::trace::Trace;
+use flinch_sim::Sample;
 use schemars::JsonSchema;
 use serde::Serialize;
 use std::path::Path;
@@ -47,7 +47,7 @@ const GRID_MAX: usize = 50_000;
 impl Measured {
     /// Reads `path`; errors name the file, the line and the column.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let (file, text) = crate::shipped::read(path).map_err(|e| e.0)?;
+        let (file, text) = flinch_model::shipped::read(path).map_err(|e| e.0)?;
         Self::parse(&text, &file)
     }
 

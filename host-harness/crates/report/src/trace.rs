@@ -3,11 +3,11 @@
 //! pressure (eq 47, a function of the stroke coordinate alone), and, with the firmware in the loop,
 //! the switch level, the firmware's stop output and what the robot controller's samples saw.
 
-use crate::hil::HilReport;
-use crate::plant::decoupler::hydraulic::HydraulicCylinder;
-use crate::plant::{decoupler::Decoupler, Plant};
-use crate::scene::{Scene, Sensor};
-use crate::sim::Sample;
+use flinch_hil::HilReport;
+use flinch_plant::decoupler::hydraulic::HydraulicCylinder;
+use flinch_plant::{decoupler::Decoupler, Plant};
+use flinch_model::scene::{Scene, Sensor};
+use flinch_sim::Sample;
 
 /// The firmware-in-the-loop signals, as step functions of time.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,10 +5,10 @@
 //! switch, the stop output and the controller's samples. Contact, detection and braking are marked
 //! in every panel; a `--measured` file is drawn under the simulated traces.
 
-use super::figure::{self, Level, Mark, Note, Panel, Series, Style, XAxis, PALETTE};
-use super::trace::Trace;
-use crate::scene::{Decoupler, Scene, Sensor, TargetKind};
-use crate::sim::{Sample, Summary};
+use flinch_output::figure::{self, Level, Mark, Note, Panel, Series, Style, XAxis, PALETTE};
+use crate::trace::Trace;
+use flinch_model::scene::{Decoupler, Scene, Sensor, TargetKind};
+use flinch_sim::{Sample, Summary};
 use plotters::style::RGBColor;
 use std::path::Path;
 
@@ -42,7 +42,7 @@ pub fn panels(scene: &Scene, s: &Summary, h: &[Sample], trace: &Trace, measured:
         measured.iter().find(|(c, _)| c == col).map(|(_, p)| Series { name: format!("measured {label}"), points: p.iter().map(|&(t, v)| (t, v * scale)).collect(), color: MEASURED, style: Style::Thin })
     };
     // A body part in transient contact (ISO/TS 15066) is a free mass too: draw its velocity.
-    let object = matches!(scene.target.kind, TargetKind::Object { .. }) || matches!(scene.target.kind, TargetKind::BodyRegion(b) if b.contact == crate::body::BodyContact::Transient);
+    let object = matches!(scene.target.kind, TargetKind::Object { .. }) || matches!(scene.target.kind, TargetKind::BodyRegion(b) if b.contact == flinch_model::body::BodyContact::Transient);
     let mut out = Vec::new();
 
     // Velocities.

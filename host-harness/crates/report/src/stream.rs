@@ -3,12 +3,12 @@
 //! keeps a bounded, peak-preserving decimation, a long run says what it will write and shows its
 //! progress on a terminal, and Ctrl-C stops it with the rows written so far complete.
 
-use super::csv::{HistoryWriter, ROW_BYTES};
-use super::measured::Resampler;
-use super::output::{self, Failure, EXIT_INTERRUPTED};
-use super::trace::Trace;
-use crate::scene::Scene;
-use crate::sim::{Run, Sample, Summary};
+use crate::csv::{HistoryWriter, ROW_BYTES};
+use crate::measured::Resampler;
+use flinch_output::output::{self, Failure, EXIT_INTERRUPTED};
+use crate::trace::Trace;
+use flinch_model::scene::Scene;
+use flinch_sim::{Run, Sample, Summary};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::cell::RefCell;
 use std::io::{IsTerminal, Write};
@@ -156,7 +156,7 @@ pub struct Streamed {
 pub fn expected_rows(scene: &Scene) -> u64 {
     let dt = scene.solver.output_interval;
     if dt > 0.0 {
-        return crate::sim::recorded_rows(scene.duration_s, dt);
+        return flinch_sim::recorded_rows(scene.duration_s, dt);
     }
     let n = scene.duration_s / scene.solver.max_step.max(1e-9) * 4.0;
     if n.is_finite() { n.ceil().min(1e18) as u64 + 1 } else { u64::MAX }
