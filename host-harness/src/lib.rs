@@ -4,15 +4,7 @@
 //! `solver` integrates; `sim` runs a scene and summarises it; `report` prints, plots and writes
 //! what a run produced; `avoid` is collision avoidance (Ch. 5); `bench` is the speed/accuracy study (`flinch bench`).
 pub mod avoid;
-pub mod bench;
-pub mod body_design;
-pub mod check;
-pub mod design;
-pub mod kinematics;
 pub mod report;
-pub mod sample;
-pub mod sweep;
-pub mod validate;
 
 pub use flinch_solver as solver;
 pub use flinch_model::{body, scene, shipped};
@@ -20,3 +12,9 @@ pub use flinch_plant as plant;
 pub use flinch_sim as sim;
 pub use flinch_sim::verdict;
 pub use flinch_hil as hil;
+pub use flinch_studies::{bench, body_design, check, design, sample, sweep, validate};
+/// The robot from its URDF (`flinch-kinematics`), and `flinch robot` (`cli`).
+pub mod kinematics {
+    pub use flinch_kinematics::*;
+    pub use flinch_studies::robot as cli;
+}

@@ -1,5 +1,5 @@
 //! `flinch design SCENE --body-region REGION|all`: how fast may the robot go near a person's body
-//! region (ISO/TS 15066 Annex A, crate::body), with the scene's module and with a rigid tool.
+//! region (ISO/TS 15066 Annex A, flinch_model::body), with the scene's module and with a rigid tool.
 //!
 //! For each region the scene's body-region target is set to that region (its Table A.3 mass and
 //! spring, its Table A.2 limits; the scene's contact kind, area and gap kept; a `mass` or
@@ -12,7 +12,7 @@
 //!   sensor in the tool: `--rigid-sensor`, default 25 N, the thesis's rigid end-effector, Ch.
 //!   3.1.2), both judged on the body limits alone (`body_limits_pass`: the peak force and pressure
 //!   of the whole run, including any push through a bottomed module), so the two compare fairly;
-//! - and, with the module, the largest speed at which the run is `safe` (crate::verdict, the one
+//! - and, with the module, the largest speed at which the run is `safe` (flinch_sim::verdict, the one
 //!   definition: the body limits hold *and* the stroke is not exhausted while touching the body).
 //!   That is the speed to quote for the module: beyond it the module has bottomed and the robot
 //!   pushes through its stack, which the stroke rule does not accept whatever the force.
@@ -28,10 +28,10 @@
 //! the contact happens at the commanded speed, Annex A's v) and its `duration` covers the contact,
 //! 0.5 s to detect, the dead time, braking and 0.3 s of ring-down.
 
-use crate::body::{self, BodyContact, BodyTarget, Preset};
-use crate::scene::{Decoupler, Scene, TargetKind};
+use flinch_model::body::{self, BodyContact, BodyTarget, Preset};
+use flinch_model::scene::{Decoupler, Scene, TargetKind};
 use crate::sweep::Template;
-use crate::verdict::mps;
+use flinch_sim::verdict::mps;
 use serde::Serialize;
 
 /// The default force threshold of the rigid tool's sensor, N (Ch. 3.1.2: the rigid end-effector of
@@ -56,7 +56,7 @@ pub struct Answer {
     /// Largest simulated speed at which the body-region limits hold (force and pressure, the
     /// whole run; `body_limits_pass`), m/s.
     pub speed_simulated_mps: Option<f64>,
-    /// With the module: the largest simulated speed at which the run is `safe` (crate::verdict:
+    /// With the module: the largest simulated speed at which the run is `safe` (flinch_sim::verdict:
     /// the body limits hold *and* the stroke is not exhausted while touching the body), m/s; null
     /// for a rigid tool (its stroke rule always fails) or when not found (`safe_search_note`).
     pub speed_safe_mps: Option<f64>,
@@ -143,7 +143,7 @@ impl Cand<'_> {
     /// candidate is refused or fails to run.
     fn holds(&self, v: f64, whole_verdict: bool) -> Option<bool> {
         let s = self.scene(v)?;
-        let r = crate::sim::run_to_conclusion(&s).ok()?;
+        let r = flinch_sim::run_to_conclusion(&s).ok()?;
         // A run whose tool never reached the body confirms nothing.
         r.t_contact?;
         Some(if whole_verdict { r.safe } else { r.body_limits_pass == Some(true) })
@@ -158,13 +158,13 @@ impl Cand<'_> {
         let xs = scan();
         if !self.rigid {
             let g = |v: f64| self.holds(v, true);
-            match crate::design::boundary(&xs, &g, true, 16, mps) {
+            match crate::search::boundary(&xs, &g, true, 16, mps) {
                 Ok((v, _)) => a.speed_safe_mps = Some(v),
                 Err(e) => {
                     // Say why the slowest candidate is not safe: the run's own first failure (a
                     // free body part bounced off below the switching force is never detected, so
                     // the robot never stops: not concluded).
-                    let why = self.scene(xs[0]).and_then(|s| crate::sim::run_to_conclusion(&s).ok()).and_then(|r| r.failures.first().cloned());
+                    let why = self.scene(xs[0]).and_then(|s| flinch_sim::run_to_conclusion(&s).ok()).and_then(|r| r.failures.first().cloned());
                     a.safe_search_note = Some(format!(
                         "speed search over {}..{}: {e}{}",
                         mps(xs[0]),
@@ -175,10 +175,10 @@ impl Cand<'_> {
             }
         }
         let f = |v: f64| self.holds(v, false);
-        match crate::design::boundary(&xs, &f, true, 16, mps) {
+        match crate::search::boundary(&xs, &f, true, 16, mps) {
             Ok((v, _)) => {
                 a.speed_simulated_mps = Some(v);
-                if let Some(r) = self.scene(v).and_then(|s| crate::sim::run_to_conclusion(&s).ok()) {
+                if let Some(r) = self.scene(v).and_then(|s| flinch_sim::run_to_conclusion(&s).ok()) {
                     a.peak_force_at_limit_n = r.body_peak_force_n;
                     a.stroke_held_at_limit = (!self.rigid).then_some(!r.stroke_exhausted);
                 }
@@ -372,11 +372,11 @@ pub fn human(r: &BodyDesign) -> String {
     o
 }
 
-/// Runs `flinch design SCENE --body-region WHICH`.
-pub fn run(a: &crate::design::DesignArgs, which: &str) -> Result<bool, String> {
-    let t = Template::load(&a.scene).map_err(|e| e.to_string())?;
-    let r = design(&t, which, a.dead_time, a.rigid_sensor).map_err(|e| format!("{}: {e}", a.scene.display()))?;
-    if a.json {
+/// Runs `flinch design SCENE --body-region WHICH` (`design::run` passes its arguments).
+pub fn run(scene: &std::path::Path, which: &str, dead_time: Option<f64>, rigid_sensor: f64, json: bool) -> Result<bool, String> {
+    let t = Template::load(scene).map_err(|e| e.to_string())?;
+    let r = design(&t, which, dead_time, rigid_sensor).map_err(|e| format!("{}: {e}", scene.display()))?;
+    if json {
         println!("{}", serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?);
     } else {
         print!("{}", human(&r));

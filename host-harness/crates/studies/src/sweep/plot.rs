@@ -5,8 +5,8 @@
 //! refused by the validator (light grey, a cross) or failed in the solver (dark grey).
 
 use super::{Spacing, Status, SweepResult};
-use crate::report::figure::{self, with_backend, DrawResult};
-pub use crate::report::figure::{finite_range, fmt_num, ticks, Series, Style, XAxis, PALETTE};
+use flinch_output::figure::{self, with_backend, DrawResult};
+pub use flinch_output::figure::{finite_range, fmt_num, ticks, Series, Style, XAxis, PALETTE};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -323,7 +323,7 @@ pub fn key_label(key: &str) -> String {
 
 /// A label for a summary metric, with its unit (from the JSON Schema's unit table).
 pub fn metric_label(m: &str) -> String {
-    match crate::report::schema::unit_of(m) {
+    match flinch_output::units::unit_of(m) {
         Some("1") | None => m.to_string(),
         Some(u) => format!("{m} [{u}]"),
     }

@@ -19,8 +19,8 @@
 pub mod cli;
 pub mod plot;
 
-use crate::scene::{self, Scene};
-use crate::sim::{self, Summary};
+use flinch_model::scene::{self, Scene};
+use flinch_sim::{self as sim, Summary};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::de::{Deserialize, Deserializer, MapAccess, Visitor};
@@ -282,9 +282,9 @@ pub fn close_matches(key: &str, candidates: &[String]) -> Vec<String> {
 
 impl Template {
     /// Reads and validates a scene file.
-    /// Reads a scene argument (a file, `-`, or a shipped scene's name: [`crate::shipped::read`]).
+    /// Reads a scene argument (a file, `-`, or a shipped scene's name: [`flinch_model::shipped::read`]).
     pub fn load(path: &Path) -> Result<Self, SweepError> {
-        let (file, text) = crate::shipped::read(path).map_err(|e| SweepError(e.0))?;
+        let (file, text) = flinch_model::shipped::read(path).map_err(|e| SweepError(e.0))?;
         Self::from_text(&text, &file)
     }
 

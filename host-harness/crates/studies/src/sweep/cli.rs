@@ -1,7 +1,7 @@
 //! The `flinch sweep` command line.
 
 use super::{check_metric, plot, Axis, Progress, Sweep, SweepError, Template};
-use crate::report::output::{self, Failure};
+use flinch_output::output::{self, Failure};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -72,7 +72,7 @@ pub fn run(args: &SweepArgs) -> Result<bool, Failure> {
         None => (args.csv.clone(), args.plot.clone()),
     };
     if let Some(p) = &svg {
-        crate::report::figure::check_extension(p).map_err(|e| Failure::bad_input(format!("--plot {e}")))?;
+        flinch_output::figure::check_extension(p).map_err(|e| Failure::bad_input(format!("--plot {e}")))?;
     }
     let template = Template::load(&args.scene).map_err(|e| Failure::bad_input(e.to_string()))?;
     let built = if args.strict { Sweep::new(&template, axes) } else { Sweep::keep_going(&template, axes) };

@@ -15,8 +15,9 @@
 //! when the flange would otherwise meet the target before reaching V_c.
 
 use crate::check;
-use crate::scene::{Decoupler, Scene, Sensor};
-use crate::sim::Summary;
+pub use crate::search::boundary;
+use flinch_model::scene::{Decoupler, Scene, Sensor};
+use flinch_sim::Summary;
 use crate::sweep::plot::{self as splot, Panel, Series, Style, XAxis, PALETTE};
 use crate::sweep::{SweepError, Template};
 use rayon::prelude::*;
@@ -63,7 +64,7 @@ pub struct Trial {
     #[serde(rename = "stroke_m")]
     pub stroke: f64,
     /// The run: its `safe`, `failures`, `stroke_left_min_m` and `closest_approach_m` are the one
-    /// definition of crate::verdict.
+    /// definition of flinch_sim::verdict.
     pub summary: Summary,
 }
 
@@ -129,7 +130,7 @@ pub struct DesignReport {
     /// min(speed_limit_formula, speed_limit_simulated), m/s; null when the simulated search failed.
     pub speed_limit_mps: Option<f64>,
     /// The verdict at the design point, the same as `flinch check`'s: the budget fits and the
-    /// simulation is safe (crate::verdict).
+    /// simulation is safe (flinch_sim::verdict).
     pub safe: bool,
     /// Why not, for people (empty when safe).
     pub failures: Vec<String>,
@@ -209,7 +210,7 @@ impl Candidates<'_> {
     }
     fn safe(&self, v: f64, c: f64) -> Option<bool> {
         let s = self.scene(v, c).ok()?;
-        crate::sim::run_to_conclusion(&s).ok().map(|r| r.safe)
+        flinch_sim::run_to_conclusion(&s).ok().map(|r| r.safe)
     }
 }
 
@@ -234,14 +235,14 @@ fn first_refusal(e: &str, cand: &Candidates, xs: &[f64], at: impl Fn(f64) -> (f6
 
 /// Runs a scene (its verdict is in the summary).
 fn trial_of(s: &Scene, v: f64, c: f64) -> Result<Trial, String> {
-    let summary = crate::sim::run_to_conclusion(s).map_err(|e| format!("V_c = {}, C = {}: {e}", crate::verdict::mps(v), crate::verdict::mm(c)))?;
+    let summary = flinch_sim::run_to_conclusion(s).map_err(|e| format!("V_c = {}, C = {}: {e}", flinch_sim::verdict::mps(v), flinch_sim::verdict::mm(c)))?;
     Ok(Trial { speed: v, stroke: c, summary })
 }
 
 /// Speed that uses the budget exactly for the scene's motion: `v DT + v^2 / (2 d) = room`, or with
 /// the robot's stopping table `v DT + D(v) = room` by bisection (D increases with v). With a table
 /// the answer is capped at its largest speed (`true`: capped, the budget is not used up there).
-pub fn speed_for_room(m: &crate::scene::Motion, room: f64, dead_time: f64) -> (f64, bool) {
+pub fn speed_for_room(m: &flinch_model::scene::Motion, room: f64, dead_time: f64) -> (f64, bool) {
     let Some(t) = &m.stopping else {
         return (speed_for_budget(room, dead_time, m.decel), false);
     };
@@ -267,33 +268,6 @@ pub fn speed_for_budget(room: f64, dead_time: f64, decel: f64) -> f64 {
         return 0.0;
     }
     decel * (-dead_time + (dead_time * dead_time + 2.0 * room / decel).sqrt())
-}
-
-/// Scans `xs` (ascending) for the first boundary from `want_low` to its opposite and bisects it;
-/// `f` is None where the candidate is invalid. Returns the last x on the `want_low` side and the
-/// first x past it.
-pub(crate) fn boundary(xs: &[f64], f: &(dyn Fn(f64) -> Option<bool> + Sync), want_low: bool, iters: usize, show: fn(f64) -> String) -> Result<(f64, f64), String> {
-    let scan: Vec<Option<bool>> = xs.par_iter().map(|&x| f(x)).collect();
-    let valid: Vec<(f64, bool)> = xs.iter().copied().zip(scan).filter_map(|(x, s)| s.map(|s| (x, s))).collect();
-    if valid.is_empty() {
-        return Err("the validator refuses every candidate".into());
-    }
-    let Some(k) = valid.iter().position(|&(_, s)| s != want_low) else {
-        return Err(format!("no boundary between {} and {}", show(valid[0].0), show(valid[valid.len() - 1].0)));
-    };
-    if k == 0 {
-        return Err(format!("already past the boundary at the smallest candidate {}", show(valid[0].0)));
-    }
-    let (mut lo, mut hi) = (valid[k - 1].0, valid[k].0);
-    for _ in 0..iters {
-        let mid = 0.5 * (lo + hi);
-        match f(mid) {
-            Some(s) if s == want_low => lo = mid,
-            Some(_) => hi = mid,
-            None => break,
-        }
-    }
-    Ok((lo, hi))
 }
 
 /// Answers the design questions for a scene with optional overrides.
@@ -331,7 +305,7 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     // Smallest stroke, simulated: scan 0.4..2.5 x the formula's, then bisect.
     let strokes: Vec<f64> = (0..16).map(|i| needed * (0.4 + 2.1 * i as f64 / 15.0)).collect();
     let unsafe_at = |cc: f64| cand.safe(v, cc).map(|s| !s);
-    let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, 14, crate::verdict::mm) {
+    let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, 14, flinch_sim::verdict::mm) {
         Ok((_, first_safe)) => (Some(first_safe), None),
         Err(e) => (None, Some(format!("stroke search over {:.2}..{:.2} mm ({} C1:C2 scaled together): {e}{}", strokes[0] * 1e3, strokes[15] * 1e3, module.name(), first_refusal(&e, &cand, &strokes, |x| (v, x))))),
     };
@@ -339,26 +313,26 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     let (v_formula, formula_capped) = speed_for_room(&base.motion, c - d_sw, dt);
     let table_top = base.motion.stopping.map(|s| s.max_speed());
     if formula_capped {
-        notes.push(format!("the budget still fits at the stopping table's largest speed {}: the formula limit is that speed (the table is not extrapolated)", crate::verdict::mps(v_formula)));
+        notes.push(format!("the budget still fits at the stopping table's largest speed {}: the formula limit is that speed (the table is not extrapolated)", flinch_sim::verdict::mps(v_formula)));
     }
     let speeds: Vec<f64> = (0..20).map(|i| (v_formula * (0.1 + 2.9 * i as f64 / 19.0)).min(table_top.unwrap_or(f64::INFINITY))).collect();
     let safe_at = |vv: f64| cand.safe(vv, c);
     let (speed_sim, speed_note, at_limit) = if v_formula <= 0.0 {
         (None, Some("the switch travel takes the whole stroke: no speed is safe".to_string()), None)
     } else {
-        match boundary(&speeds, &safe_at, true, 16, crate::verdict::mps) {
+        match boundary(&speeds, &safe_at, true, 16, flinch_sim::verdict::mps) {
             Ok((vmax, _)) => (Some(vmax), None, cand.trial(vmax, c).ok()),
             // Safe up to the end of the robot's stopping table: the answer stops there.
             Err(_) if table_top.is_some_and(|top| safe_at(top) == Some(true)) => {
                 let top = table_top.unwrap_or(0.0);
-                notes.push(format!("simulated safe up to the stopping table's largest speed {}: faster is not in the robot's data", crate::verdict::mps(top)));
+                notes.push(format!("simulated safe up to the stopping table's largest speed {}: faster is not in the robot's data", flinch_sim::verdict::mps(top)));
                 (Some(top), None, cand.trial(top, c).ok())
             }
             // Safe at every candidate the validator accepts (no boundary above the formula's
             // limit, up to 3x it): the simulation confirms the budget's limit, which is the answer.
             Err(e) if e.starts_with("no boundary") => match speeds.iter().rev().copied().find(|&x| safe_at(x) == Some(true)) {
                 Some(top) => {
-                    notes.push(format!("simulated safe at every candidate speed up to {}: the budget's limit stands", crate::verdict::mps(top)));
+                    notes.push(format!("simulated safe at every candidate speed up to {}: the budget's limit stands", flinch_sim::verdict::mps(top)));
                     (Some(top), None, cand.trial(top, c).ok())
                 }
                 None => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}", speeds[0], speeds[19])), None),
@@ -406,7 +380,7 @@ fn mode_text(m: Option<u8>) -> &'static str {
 
 /// The human answer.
 pub fn human(r: &DesignReport) -> String {
-    use crate::verdict::{mm, mm_signed, mps, ms};
+    use flinch_sim::verdict::{mm, mm_signed, mps, ms};
     use std::fmt::Write;
     let mut o = String::new();
     let _ = writeln!(o, "{} ({} module, m_t = {} kg)", r.scene, r.module, r.tool_mass);
@@ -434,7 +408,7 @@ pub fn human(r: &DesignReport) -> String {
     let _ = writeln!(o, "  budget margin C - d_sw - stopping distance = {}: {}", mm_signed(r.margin_formula), if r.margin_formula >= 0.0 { "FITS" } else { "DOES NOT FIT" });
     let d = &r.design.summary;
     let _ = writeln!(o, "  simulated at V_c = {}: max travel {}, working mode {}; peak force on the robot {:.1} N, peak contact force {:.1} N", mps(r.speed), mm(d.max_travel), mode_text(d.mode), d.peak_robot_force, d.peak_contact_force);
-    let _ = writeln!(o, "  simulation {}", crate::verdict::line(d));
+    let _ = writeln!(o, "  simulation {}", flinch_sim::verdict::line(d));
     for e in &r.explanations {
         let _ = writeln!(o, "  why: {e}");
     }
@@ -446,7 +420,7 @@ pub fn human(r: &DesignReport) -> String {
     let _ = writeln!(o, "  formula ({} = C - d_sw): {}", r.stopping_law, mps(r.speed_limit_formula));
     match (r.speed_limit_simulated, &r.at_limit, &r.speed_search_note) {
         (Some(v), Some(t), _) => {
-            let _ = writeln!(o, "  simulated: {} ({:+.1} % vs the formula); there: working mode {}, peak force on the robot {:.1} N, {}", mps(v), (v / r.speed_limit_formula - 1.0) * 100.0, mode_text(t.summary.mode), t.summary.peak_robot_force, crate::verdict::line(&t.summary));
+            let _ = writeln!(o, "  simulated: {} ({:+.1} % vs the formula); there: working mode {}, peak force on the robot {:.1} N, {}", mps(v), (v / r.speed_limit_formula - 1.0) * 100.0, mode_text(t.summary.mode), t.summary.peak_robot_force, flinch_sim::verdict::line(&t.summary));
         }
         (_, _, Some(n)) => {
             let _ = writeln!(o, "  simulated: not found ({n})");
@@ -518,18 +492,18 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
         if a.stroke.is_some() || a.speed.is_some() || a.plot.is_some() {
             return Err("--body-region: --stroke, --speed and --plot do not apply (the speed is what it searches)".into());
         }
-        return crate::body_design::run(a, which);
+        return crate::body_design::run(&a.scene, which, a.dead_time, a.rigid_sensor, a.json);
     }
     let t = Template::load(&a.scene).map_err(|e| e.to_string())?;
     let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     if a.json {
-        print!("{}", crate::report::to_json(&crate::report::Versioned::new(&r)));
+        print!("{}", flinch_output::to_json(&flinch_output::Versioned::new(&r)));
     } else {
         print!("{}", human(&r));
     }
     if let Some(p) = &a.plot {
         draw(p, &t, &r)?;
-        crate::report::output::note(&format!("wrote {} (plot)", p.display()));
+        flinch_output::output::note(&format!("wrote {} (plot)", p.display()));
     }
     Ok(r.safe)
 }

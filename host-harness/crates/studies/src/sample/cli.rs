@@ -2,7 +2,7 @@
 
 use super::parquet_file::{ParquetRows, ROW_GROUP};
 use super::{merge, parse_chunk, Plan, SampleReport, FORMS, STOP};
-use crate::report::output::{self, Failure};
+use flinch_output::output::{self, Failure};
 use crate::sweep::{Progress, Template};
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
@@ -72,7 +72,7 @@ pub fn parse_count(s: &str) -> Result<u64, String> {
 
 fn print(args: &SampleArgs, r: &SampleReport) -> Result<(), Failure> {
     if args.json {
-        output::print(&crate::report::to_json(r))
+        output::print(&flinch_output::to_json(r))
     } else if args.csv.as_deref().is_some_and(output::is_stdout) {
         output::note(r.human().trim_end());
         Ok(())
@@ -128,7 +128,7 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
     if args.jobs == Some(0) {
         return Err(Failure::bad_input("--jobs must be at least 1"));
     }
-    let (file, text) = crate::shipped::read(scene).map_err(|e| Failure::bad_input(e.0))?;
+    let (file, text) = flinch_model::shipped::read(scene).map_err(|e| Failure::bad_input(e.0))?;
     let template = Template::from_text(&text, &file).map_err(|e| Failure::bad_input(e.0))?;
     let plan = Plan::new(template, &text, &args.vary, args.seed, samples, chunk, args.truncate).map_err(|e| Failure::bad_input(e.0))?;
     for v in &plan.vary {

@@ -1,6 +1,9 @@
 //! `flinch sample`: the counter-based random numbers and the distributions a key is drawn from.
 
-use super::*;
+
+use crate::sweep::SweepError;
+use super::common::*;
+use super::stats;
 
 // ---------------------------------------------------------------------------------------------
 // Random numbers

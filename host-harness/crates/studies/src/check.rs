@@ -5,19 +5,19 @@
 //! to the micrometre), while the stroke left is `C - d_sw`. The simulation then confirms it: the
 //! largest travel it reaches and whether the flange reached the target.
 
-use crate::scene::{Decoupler, Scene, Sensor};
-use crate::sim::{self, Summary};
-use crate::verdict;
+use flinch_model::scene::{Decoupler, Scene, Sensor};
+use flinch_sim::{self as sim, Summary};
+use flinch_sim::verdict;
 use flinch_firmware::stopping_distance_um;
 use serde::Serialize;
 
-pub use crate::hil::units::{um_down, um_up};
+pub use flinch_hil::units::{um_down, um_up};
 
 
 /// Stopping distance after detection, m, rounded up to the micrometre: the firmware's formula
 /// `v DT + v^2 / (2 d)`, or with the robot's stopping table `v DT + D(v)`, D read from the table
 /// itself (DT then being the delay to the stop signal; plant/stopping.rs).
-pub fn stopping_distance(m: &crate::scene::Motion) -> Result<f64, String> {
+pub fn stopping_distance(m: &flinch_model::scene::Motion) -> Result<f64, String> {
     match &m.stopping {
         None => Ok(stopping_distance_um(um_up(m.speed), um_up(m.dead_time), um_down(m.decel).max(1)) as f64 * 1e-6),
         Some(t) => {
@@ -28,7 +28,7 @@ pub fn stopping_distance(m: &crate::scene::Motion) -> Result<f64, String> {
 }
 
 /// How the stopping distance after detection was computed, for people.
-pub fn stopping_law(m: &crate::scene::Motion) -> String {
+pub fn stopping_law(m: &flinch_model::scene::Motion) -> String {
     match &m.stopping {
         None => "v DT + v^2/2d".into(),
         Some(t) if m.dead_time > 0.0 => format!("v DT + D(v), D from the robot's category-{} stopping table", t.category),
@@ -59,13 +59,13 @@ pub struct BudgetCheck {
     pub margin: f64,
     /// The budget holds.
     pub fits: bool,
-    /// The simulation of the same scene (its `safe` and `failures`: crate::verdict).
+    /// The simulation of the same scene (its `safe` and `failures`: flinch_sim::verdict).
     pub simulated: Summary,
     /// The verdict of `check`: the budget fits and the simulation is safe (docs/verdicts.md).
     pub safe: bool,
     /// Why not, for people: the budget's failure and the simulation's (empty when safe).
     pub failures: Vec<String>,
-    /// Why the budget and the simulation disagree, for people (crate::verdict::explain).
+    /// Why the budget and the simulation disagree, for people (flinch_sim::verdict::explain).
     pub explanations: Vec<String>,
 }
 
@@ -96,7 +96,7 @@ pub fn check(scene: &Scene) -> Result<BudgetCheck, String> {
 
 /// The human text of `flinch check`.
 pub fn human(c: &BudgetCheck) -> String {
-    use crate::verdict::{mm, mm_signed};
+    use flinch_sim::verdict::{mm, mm_signed};
     let s = &c.simulated;
     let mut t = format!("{}\n", s.scene);
     t.push_str(&format!("  stopping distance after detection {} = {}\n", c.stopping_law, mm(c.stopping_distance)));

@@ -7,9 +7,9 @@
 //! `docs/validation.md` differs. [`write`] also draws the pictures into `docs/validation/` (finer
 //! grids; the test does not redraw them, it checks they exist).
 
-use crate::report;
-use crate::scene::{Decoupler, Scene};
-use crate::sim::{self, Sample, Summary};
+use flinch_report as report;
+use flinch_model::scene::{Decoupler, Scene};
+use flinch_sim::{self as sim, Sample, Summary};
 use crate::sweep::plot::{self as splot, Panel, Series, Style, XAxis, PALETTE};
 use crate::sweep::{Axis, Progress, Spacing, Sweep, SweepResult, Template};
 use std::fmt::Write as _;
@@ -528,7 +528,7 @@ pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
         let hs10 = cx.run("table14_hydraulic_surface_dt10.toml", &[])?;
         let bs10 = cx.run("table15_bistable_surface_dt10.toml", &[])?;
         let k_hyd = match &cx.scene("table14_hydraulic_surface.toml", &[])?.decoupler {
-            Decoupler::Hydraulic(h) => crate::plant::decoupler::hydraulic::HydraulicCylinder::new(h).k_hyd(),
+            Decoupler::Hydraulic(h) => flinch_plant::decoupler::hydraulic::HydraulicCylinder::new(h).k_hyd(),
             _ => f64::NAN,
         };
         let k_bm = match &cx.scene("table15_bistable_surface.toml", &[])?.decoupler {
@@ -562,7 +562,7 @@ pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
         let b70_hc = cx.run_hc("table13_bistable_object.toml", &[])?;
         let (hc_e, hc_alpha) = match &cx.hunt_crossley("table12_hydraulic_object_dt10.toml", &[])?.decoupler {
             Decoupler::Hydraulic(h) => match h.front_stop.law {
-                crate::scene::FrontStopLaw::HuntCrossley { alpha, restitution, .. } => (restitution, alpha),
+                flinch_model::scene::FrontStopLaw::HuntCrossley { alpha, restitution, .. } => (restitution, alpha),
                 _ => (f64::NAN, f64::NAN),
             },
             _ => (f64::NAN, f64::NAN),
@@ -588,7 +588,7 @@ pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
         let bs10_d5 = cx.run("table15_bistable_surface_dt10.toml", &[("motion.decel", 5.0)])?;
         let k_hyd_at = |kappa: f64| -> Result<f64, String> {
             match &cx.scene("table14_hydraulic_surface.toml", &[("decoupler.adiabatic_exponent", kappa)])?.decoupler {
-                Decoupler::Hydraulic(h) => Ok(crate::plant::decoupler::hydraulic::HydraulicCylinder::new(h).k_hyd()),
+                Decoupler::Hydraulic(h) => Ok(flinch_plant::decoupler::hydraulic::HydraulicCylinder::new(h).k_hyd()),
                 _ => Ok(f64::NAN),
             }
         };

@@ -1,6 +1,11 @@
 //! `flinch sample`: the estimates with their intervals, the report, merging chunks, its schema.
 
-use super::*;
+use super::{outcome::*, tally::*, dist::*};
+use crate::sweep::SweepError;
+use super::common::*;
+use serde::{Deserialize, Serialize};
+use super::stats;
+use std::sync::atomic::AtomicBool;
 
 // ---------------------------------------------------------------------------------------------
 // The report and its estimates

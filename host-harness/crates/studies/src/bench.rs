@@ -17,8 +17,8 @@
 
 pub mod fixed_point;
 
-use crate::scene::{self, Fidelity, Method, Scene, Simplify};
-use crate::sim::{self, Summary};
+use flinch_model::scene::{self, Fidelity, Method, Scene, Simplify};
+use flinch_sim::{self as sim, Summary};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -493,7 +493,7 @@ pub fn pareto_svg(path: &Path, aggs: &[Aggregate]) -> Result<(), String> {
 /// The shipped scenes `flinch bench` uses by default, as built into the binary: the top level and
 /// `extremes/` (the study scenes of docs/accuracy.md), except `avoid_*`.
 pub fn default_scene_names() -> Vec<&'static str> {
-    crate::shipped::names()
+    flinch_model::shipped::names()
         .filter(|n| {
             let top = n.strip_prefix("extremes/").unwrap_or(n);
             !top.contains('/') && !top.starts_with("avoid_")
@@ -505,7 +505,7 @@ pub fn default_scene_names() -> Vec<&'static str> {
 pub fn load_scenes(o: &Options) -> Result<Vec<(String, Scene)>, String> {
     let stem = |f: &Path| f.file_stem().map_or("?".into(), |s| s.to_string_lossy().into_owned());
     if !o.scenes.is_empty() {
-        return o.scenes.iter().map(|f| crate::shipped::load(f).map(|sc| (stem(f), sc))).collect();
+        return o.scenes.iter().map(|f| flinch_model::shipped::load(f).map(|sc| (stem(f), sc))).collect();
     }
     match &o.scenes_dir {
         Some(dir) => {
@@ -517,7 +517,7 @@ pub fn load_scenes(o: &Options) -> Result<Vec<(String, Scene)>, String> {
             }
             v.iter().map(|f| scene::load(f).map(|sc| (stem(f), sc)).map_err(|e| e.to_string())).collect()
         }
-        None => default_scene_names().into_iter().map(|n| crate::shipped::load(Path::new(n)).map(|sc| (stem(Path::new(n)), sc))).collect(),
+        None => default_scene_names().into_iter().map(|n| flinch_model::shipped::load(Path::new(n)).map(|sc| (stem(Path::new(n)), sc))).collect(),
     }
 }
 

@@ -1,11 +1,11 @@
 //! `flinch robot SCENE`: the robot of a scene's `[robot] urdf = ...` reduced to m_r, k_r, c_r, how
 //! each joint contributes, and (`--sweep-joint J`) the three against one joint, like the thesis's
 //! Fig. 12 (m_r, c_r, k_r along the approach).
-use super::{Reduced, MIN_MOBILITY};
-use crate::report::figure::{self, Mark, Panel, Series, Style, XAxis, PALETTE};
-use crate::report::output::{self, Failure};
-use crate::scene::{self, UrdfRobot};
-use crate::shipped;
+use flinch_kinematics::{Reduced, MIN_MOBILITY};
+use flinch_output::figure::{self, Mark, Panel, Series, Style, XAxis, PALETTE};
+use flinch_output::output::{self, Failure};
+use flinch_model::scene::{self, UrdfRobot};
+use flinch_model::shipped;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -38,8 +38,8 @@ pub struct RobotArgs {
 
 fn unit(robot: &UrdfRobot, i: usize) -> &'static str {
     match robot.chain.joint_kinds[i] {
-        super::JointKind::Revolute => "rad",
-        super::JointKind::Prismatic => "m",
+        flinch_kinematics::JointKind::Revolute => "rad",
+        flinch_kinematics::JointKind::Prismatic => "m",
     }
 }
 
@@ -188,7 +188,7 @@ pub fn run(a: &RobotArgs) -> Result<bool, Failure> {
 /// A pose whose reduced values the plant would refuse (`[robot]` mass, stiffness, damping ranges of
 /// scene/robot.rs) is refused here too, with the range: `flinch run` at that pose would not run.
 fn within_plant_range(r: Reduced) -> Result<Reduced, String> {
-    use crate::scene::{Ty, ROBOT_DAMPING, ROBOT_MASS, ROBOT_STIFFNESS};
+    use flinch_model::scene::{Ty, ROBOT_DAMPING, ROBOT_MASS, ROBOT_STIFFNESS};
     for (key, x) in [(&ROBOT_MASS, r.mass_kg), (&ROBOT_STIFFNESS, r.stiffness_npm), (&ROBOT_DAMPING, r.damping_nspm)] {
         if let Ty::Number(span) = &key.ty {
             if !span.contains(x) {

@@ -14,7 +14,9 @@
 //! (a panic unwinding) finishes it too, so the file on disk is always a valid Parquet file holding
 //! whole rows, as the CSV always ends on a complete row.
 
-use super::{Outcome, Plan, Row, BLOCK};
+use super::common::BLOCK;
+use super::outcome::{Outcome, Row};
+use super::plan::Plan;
 use parquet::basic::{LogicalType, Repetition, Type as Physical};
 use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DataType, DoubleType, Int32Type, Int64Type};
 use parquet::file::metadata::KeyValue;
@@ -196,7 +198,7 @@ impl ParquetRows {
         // Not concluded: a failure seen before the run's end is known, else the stroke, the mode
         // and the body limits are unknown (null, as the CSV's empty cells); the peaks and the
         // stroke left are up to the end.
-        let concluded = |b: &&super::Brief| b.not_concluded.is_none();
+        let concluded = |b: &&super::outcome::Brief| b.not_concluded.is_none();
         self.stroke_exhausted.push(ran.filter(|b| concluded(b) || b.stroke_exhausted).map(|b| b.stroke_exhausted));
         self.mode.push(ran.filter(|b| concluded(b) || b.mode == Some(3)).and_then(|b| b.mode).map(i32::from));
         self.peak_contact_force_n.push(ran.map(|b| b.peak_contact_force_n));
