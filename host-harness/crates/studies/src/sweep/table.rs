@@ -1,0 +1,95 @@
+//! A sweep's CSV: a row per point with its status, reason and every metric.
+
+use flinch_sim::Summary;
+use serde_json::Value as Json;
+use std::io::{self, Write};
+use super::{grid::*, metrics::*};
+
+
+pub(crate) fn csv_cell(v: &Json) -> String {
+    match v {
+        Json::Null => String::new(),
+        Json::Bool(b) => b.to_string(),
+        Json::Number(n) => n.to_string(),
+        Json::String(s) => s.clone(),
+        Json::Array(a) => a.iter().map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string)).collect::<Vec<_>>().join("; "),
+        Json::Object(_) => v.to_string(),
+    }
+}
+
+/// A CSV writer's error as the I/O error it wraps, keeping its kind: `io::Error::from(csv::Error)`
+/// has kind Other, so a closed reader (`| head`) was reported as an error, exit 3, instead of the
+/// quiet exit 141 of docs/conventions.md.
+pub fn csv_io(e: csv::Error) -> io::Error {
+    if !matches!(e.kind(), csv::ErrorKind::Io(_)) {
+        return io::Error::other(e);
+    }
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        k => io::Error::other(format!("{k:?}")),
+    }
+}
+
+impl SweepResult {
+    /// Writes the CSV (the `csv` crate quotes): the swept keys, every `Summary` field, then
+    /// `status` (ok, refused, failed) and `reason` (the validator's or the solver's message).
+    pub fn write_csv(&self, out: &mut dyn Write) -> io::Result<()> {
+        let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).collect()).unwrap_or_default();
+        let mut w = csv::Writer::from_writer(out);
+        let mut header: Vec<String> = self.axes.iter().map(|a| a.key.clone()).collect();
+        header.extend(names.iter().cloned());
+        header.push("status".into());
+        header.push("reason".into());
+        w.write_record(&header).map_err(csv_io)?;
+        for p in &self.points {
+            let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
+            match &p.outcome {
+                Ok(s) => {
+                    let fields = summary_map(s);
+                    row.extend(names.iter().map(|n| fields.get(n).map_or(String::new(), csv_cell)));
+                    row.push(p.status.as_str().into());
+                    row.push(String::new());
+                }
+                Err(e) => {
+                    row.extend(names.iter().map(|_| String::new()));
+                    row.push(p.status.as_str().into());
+                    row.push(e.clone());
+                }
+            }
+            w.write_record(&row).map_err(csv_io)?;
+        }
+        w.flush()
+    }
+
+    /// The CSV as a string.
+    pub fn csv(&self) -> String {
+        let mut v = Vec::new();
+        let _ = self.write_csv(&mut v);
+        String::from_utf8_lossy(&v).into_owned()
+    }
+
+    /// A metric at every point (NaN where missing or failed), row-major.
+    pub fn metric(&self, name: &str) -> Vec<f64> {
+        self.points.iter().map(|p| p.outcome.as_ref().ok().and_then(|s| metric(s, name)).unwrap_or(f64::NAN)).collect()
+    }
+
+    /// The summary at grid indices `idx` (one per axis), if that point ran.
+    pub fn at(&self, idx: &[usize]) -> Option<&Summary> {
+        let sizes: Vec<usize> = self.values.iter().map(Vec::len).collect();
+        let mut k = 0;
+        for (i, n) in idx.iter().zip(&sizes) {
+            k = k * n + i;
+        }
+        self.points.get(k).and_then(|p| p.outcome.as_ref().ok())
+    }
+
+    /// Points whose solver failed.
+    pub fn failures(&self) -> usize {
+        self.points.iter().filter(|p| p.status == Status::Failed).count()
+    }
+
+    /// Points the validator refused.
+    pub fn refused(&self) -> usize {
+        self.points.iter().filter(|p| p.status == Status::Refused).count()
+    }
+}
