@@ -111,7 +111,7 @@ mod tests {
 
     #[test]
     fn every_shipped_scene_is_embedded_and_found_by_any_spelling() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../scenes");
         let on_disk = std::fs::read_dir(&dir).unwrap().flatten().filter(|e| e.path().extension().is_some_and(|x| x == "toml")).count();
         assert!(on_disk > 10);
         assert!(names().filter(|n| !n.contains('/')).count() == on_disk, "build.rs must embed every scenes/*.toml");

@@ -557,7 +557,7 @@ mod tests {
         let names = default_scene_names();
         assert!(names.contains(&"tables5-7_bistable") && names.contains(&"extremes/tables5-7_bistable_object"), "{names:?}");
         assert!(!names.iter().any(|n| n.contains("avoid_") || n.starts_with("figures/")), "{names:?}");
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../scenes");
         let on_disk = shipped_scenes(&dir).unwrap().len() + shipped_scenes(&dir.join("extremes")).unwrap().len();
         assert_eq!(names.len(), on_disk, "the same scenes as --scenes-dir scenes");
         let o = Options { scenes: vec![], scenes_dir: None, out: PathBuf::new(), repeats: 1, quick: true };

@@ -64,7 +64,7 @@ mod tests {
 
     #[test]
     fn scenes_md_lists_every_range_and_is_current() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/SCENES.md");
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../docs/SCENES.md");
         let doc = std::fs::read_to_string(&path).unwrap();
         let (Some(a), Some(b)) = (doc.find(BEGIN), doc.find(END)) else { panic!("docs/SCENES.md lacks the markers {BEGIN} ... {END}") };
         let fresh = format!("{}{BEGIN}\n{}{}", &doc[..a], range_table(), &doc[b..]);

@@ -84,7 +84,7 @@ fn reports_read_back_have_the_numbers_written() {
 fn schema_in_docs_is_current_and_every_number_has_a_unit() {
     let (text, missing) = schema();
     assert!(missing.is_empty(), "numeric fields of the sample report without a unit (add them to UNITS): {missing:?}");
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/schema/sample.json");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../docs/schema/sample.json");
     if std::env::var_os("FLINCH_BLESS").is_some() {
         std::fs::write(&path, &text).unwrap();
     }

@@ -29,7 +29,7 @@ fn edit_distance() {
 /// element), so the fast path validates exactly what the slow one did.
 #[test]
 fn spliced_text_is_the_edited_documents_text() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../scenes");
     let mut checked = 0;
     for e in std::fs::read_dir(&dir).unwrap().flatten() {
         let path = e.path();

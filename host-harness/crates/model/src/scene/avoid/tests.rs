@@ -21,7 +21,7 @@ fn refused(from: &str, to: &str) -> String {
 
 #[test]
 fn shipped_avoid_scenes_pass() {
-    for f in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes")).unwrap() {
+    for f in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../scenes")).unwrap() {
         let p = f.unwrap().path();
         if p.file_name().unwrap().to_string_lossy().starts_with("avoid_") {
             let text = std::fs::read_to_string(&p).unwrap();
