@@ -3,7 +3,6 @@
 //! Layout: `scene` reads and validates scene files; `plant` holds one physical element per file;
 //! `solver` integrates; `sim` runs a scene and summarises it; `report` prints, plots and writes
 //! what a run produced; `avoid` is collision avoidance (Ch. 5); `bench` is the speed/accuracy study (`flinch bench`).
-pub mod avoid;
 pub mod report;
 
 pub use flinch_solver as solver;
@@ -18,3 +17,4 @@ pub mod kinematics {
     pub use flinch_kinematics::*;
     pub use flinch_studies::robot as cli;
 }
+pub use flinch_avoid as avoid;

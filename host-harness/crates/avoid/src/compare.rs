@@ -10,9 +10,9 @@
 
 use flinch_firmware::avoidance::{self as fw, num::{I16F16, I20F12, I8F24}, Controller, Gauss, Real, Receiver};
 
-use super::path::{gains, simulate_with, FwEngine, PathResult, RefEngine, Setup};
-use super::rbf::Field;
-use super::scene::Avoid;
+use crate::path::{gains, simulate_with, FwEngine, PathResult, RefEngine, Setup};
+use crate::rbf::Field;
+use crate::scene::Avoid;
 
 /// One row of the comparison.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -118,7 +118,7 @@ mod tests {
     /// table the board runs) within 5 mm/s.
     #[test]
     fn firmware_step_matches_the_f64_reference() {
-        let mut scene = Avoid::parse(include_str!("../../../scenes/avoid_thesis_reach.toml")).unwrap();
+        let mut scene = Avoid::parse(include_str!("../../../../scenes/avoid_thesis_reach.toml")).unwrap();
         scene.camera.width_px = 105;
         scene.camera.height_px = 105;
         scene.camera.m_per_px = 0.01;
@@ -141,7 +141,7 @@ mod tests {
         assert!(max32 < 0.005, "f32 table: max {max32} m/s");
         assert!(rms32 <= rms, "f32 table rms {rms32} vs I16F16 {rms}");
         // The type the `--mcu` engine runs is one of the two checked here.
-        assert!(["f32", "I16F16"].contains(&crate::avoid::path::board_real_name()));
+        assert!(["f32", "I16F16"].contains(&crate::path::board_real_name()));
         // I20F12 is visibly worse than I16F16 (the comparison can tell formats apart).
         let (_, rms12) = command_error::<I20F12, _>(&scene, f, &pts, &fw::GaussLut::<I20F12>::new()).unwrap();
         assert!(rms12 > rms, "I20F12 rms {rms12} vs I16F16 {rms}");

@@ -19,8 +19,8 @@
 
 use std::path::Path;
 
-use super::depth::{raise, render, to_height, Camera, HeightMap, RobotShape, Rng};
-use super::rbf::{filter_weights, Field, Fitter};
+use crate::depth::{raise, render, to_height, Camera, HeightMap, RobotShape, Rng};
+use crate::rbf::{filter_weights, Field, Fitter};
 
 const MAGIC: &[u8; 8] = b"FLAVCAL1";
 
@@ -55,7 +55,7 @@ pub fn zigzag(min: [f64; 2], max: [f64; 2], step_m: f64) -> Vec<[f64; 2]> {
 
 /// Pre-processing shared by calibration and run time: flip, fill, optional robot removal, raise.
 pub fn preprocess(
-    depth: &super::depth::DepthImage,
+    depth: &crate::depth::DepthImage,
     cam: &Camera,
     offset_m: f64,
     removal: Option<(&Calibration, [f64; 2])>,
@@ -184,7 +184,7 @@ impl Calibration {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::avoid::rbf::RbfGrid;
+    use crate::rbf::RbfGrid;
 
     fn setup() -> (Camera, RobotShape, Fitter) {
         let cam = Camera { width_px: 100, height_px: 100, m_per_px: 0.01, camera_height_m: 1.2, noise_mm: 2.0, null_fraction: 0.01 };

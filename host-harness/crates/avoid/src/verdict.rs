@@ -5,8 +5,8 @@
 
 use flinch_firmware::avoidance::{SafeController, SsmParams};
 
-use super::engine::ssm_params;
-use super::scene::Avoid;
+use crate::engine::ssm_params;
+use crate::scene::Avoid;
 
 /// The speed the SSM bound of ISO/TS 15066 5.5.4 allows at a TRUE separation `s_m` (from the tool's
 /// surface to the obstacles' true footprint, m), m/s: the largest `v_r` with
@@ -223,10 +223,10 @@ impl Verdict {
     /// The process exit code.
     pub fn code(self) -> u8 {
         match self {
-            Verdict::Good => crate::report::output::EXIT_OK,
-            Verdict::Unsafe => crate::report::output::EXIT_VERDICT,
-            Verdict::SafeStop => crate::report::output::EXIT_SAFE_STOP,
-            Verdict::Unverified => crate::report::output::EXIT_UNVERIFIED,
+            Verdict::Good => flinch_output::output::EXIT_OK,
+            Verdict::Unsafe => flinch_output::output::EXIT_VERDICT,
+            Verdict::SafeStop => flinch_output::output::EXIT_SAFE_STOP,
+            Verdict::Unverified => flinch_output::output::EXIT_UNVERIFIED,
         }
     }
 }

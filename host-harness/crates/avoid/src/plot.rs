@@ -6,8 +6,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::path::PathResult;
-use super::scene::Avoid;
+use crate::path::PathResult;
+use crate::scene::Avoid;
 
 fn colour(v: f64, max: f64) -> RGBColor {
     // Dark blue (plane) -> teal -> yellow (top of the hill).
@@ -180,7 +180,7 @@ where
         .rows
         .iter()
         .enumerate()
-        .filter(|(_, w)| w.v_mps[0].hypot(w.v_mps[1]) > w.ssm_bound_mps + super::path::SSM_TOL_MPS)
+        .filter(|(_, w)| w.v_mps[0].hypot(w.v_mps[1]) > w.ssm_bound_mps + crate::path::SSM_TOL_MPS)
         .map(|(k, _)| (res.points[k][0], res.points[k][1]))
         .collect();
     if !over.is_empty() {

@@ -11,7 +11,13 @@ pub mod camera;
 pub mod compare;
 pub mod depth;
 pub mod engine;
+pub mod link;
 pub mod path;
+#[cfg(test)]
+mod path_tests;
+pub mod result;
+pub mod sensing;
+pub mod setup;
 pub mod plot;
 pub mod rbf;
 pub mod recorded;
@@ -183,7 +189,7 @@ impl AvoidMetrics {
     pub fn new(res: &PathResult, engine: Engine, monitor: bool) -> Self {
         let reason = res.status.reason().map(|r| r.name());
         Self {
-            schema_version: crate::report::SCHEMA_VERSION,
+            schema_version: flinch_output::SCHEMA_VERSION,
             engine: match engine {
                 Engine::Reference => "reference-f64",
                 Engine::Mcu => match path::board_real_name() {
@@ -247,7 +253,7 @@ pub const CSV_HEADER: &str = "t_s,x_m,y_m,vx_mps,vy_mps,separation_m,speed_limit
 /// step's segment; `speed_limit_mps`: the monitor's limit from what it sensed; `ssm_bound_mps`:
 /// the SSM bound at the true separation at the step's start, which the speed must not exceed).
 pub fn write_csv(res: &PathResult, out: &std::path::Path) -> Result<(), String> {
-    use crate::report::output;
+    use flinch_output::output;
     let mut w = output::create(out).map_err(|f| f.message)?;
     let mut body = format!("{CSV_HEADER}\n");
     for r in &res.rows {
@@ -315,7 +321,7 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
         write_csv(&res, p)?;
     }
     if args.json {
-        print!("{}", crate::report::to_json(&AvoidMetrics::new(&res, engine, scene.safety.on())));
+        print!("{}", flinch_output::to_json(&AvoidMetrics::new(&res, engine, scene.safety.on())));
     } else {
         let name = args.scene.display();
         if args.mcu {
@@ -423,7 +429,7 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
             );
         }
         if let Some(p) = &args.plot {
-            crate::report::output::note(&format!("wrote {} (plot)", p.display()));
+            flinch_output::output::note(&format!("wrote {} (plot)", p.display()));
         }
     }
     Ok(res.status.verdict())

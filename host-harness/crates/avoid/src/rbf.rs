@@ -12,7 +12,7 @@
 use flinch_firmware::avoidance::{self as fw, Real};
 use nalgebra::DMatrix;
 
-use super::depth::HeightMap;
+use crate::depth::HeightMap;
 
 /// Geometry of the RBF grid over an image.
 #[derive(Clone, Debug, PartialEq)]

@@ -7,9 +7,9 @@ use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, 
 use flinch_firmware::avoidance::{num::I16F16, BoardReal};
 use flinch_hal_sim::serial::SimSerial;
 
-use super::path::frame_delay_s;
-use super::rbf::Field;
-use super::scene::Avoid;
+use crate::link::frame_delay_s;
+use crate::rbf::Field;
+use crate::scene::Avoid;
 
 /// Which implementation computes the command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,7 +40,7 @@ pub fn mcu_engine(scene: &Avoid) -> Result<FwEngine<BoardReal, fw::GaussLut<Boar
     FwEngine::new(scene, fw::GaussLut::new())
 }
 
-/// A command source for [`simulate_with`](super::path::simulate_with): gets every new field, answers every control step.
+/// A command source for [`simulate_with`](crate::path::simulate_with): gets every new field, answers every control step.
 pub trait StepEngine {
     /// A new fit is available (frame `seq` at `now_ms`).
     fn new_field(&mut self, field: &Field, seq: u32, now_ms: u32) -> Result<(), String>;

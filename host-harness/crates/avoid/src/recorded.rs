@@ -45,11 +45,11 @@
 
 use std::path::{Path, PathBuf};
 
-use super::camera::{reproject, Cell, Pinhole, PlaneRaster};
-use super::depth::{DepthImage, HeightMap};
-use super::path::{Frame, FrameSource, Setup, NOTHING_SENSED_M};
-use super::rbf::{filter_weights, Field};
-use super::scene::Avoid;
+use crate::camera::{reproject, Cell, Pinhole, PlaneRaster};
+use crate::depth::{DepthImage, HeightMap};
+use crate::path::{Frame, FrameSource, Setup, NOTHING_SENSED_M};
+use crate::rbf::{filter_weights, Field};
+use crate::scene::Avoid;
 
 /// Most pixels of one recorded frame: 4096 x 4096 (depth cameras give up to 1280 x 1024).
 pub const MAX_FRAME_PIXELS: usize = 4096 * 4096;
@@ -286,7 +286,7 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
     let fill_reach = if filled_floor > 0 { FILL_REACH_CELLS * plane.m_per_px } else { 0.0 };
     let sep = (from_centre - robot.wrist_radius_m - fill_reach).max(0.0);
     let mut map = HeightMap { width: w, height: h, m };
-    super::depth::raise(&mut map, scene.fit.offset_m);
+    crate::depth::raise(&mut map, scene.fit.offset_m);
     let mut wts = setup.fitter.weights(&map);
     if scene.fit.remove_plane {
         for (v, p) in wts.iter_mut().zip(&setup.plane_weights) {
@@ -317,7 +317,7 @@ pub struct FrameInfo {
 
 /// Whether the line of sight from the floor at `q` to the camera passes through the robot (with the
 /// tool at `pose`): checked every 2 mm of height up to the robot's top.
-fn hidden_by_robot(cam: &Pinhole, robot: &super::depth::RobotShape, pose: [f64; 2], q: [f64; 2], top: f64) -> bool {
+fn hidden_by_robot(cam: &Pinhole, robot: &crate::depth::RobotShape, pose: [f64; 2], q: [f64; 2], top: f64) -> bool {
     let o = cam.origin;
     let n = (top / 2e-3).ceil() as usize;
     (1..=n).any(|i| {
@@ -371,11 +371,11 @@ pub fn render_recording(scene: &Avoid, outs: &[(&Path, f64)], width: usize, heig
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
     let robot = scene.robot_shape();
-    let mut rng = super::depth::Rng::new(scene.camera.seed ^ 0x5EC0);
+    let mut rng = crate::depth::Rng::new(scene.camera.seed ^ 0x5EC0);
     let mut index = String::from("t_s,file\n");
     let mut poses = String::from("t_s,x_m,y_m\n");
     for (k, &(t, tool)) in track.iter().enumerate() {
-        let z = super::camera::render_depth(&cam, width, height, Some((&robot, tool)), Some((&scene.operator_shape_at(t), scene.hand_at(t))));
+        let z = crate::camera::render_depth(&cam, width, height, Some((&robot, tool)), Some((&scene.operator_shape_at(t), scene.hand_at(t))));
         let noisy: Vec<Option<f64>> = z
             .iter()
             .map(|d| {
@@ -386,7 +386,7 @@ pub fn render_recording(scene: &Avoid, outs: &[(&Path, f64)], width: usize, heig
             .collect();
         let name = format!("{k:05}.png");
         for (dir, scale) in outs {
-            super::camera::to_counts(&noisy, width, height, *scale).save(&dir.join(&name))?;
+            crate::camera::to_counts(&noisy, width, height, *scale).save(&dir.join(&name))?;
         }
         index.push_str(&format!("{t},{name}\n"));
         poses.push_str(&format!("{t},{},{}\n", tool[0], tool[1]));
@@ -400,8 +400,8 @@ pub fn render_recording(scene: &Avoid, outs: &[(&Path, f64)], width: usize, heig
 
 /// `flinch avoid --depth`: the scene's loop on the recorded frames, with the reference or the
 /// on-target engine.
-pub fn simulate(scene: &Avoid, setup: &Setup, engine: super::path::Engine, depth: &Path, poses: Option<&Path>) -> Result<(super::path::PathResult, RecordedStats), String> {
-    use super::path::{mcu_engine, simulate_from, Engine, RefEngine};
+pub fn simulate(scene: &Avoid, setup: &Setup, engine: crate::path::Engine, depth: &Path, poses: Option<&Path>) -> Result<(crate::path::PathResult, RecordedStats), String> {
+    use crate::path::{mcu_engine, simulate_from, Engine, RefEngine};
     let rec = Recording::open(depth, poses)?;
     let mut src = RecordedSource::new(scene, rec)?;
     let mut res = match engine {
@@ -410,7 +410,7 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: super::path::Engine, depth
     };
     // The verdict was judged against the scene file's model operator, not the recording's people:
     // never a verified `reached` or `stopped`.
-    res.verdict_basis = super::path::VerdictBasis::SceneModelNotRecording;
+    res.verdict_basis = crate::path::VerdictBasis::SceneModelNotRecording;
     res.status = res.status.unverified();
     Ok((res, src.stats))
 }

@@ -14,7 +14,7 @@
 //! has its centre at `(u, v)` in the intrinsics (OpenCV's convention), so the point of a count is
 //! `R z ((u - cx) / fx, (v - cy) / fy, 1) + C`.
 
-use super::depth::{DepthImage, OperatorShape, RobotShape};
+use crate::depth::{DepthImage, OperatorShape, RobotShape};
 
 pub use flinch_model::avoid::depth_camera::DepthCameraCfg;
 
@@ -199,7 +199,7 @@ fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
     if ((d1 > 0.0) != (d2 > 0.0)) && ((d3 > 0.0) != (d4 > 0.0)) {
         return 0.0;
     }
-    use super::depth::dist_to_segment as ds;
+    use crate::depth::dist_to_segment as ds;
     ds(a, c, d).min(ds(b, c, d)).min(ds(c, a, b)).min(ds(d, a, b))
 }
 
