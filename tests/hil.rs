@@ -314,7 +314,7 @@ fn a_category_0_stopping_table_gives_the_brakes() {
     let v = [0.1, 0.25];
     let d: Vec<f64> = v.iter().map(|v| v * 0.05 + v * v / 4.0).collect();
     let t: Vec<f64> = v.iter().map(|v| 0.05 + v / 2.0).collect();
-    sc.motion.stopping = Some(flinch_harness::plant::stopping::StoppingTable::new(0, &v, &d, &t).unwrap());
+    sc.motion.stopping = Some(flinch_harness::stopping::StoppingTable::new(0, &v, &d, &t).unwrap());
     let h = hil::run(&sc, &Controller::new(0.07, 0.0, 1e-4), false).unwrap().0;
     let f = &h.firmware;
     assert!(f.category0, "{f:?}");

@@ -10,11 +10,14 @@
 //! not (the page is written either way), 2 for a scene or option that cannot be read, 3 when the
 //! page cannot be written or the run fails.
 
-use crate::report::output::{self, Failure};
-use crate::report::{plot, schema, stream, trace::Trace};
-use crate::scene::{self, Key, Ty};
-use crate::sweep::{self, Template};
-use crate::{check, design, shipped, verdict};
+use flinch_output::output::{self, Failure};
+use crate::schema;
+use flinch_report::{plot, stream, trace::Trace};
+use flinch_model::scene::{self, Key, Ty};
+use flinch_studies::sweep::{self, Template};
+use flinch_model::shipped;
+use flinch_sim::verdict;
+use flinch_studies::{check, design};
 use serde_json::Value as Json;
 use sha2::{Digest, Sha256};
 use std::fmt::Write;

@@ -5,8 +5,8 @@
 //! `peak_contact_force`, ...), the table below. A numeric field with neither fails the test that
 //! keeps docs/schema/ current, so no field ships without its unit.
 
-use super::{HilJson, RunJson, Versioned};
-use crate::scene::{Bound, Key, Need, Ty};
+use flinch_report::{HilJson, RunJson, Versioned};
+use flinch_model::scene::{Bound, Key, Need, Ty};
 use schemars::{schema_for, Schema};
 use serde_json::{Map, Value};
 
@@ -62,9 +62,9 @@ pub fn documents() -> (Vec<(&'static str, String)>, Vec<String>) {
     for (file, mut schema, what) in [
         ("run.json", schema_for!(RunJson), "`flinch run --json`: the run's summary (the scene contract, docs/SCENES.md) and, with --measured, the comparison"),
         ("hil.json", schema_for!(HilJson), "`flinch hil --json`: the run's summary and the firmware's figures"),
-        ("check.json", schema_for!(Versioned<'static, crate::check::BudgetCheck>), "`flinch check --json`: the stroke budget and the simulation that confirms it (`simulated`: the run's summary, docs/schema/run.json)"),
-        ("design.json", schema_for!(Versioned<'static, crate::design::DesignReport>), "`flinch design --json`: the stroke a robot needs, the largest safe speed, the working mode"),
-        ("avoid.json", schema_for!(crate::avoid::AvoidMetrics), "`flinch avoid --json`: the metrics of one avoidance run"),
+        ("check.json", schema_for!(Versioned<'static, flinch_studies::check::BudgetCheck>), "`flinch check --json`: the stroke budget and the simulation that confirms it (`simulated`: the run's summary, docs/schema/run.json)"),
+        ("design.json", schema_for!(Versioned<'static, flinch_studies::design::DesignReport>), "`flinch design --json`: the stroke a robot needs, the largest safe speed, the working mode"),
+        ("avoid.json", schema_for!(flinch_avoid::AvoidMetrics), "`flinch avoid --json`: the metrics of one avoidance run"),
     ] {
         if let Some(o) = schema.as_object_mut() {
             o.insert("description".into(), Value::String(format!("{what}. Units: the `unit` keyword of every numeric field (docs/conventions.md).")));
@@ -137,7 +137,7 @@ fn key_schema(k: &Key, path: &str) -> Value {
         }
         Ty::Table(what) => {
             let sub = if path.is_empty() { k.name.to_string() } else { format!("{path}.{}", k.name) };
-            if crate::scene::key_tables().iter().any(|t| t.path == sub) {
+            if flinch_model::scene::key_tables().iter().any(|t| t.path == sub) {
                 return table_schema(&sub, k.doc);
             }
             o.insert("type".into(), serde_json::json!(["object", "array"]));
@@ -159,7 +159,7 @@ fn key_schema(k: &Key, path: &str) -> Value {
 fn table_schema(path: &str, doc: &str) -> Value {
     let mut props = Map::new();
     let mut required: Option<Vec<&str>> = None;
-    for t in crate::scene::key_tables().iter().filter(|t| t.path == path) {
+    for t in flinch_model::scene::key_tables().iter().filter(|t| t.path == path) {
         for k in t.keys {
             let mut p = key_schema(k, path);
             if !t.when.is_empty() {
@@ -253,7 +253,7 @@ mod tests {
     fn schemas_in_docs_are_current_and_every_number_has_a_unit() {
         let (docs, missing) = documents();
         assert!(missing.is_empty(), "numeric fields without a unit (add a suffix per docs/conventions.md, or list a contract name in NAMED): {missing:?}");
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/schema");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../docs/schema");
         for (file, text) in docs {
             let path = dir.join(file);
             if std::env::var_os("FLINCH_BLESS").is_some() {
@@ -321,8 +321,8 @@ mod tests {
     fn every_shipped_scene_meets_the_scene_schema_and_a_bad_one_does_not() {
         let schema = scene_schema();
         let mut n = 0;
-        for name in crate::shipped::names().filter(|n| !n.contains("avoid_")) {
-            let text = crate::shipped::get(name).unwrap();
+        for name in flinch_model::shipped::names().filter(|n| !n.contains("avoid_")) {
+            let text = flinch_model::shipped::get(name).unwrap();
             let v: Value = toml::from_str(text).unwrap();
             let mut out = Vec::new();
             violations(&schema, &v, "", &mut out);
@@ -330,7 +330,7 @@ mod tests {
             n += 1;
         }
         assert!(n > 20, "{n} scenes");
-        let bad: Value = toml::from_str(&crate::shipped::get("tables5-7_bistable").unwrap().replace("speed = 0.05", "speed = 50.0\nsped = 1.0")).unwrap();
+        let bad: Value = toml::from_str(&flinch_model::shipped::get("tables5-7_bistable").unwrap().replace("speed = 0.05", "speed = 50.0\nsped = 1.0")).unwrap();
         let mut out = Vec::new();
         violations(&schema, &bad, "", &mut out);
         assert!(out.iter().any(|o| o.starts_with("motion.speed = 50")) && out.iter().any(|o| o.starts_with("motion.sped")), "{out:?}");
