@@ -21,7 +21,7 @@
 //! (`flinch_model::scene::controller`): a scene without them gets them there.
 //!
 //! With the robot's own category-0 stopping data (`motion.stopping` with `category = 0`) the
-//! plant uses that table's equivalent delay and deceleration at v_0 instead (plant/stopping.rs).
+//! plant uses that table's equivalent delay and deceleration at v_0 instead (model/src/stopping.rs).
 
 pub use flinch_model::scene::{DEFAULT_BRAKE_DECEL_MPS2 as DEFAULT_DECEL_MPS2, DEFAULT_BRAKE_DELAY_S as DEFAULT_DELAY_S};
 use flinch_model::scene::Controller;

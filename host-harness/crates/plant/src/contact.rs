@@ -2,7 +2,7 @@
 //! `F = k d^1.5 + chi d^1.5 d'`, never negative (a contact pushes, it never pulls), zero for d <= 0.
 //! Units: k in N/m^1.5, chi in N s/m^2.5, d in m, d' in m/s, F in N.
 //!
-//! A human body region (ISO/TS 15066 Annex A, `crate::body`) is a *linear* undamped spring instead:
+//! A human body region (ISO/TS 15066 Annex A, `flinch_model::body`) is a *linear* undamped spring instead:
 //! `F = k d` for d > 0, k in N/m, chi = 0 ([`Contact::linear`]); it never pulls either.
 //!
 //! chi is fixed per contact at its onset from the approach velocity v_in (eq 7 and the other laws

@@ -9,7 +9,7 @@
 //!   *sticking*, the two sides move together and the friction is whatever force keeps them so
 //!   ([`required`]), as long as its magnitude stays below mu |F_n|; while *slipping* in direction d,
 //!   the force is -d mu |F_n| (opposing the relative velocity). The switches are located events
-//!   (`sim.rs`): stick -> slip when the required force reaches the limit ([`Slide::event`]), slip
+//!   (`flinch-sim`): stick -> slip when the required force reaches the limit ([`Slide::event`]), slip
 //!   -> stick or reversal when the relative velocity reaches zero ([`Slide::decide`] chooses). One
 //!   coefficient for sticking and sliding: the thesis gives one mu.
 

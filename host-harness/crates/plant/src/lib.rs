@@ -119,7 +119,7 @@ pub struct Plant {
     /// cost a dozen rejected steps at every contact onset (docs/accuracy.md).
     pub in_contact: bool,
     /// The stick/slip state of a Coulomb slide (`decoupler.friction.law = "stick-slip"`), set at
-    /// located events (`sim.rs`); `None` for every other decoupler. While sticking, the tool's
+    /// located events (`flinch-sim`); `None` for every other decoupler. While sticking, the tool's
     /// position is the flange's plus the stuck stroke, whatever the state vector says.
     pub slide: Option<Slide>,
 }

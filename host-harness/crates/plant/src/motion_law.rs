@@ -2,7 +2,7 @@
 //! profile"): accelerate at a_c to V_c, cruise, and, from t_brake = t_detect + DT, brake at d_c to
 //! standstill without reversing. Units: s, m, m/s, m/s^2.
 //!
-//! With the robot's stopping table (`motion.stopping`, `plant/stopping.rs`) the stop is signalled
+//! With the robot's stopping table (`motion.stopping`, `model/src/stopping.rs`) the stop is signalled
 //! ([`MotionLaw::stop_signal_at`]) and the law brakes with the table's equivalent dead time and
 //! deceleration at the speed commanded at that instant, so it covers the table's D(v) in T(v).
 
@@ -55,7 +55,7 @@ impl MotionLaw {
 
     /// The robot gets the stop signal at `t`: without a table braking starts then (`brake_at`);
     /// with one, the table's equivalent dead time later, at its equivalent deceleration, both for
-    /// the speed commanded at `t` (plant/stopping.rs). A second signal changes nothing.
+    /// the speed commanded at `t` (model/src/stopping.rs). A second signal changes nothing.
     pub fn stop_signal_at(&mut self, t: f64) {
         if self.t_brake.is_some() {
             return;

@@ -80,7 +80,7 @@ pub struct Simulation {
     /// stays bounded whatever the duration); `None` keeps them in `history`.
     pub sink: Option<Sink>,
     /// Called after every accepted step with the plant, the step's span [t0, t1] and its dense
-    /// output: firmware in the loop reads the switch between steps from it (`hil.rs`).
+    /// output: firmware in the loop reads the switch between steps from it (`flinch-hil`).
     pub probe: Option<Probe>,
     pub(crate) warnings: Vec<String>,
     /// Contact and robot-force magnitude at the end of the last step (t, (N, N)).

@@ -152,7 +152,7 @@ impl<const N: usize, const E: usize> Driver<N, E> {
 
     /// The step the adaptive controller proposes next, s (0 before the first estimate). A caller
     /// that advances to `t + next_step()` takes the step the driver would have taken anyway, and can
-    /// look at the state after each one (firmware in the loop, `hil.rs`).
+    /// look at the state after each one (firmware in the loop, `flinch-hil`).
     pub fn next_step(&self) -> f64 {
         self.h
     }

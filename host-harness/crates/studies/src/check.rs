@@ -16,7 +16,7 @@ pub use flinch_hil::units::{um_down, um_up};
 
 /// Stopping distance after detection, m, rounded up to the micrometre: the firmware's formula
 /// `v DT + v^2 / (2 d)`, or with the robot's stopping table `v DT + D(v)`, D read from the table
-/// itself (DT then being the delay to the stop signal; plant/stopping.rs).
+/// itself (DT then being the delay to the stop signal; model/src/stopping.rs).
 pub fn stopping_distance(m: &flinch_model::scene::Motion) -> Result<f64, String> {
     match &m.stopping {
         None => Ok(stopping_distance_um(um_up(m.speed), um_up(m.dead_time), um_down(m.decel).max(1)) as f64 * 1e-6),

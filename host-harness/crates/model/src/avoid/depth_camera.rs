@@ -1,7 +1,7 @@
 //! `[avoid.depth_camera]`: the pinhole camera of recorded depth frames as a scene gives it
 //! (intrinsics, pose over the work plane, depth scale); `flinch-avoid`'s camera.rs uses it.
 
-/// `[avoid.depth_camera]` as written in the scene (ranges: `scene/avoid.rs`, `DEPTH_CAMERA_KEYS`).
+/// `[avoid.depth_camera]` as written in the scene (ranges: `scene/avoid/`, `DEPTH_CAMERA_KEYS`).
 #[derive(Clone, Debug, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DepthCameraCfg {

@@ -1,5 +1,5 @@
 //! The avoidance scene (TOML, table `[avoid]`): documented key by key in `docs/avoidance.md`; read
-//! and checked by the scene loader's tables (`scene/avoid.rs`: keys, units, ranges with their
+//! and checked by the scene loader's tables (`scene/avoid/`: keys, units, ranges with their
 //! sources, defaults), which build these structs.
 
 use super::shapes::{Camera, Obstacle, OperatorShape, RobotShape};

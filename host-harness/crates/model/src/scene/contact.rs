@@ -1,4 +1,4 @@
-//! The damping keys of a nonlinear contact (`plant/contact.rs`, `plant/damping_law.rs`):
+//! The damping keys of a nonlinear contact (`plant/contact.rs`, `model/src/damping_law.rs`):
 //! `restitution` with a `damping_law`, or a fixed `chi` (Table 12). The target and the back
 //! end-stop share them.
 use super::check::{Bound::*, Ctx, Key, Tab, Ty};

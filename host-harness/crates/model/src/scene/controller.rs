@@ -1,4 +1,4 @@
-//! `[controller]`: the robot controller of firmware-in-the-loop runs (`flinch hil`, `hil.rs`):
+//! `[controller]`: the robot controller of firmware-in-the-loop runs (`flinch hil`, `flinch-hil`):
 //! inputs sampled once per scan cycle, the firmware ticking at its own period.
 use super::check::{Bound::*, Ctx, Key, Tab, Ty};
 use super::model::{Controller, DEFAULT_BRAKE_DECEL_MPS2, DEFAULT_BRAKE_DELAY_S};

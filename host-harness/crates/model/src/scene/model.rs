@@ -37,7 +37,7 @@ pub struct Motion {
     pub speed: f64,
     /// a_c, m/s^2, > 0.
     pub accel: f64,
-    /// d_c, m/s^2, > 0; with `stopping`, the table's equivalent at V_c (plant/stopping.rs; the
+    /// d_c, m/s^2, > 0; with `stopping`, the table's equivalent at V_c (model/src/stopping.rs; the
     /// plant recomputes it at the speed the stop is signalled at).
     pub decel: f64,
     /// DT, s, >= 0, from detection to the start of braking; with `stopping`, from detection to the

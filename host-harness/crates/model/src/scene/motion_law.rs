@@ -64,7 +64,7 @@ pub(super) fn motion(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<Mo
         }
         (None, Some(table)) => {
             let (table, payload) = table?;
-            // The plant brakes from V_c with the equivalent deceleration (plant/stopping.rs); above
+            // The plant brakes from V_c with the equivalent deceleration (model/src/stopping.rs); above
             // the table nothing is known: refused, not extrapolated.
             let Some(e) = table.equivalent(speed) else {
                 cx.bad(t, SPEED.name, format!(

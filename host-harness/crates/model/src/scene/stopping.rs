@@ -1,5 +1,5 @@
 //! `motion.stopping`: the robot's own stopping data (ISO 10218-1 Annex B), the alternative to
-//! `motion.decel` (plant: `plant/stopping.rs`, which says how it is interpolated and what the plant
+//! `motion.decel` (plant: `model/src/stopping.rs`, which says how it is interpolated and what the plant
 //! brakes with). `{ category = 0 | 1, speed = [...], distance = [...], time = [...] }`, optionally
 //! `payload`: distance and time measured from the stop signal to standstill, reaction included.
 use super::check::{num, Bound::*, Ctx, Key, Span, Tab, Ty};
