@@ -1,4 +1,4 @@
-//! ISO/TS 15066 Annex A body regions (host-harness/src/body.rs, body_design.rs): the target kind,
+//! ISO/TS 15066 Annex A body regions (host-harness/crates/model/src/body.rs, crates/studies/src/body_design.rs): the target kind,
 //! the limits in the verdict, the closed form against the simulation, and `design --body-region`.
 
 use flinch_harness::body_design;

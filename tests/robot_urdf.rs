@@ -1,4 +1,4 @@
-//! The robot reduced from joint space (thesis eq 10-16, `host-harness/src/kinematics`) against
+//! The robot reduced from joint space (thesis eq 10-16, `host-harness/crates/kinematics`) against
 //! closed forms, and the URDFs and configurations it must refuse.
 use flinch_harness::kinematics::{reduce, Chain, KinError};
 use flinch_tests::scene_path;

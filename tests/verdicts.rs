@@ -1,4 +1,4 @@
-//! One definition of "safe" (host-harness/src/verdict.rs, docs/verdicts.md): the contradictions of
+//! One definition of "safe" (host-harness/crates/sim/src/verdict.rs, docs/verdicts.md): the contradictions of
 //! issue 17 as tests. Each would fail on the code before the verdict module: `check` said FITS
 //! beside a travel beyond the stroke with no reason, `design` called a speed safe next to a
 //! negative "closest approach", and printed raw floats among mm values.

@@ -15,7 +15,7 @@ fn read(name: &str, columns: &[&str]) -> Vec<csv::StringRecord> {
     let path = docs().join("accuracy").join(name);
     let mut r = csv::Reader::from_path(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let head: Vec<String> = r.headers().unwrap().iter().map(str::to_string).collect();
-    assert_eq!(head, columns, "{}: the header is not the generator's (host-harness/src/bench.rs); regenerate with `flinch bench --repeats 7 --out docs/accuracy`", path.display());
+    assert_eq!(head, columns, "{}: the header is not the generator's (host-harness/crates/studies/src/bench.rs); regenerate with `flinch bench --repeats 7 --out docs/accuracy`", path.display());
     let rows: Vec<_> = r.records().map(|x| x.unwrap_or_else(|e| panic!("{}: {e}", path.display()))).collect();
     assert!(!rows.is_empty(), "{}: no rows", path.display());
     rows

@@ -344,7 +344,7 @@ fn run_exits_0_on_a_not_safe_summary_as_the_conventions_say() {
     let conv = std::fs::read_to_string(repo().join("docs/conventions.md")).unwrap();
     assert!(conv.contains("a `flinch run` whose summary says NOT SAFE (`\"safe\": false`) exits 0"), "docs/conventions.md must state it");
     // The contract lives in the repo: no source points at ../shared/.
-    for f in ["host-harness/src/scene/model.rs", "host-harness/src/main.rs", "README.md"] {
+    for f in ["host-harness/crates/model/src/scene/model.rs", "host-harness/src/main.rs", "README.md"] {
         let t = std::fs::read_to_string(repo().join(f)).unwrap();
         assert!(!t.contains("shared/SCENES.md") && !t.contains("shared/MODEL.md"), "{f} points outside the repo");
     }
