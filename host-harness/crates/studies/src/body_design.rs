@@ -56,7 +56,7 @@ pub struct Answer {
     /// Largest simulated speed at which the body-region limits hold (force and pressure, the
     /// whole run; `body_limits_pass`), m/s.
     pub speed_simulated_mps: Option<f64>,
-    /// With the module: the largest simulated speed at which the run is `safe` (flinch_sim::verdict:
+    /// With the module: the largest simulated speed at which the run is `safe` (crate::verdict:
     /// the body limits hold *and* the stroke is not exhausted while touching the body), m/s; null
     /// for a rigid tool (its stroke rule always fails) or when not found (`safe_search_note`).
     pub speed_safe_mps: Option<f64>,

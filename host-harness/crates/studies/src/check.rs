@@ -59,13 +59,13 @@ pub struct BudgetCheck {
     pub margin: f64,
     /// The budget holds.
     pub fits: bool,
-    /// The simulation of the same scene (its `safe` and `failures`: flinch_sim::verdict).
+    /// The simulation of the same scene (its `safe` and `failures`: crate::verdict).
     pub simulated: Summary,
     /// The verdict of `check`: the budget fits and the simulation is safe (docs/verdicts.md).
     pub safe: bool,
     /// Why not, for people: the budget's failure and the simulation's (empty when safe).
     pub failures: Vec<String>,
-    /// Why the budget and the simulation disagree, for people (flinch_sim::verdict::explain).
+    /// Why the budget and the simulation disagree, for people (crate::verdict::explain).
     pub explanations: Vec<String>,
 }
 

@@ -64,7 +64,7 @@ pub struct Trial {
     #[serde(rename = "stroke_m")]
     pub stroke: f64,
     /// The run: its `safe`, `failures`, `stroke_left_min_m` and `closest_approach_m` are the one
-    /// definition of flinch_sim::verdict.
+    /// definition of crate::verdict.
     pub summary: Summary,
 }
 
@@ -130,7 +130,7 @@ pub struct DesignReport {
     /// min(speed_limit_formula, speed_limit_simulated), m/s; null when the simulated search failed.
     pub speed_limit_mps: Option<f64>,
     /// The verdict at the design point, the same as `flinch check`'s: the budget fits and the
-    /// simulation is safe (flinch_sim::verdict).
+    /// simulation is safe (crate::verdict).
     pub safe: bool,
     /// Why not, for people (empty when safe).
     pub failures: Vec<String>,
