@@ -25,7 +25,7 @@
 //!   exception entry), which a due tick also waits behind; it was left out before, while it cloned
 //!   the whole 16-event log (a snapshot of all 16 events measured 1,974 instructions); it now takes
 //!   one new event per run (`event_log::DRAIN_BATCH`).
-//! * [`BOARD_CLOCK_HZ`]: the board runs on the 16 MHz HSI (firmware/src/bin/board.rs, `CORE_HZ` without the `qemu-io` feature).
+//! * [`BOARD_CLOCK_HZ`]: the board runs on the 16 MHz HSI (firmware/src/bin/support/board_hw.rs, `CORE_HZ` without the `qemu-clock` feature).
 //!
 //! # Conversion
 //!
@@ -55,7 +55,7 @@ pub const DRAIN_MASKED_INSTRUCTIONS: u32 = 86;
 pub const TICK_TO_OUTPUT_WORST_INSTRUCTIONS: u32 = 1_463;
 /// Exception entries on the worst tick-to-output path.
 pub const TICK_TO_OUTPUT_ENTRIES: u32 = 4;
-/// The board's core clock, Hz (16 MHz HSI, firmware/src/bin/board.rs).
+/// The board's core clock, Hz (16 MHz HSI, firmware/src/bin/support/board_hw.rs).
 pub const BOARD_CLOCK_HZ: u32 = 16_000_000;
 /// Cycles one instruction of the path takes at most (Cortex-M4: taken branch 1 + P, P <= 3).
 pub const CYCLES_PER_INSTRUCTION_MAX: u32 = 4;

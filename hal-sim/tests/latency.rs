@@ -41,7 +41,7 @@ fn worst_edge_to_stop_is_the_readme_figure_and_within_what_xtask_asserts() {
     assert!(WORST_EDGE_TO_STOP_INSTRUCTIONS <= limit, "{WORST_EDGE_TO_STOP_INSTRUCTIONS} > xtask's {limit}");
     let tick_limit = const_u32(&xtask, "ICOUNT_TICK_OUTPUT_LIMIT");
     assert!(TICK_TO_OUTPUT_WORST_INSTRUCTIONS <= tick_limit, "{TICK_TO_OUTPUT_WORST_INSTRUCTIONS} > xtask's {tick_limit}");
-    let board = read("firmware/src/bin/board.rs");
+    let board = read("firmware/src/bin/support/board_hw.rs");
     assert_eq!(BOARD_CLOCK_HZ, const_u32(&board, "CORE_HZ"), "the board's clock changed");
 }
 

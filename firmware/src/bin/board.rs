@@ -70,72 +70,43 @@ mod bench;
 mod board_avoid;
 
 #[cfg(target_os = "none")]
+#[path = "support/board_hw.rs"]
+mod hw;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_startup.rs"]
+mod startup;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_backup.rs"]
+mod backup;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_log.rs"]
+mod log_drain;
+
+#[cfg(target_os = "none")]
 mod board {
     use super::isr_cell::IsrCell;
-    use core::convert::Infallible;
-    use core::ptr::{read_volatile, write_volatile};
+    use crate::backup::{backup_on, retained_store, stored_boots, Bkp, SAVED_SEQ};
+    use crate::hw::{emergency_stop, exti, gpio, idr, iwdg, odr, bsrr, rcc, syscfg, tim2, tim5, In, Out, Tim2, lsi_capture, CORE_HZ, GPIOA, GPIOD, LSI_HZ, TICK_US, TIM2_HZ};
+    #[cfg(feature = "qemu-clock")]
+    use crate::startup::{not_qemu, SELF_NOT_QEMU};
+    use crate::startup::{early_outputs_low, flash_crc_ok, integrity_failed, ram_test, OptionRegs, BOR_BUSY_SPINS, SELF_BOR, SELF_FLASH, SELF_RAM};
+    use crate::log_drain::LogDrain;
     use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
     use cortex_m::peripheral::scb::SystemHandler;
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m::peripheral::NVIC;
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_rtt as _;
-    use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
-    use flinch_firmware::option_bytes::{self, BorOutcome, OptionBytes};
-    use flinch_firmware::{backup, integrity};
+    use flinch_firmware::option_bytes::{self, BorOutcome};
+    use flinch_firmware::backup;
     use flinch_firmware::{
-        BackupRam, Boot, EventLog, BudgetConfig, Cause, Clock, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
+        Boot, EventLog, BudgetConfig, Cause, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
         SwitchKind,
     };
 
-    // ---- Registers: the `stm32f4` PAC (feature stm32f407, generated from ST's SVD; RM0090 Rev 19) ---
-    use stm32f4::stm32f407 as pac;
-    /// GPIOA's and GPIOD's base addresses (RM0090 sec. 2.3), as the pins' const-generic port; the
-    /// registers behind them are the PAC's (`gpio`).
-    const GPIOA: u32 = 0x4002_0000;
-    const GPIOD: u32 = 0x4002_0C00;
-
-    /// The PAC's register blocks. SAFETY (all of them): fixed peripheral addresses of this part,
-    /// valid for the whole program; every access through them is a volatile register access.
-    #[inline(always)]
-    fn rcc() -> &'static pac::rcc::RegisterBlock {
-        unsafe { &*pac::RCC::ptr() }
-    }
-    #[inline(always)]
-    fn tim2() -> &'static pac::tim2::RegisterBlock {
-        unsafe { &*pac::TIM2::ptr() }
-    }
-    #[inline(always)]
-    fn iwdg() -> &'static pac::iwdg::RegisterBlock {
-        unsafe { &*pac::IWDG::ptr() }
-    }
-    #[inline(always)]
-    fn tim5() -> &'static pac::tim5::RegisterBlock {
-        unsafe { &*pac::TIM5::ptr() }
-    }
-    #[inline(always)]
-    fn exti() -> &'static pac::exti::RegisterBlock {
-        unsafe { &*pac::EXTI::ptr() }
-    }
-    #[inline(always)]
-    fn syscfg() -> &'static pac::syscfg::RegisterBlock {
-        unsafe { &*pac::SYSCFG::ptr() }
-    }
-    #[inline(always)]
-    fn flash() -> &'static pac::flash::RegisterBlock {
-        unsafe { &*pac::FLASH::ptr() }
-    }
-    #[inline(always)]
-    fn pwr() -> &'static pac::pwr::RegisterBlock {
-        unsafe { &*pac::PWR::ptr() }
-    }
-    /// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4; `PORT` is GPIOA or
-    /// GPIOD above). Only MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so
-    /// GPIOA's reset values in the PAC's type never leak into another port.
-    #[inline(always)]
-    fn gpio(port: u32) -> &'static pac::gpioa::RegisterBlock {
-        unsafe { &*(port as *const pac::gpioa::RegisterBlock) }
-    }
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
     const EXTI4_IRQ: u16 = 10;
     /// The bookkeeping interrupt: UART5's line (RM0090 Table 61), pended by software only.
@@ -144,124 +115,11 @@ mod board {
     const TIM5_IRQ: u16 = 50;
     /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
     const PRIO_EDGE: u8 = 0x00;
-    const PRIO_TICK: u8 = 0x80;
+    pub(crate) const PRIO_TICK: u8 = 0x80;
 
-    /// The core clock (SysTick) and TIM2's input clock: the 16 MHz HSI on the board. QEMU 7.2's
-    /// netduinoplus2 clocks the core at 168 MHz and its timers at 1 GHz whatever RCC says, so the
-    /// `qemu-io` build scales both to keep a 1 MHz `Clock` and a `TICK_US` tick there.
-    #[cfg(not(feature = "qemu-clock"))]
-    const CORE_HZ: u32 = 16_000_000;
-    #[cfg(not(feature = "qemu-clock"))]
-    const TIM2_HZ: u32 = 16_000_000;
-    #[cfg(feature = "qemu-clock")]
-    const CORE_HZ: u32 = 168_000_000;
-    #[cfg(feature = "qemu-clock")]
-    const TIM2_HZ: u32 = 1_000_000_000;
-    const TICK_US: u32 = 1_000;
-
-    // ---- The three pin accesses: GPIO in the production build, the QEMU bench's RAM with
-    // `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_bench.rs`) -------------------
-    /// A port's input register.
-    #[inline(always)]
-    fn idr(port: u32) -> u32 {
-        #[cfg(not(feature = "qemu-io"))]
-        return gpio(port).idr().read().bits();
-        #[cfg(feature = "qemu-io")]
-        return if port == GPIOA { super::bench::PINS.load(Relaxed) } else { gpio(port).idr().read().bits() };
-    }
-    /// A port's output register (the stop's read-back).
-    #[inline(always)]
-    fn odr(port: u32) -> u32 {
-        #[cfg(not(feature = "qemu-io"))]
-        return gpio(port).odr().read().bits();
-        #[cfg(feature = "qemu-io")]
-        return if port == GPIOD { super::bench::ODR_D.load(Relaxed) } else { gpio(port).odr().read().bits() };
-    }
-    /// A write to a port's bit set/reset register.
-    #[inline(always)]
-    fn bsrr(port: u32, v: u32) {
-        // SAFETY: BSRR takes any bit pattern (a set or reset request per pin).
-        gpio(port).bsrr().write(|w| unsafe { w.bits(v) });
-        #[cfg(feature = "qemu-io")]
-        if port == GPIOD {
-            super::bench::bsrr(v);
-        }
-    }
-
-    // ---- Pins: zero-sized, the port and pin are constants, so a write is a single `str` ------------
-    /// A push-pull output on `PORT`, pin `N`, written through BSRR (atomic, no read-modify-write).
-    pub struct Out<const PORT: u32, const N: u32>;
-    impl<const PORT: u32, const N: u32> ErrorType for Out<PORT, N> {
-        type Error = Infallible;
-    }
-    impl<const PORT: u32, const N: u32> OutputPin for Out<PORT, N> {
-        #[inline(always)]
-        fn set_low(&mut self) -> Result<(), Infallible> {
-            bsrr(PORT, 1 << (N + 16));
-            Ok(())
-        }
-        #[inline(always)]
-        fn set_high(&mut self) -> Result<(), Infallible> {
-            bsrr(PORT, 1 << N);
-            Ok(())
-        }
-    }
-    /// An input on `PORT`, pin `N`, read from IDR.
-    pub struct In<const PORT: u32, const N: u32>;
-    impl<const PORT: u32, const N: u32> ErrorType for In<PORT, N> {
-        type Error = Infallible;
-    }
-    impl<const PORT: u32, const N: u32> InputPin for In<PORT, N> {
-        #[inline(always)]
-        fn is_high(&mut self) -> Result<bool, Infallible> {
-            Ok(idr(PORT) & (1 << N) != 0)
-        }
-        #[inline(always)]
-        fn is_low(&mut self) -> Result<bool, Infallible> {
-            Ok(idr(PORT) & (1 << N) == 0)
-        }
-    }
-
-    /// TIM2 as a 1 MHz, 32-bit free-running counter.
-    pub struct Tim2;
-    impl Clock for Tim2 {
-        #[inline(always)]
-        fn now(&mut self) -> Micros {
-            Micros(tim2().cnt().read().bits())
-        }
-        /// LSI periods counted by TIM5's channel 4 (`lsi_capture`): the independent reference.
-        fn reference_ticks(&mut self) -> Option<u32> {
-            Some(LSI_PERIODS.load(Relaxed))
-        }
-    }
-
-    /// The clock check's reference: the LSI (the IWDG's own RC oscillator, independent of the HSI
-    /// behind TIM2 and SysTick). The F4 can only route it to TIM5's channel 4 capture input
-    /// (`TIM5_OR.TI4_RMP = 01`, RM0090 sec. 18.4.21), which timestamps edges and does not count
-    /// them; the counting adapter is the capture interrupt: every 8th LSI rising edge
-    /// (`IC4PSC = /8`) captures, and `lsi_capture` adds 8 (16 if the capture before was overwritten).
-    /// 4 kHz of a short interrupt at the tick's priority, below the edge.
-    static LSI_PERIODS: AtomicU32 = AtomicU32::new(0);
-    /// Nominal LSI, hertz; DS8626 specifies 17 to 47 kHz, hence the wide tolerance in `config`.
-    const LSI_HZ: u32 = 32_000;
-
-    fn lsi_capture() {
-        let t = tim5();
-        let _ = t.ccr4().read(); // reading CCR4 clears CC4IF
-        let sr = t.sr().read().bits();
-        let mut n = 8;
-        if sr & (1 << 12) != 0 {
-            // CC4OF: a capture was overwritten before this one was read: 8 more periods.
-            n += 8;
-            // SAFETY: rc_w0 flags: write 0 to CC4OF only, 1 elsewhere leaves the others.
-            t.sr().write(|w| unsafe { w.bits(!(1 << 12)) });
-        }
-        LSI_PERIODS.fetch_add(n, Relaxed);
-    }
-
-    type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
-    type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>, 16, Edm<In<GPIOA, 2>, In<GPIOA, 3>>>;
-    static FW: IsrCell<Fw> = IsrCell::new();
+    pub(crate) type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
+    pub(crate) type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>, 16, Edm<In<GPIOA, 2>, In<GPIOA, 3>>>;
+    pub(crate) static FW: IsrCell<Fw> = IsrCell::new();
 
     /// The installation's configuration. The numbers are those of the thesis's Ch. 3 set-up and
     /// must be replaced by the real cell's: V_c = 0.05 m/s and DT = 16 ms (Tables 5-7, Viper scan
@@ -297,211 +155,6 @@ mod board {
 
     defmt::timestamp!("{=u32:us}", tim2().cnt().read().bits());
 
-    /// Drop both outputs with raw register writes (usable from any context, even before init).
-    #[inline(always)]
-    fn emergency_stop() {
-        bsrr(GPIOD, (1 << (12 + 16)) | (1 << (13 + 16)));
-    }
-
-    // ---- Start-up integrity checks (`flinch_firmware::integrity`) ---------------------------------
-    /// The CRC-32 of the flash image with this word counted as zeros; written into the ELF after the
-    /// link by `cargo xtask` (`patch_flash_crc`). An image that was not patched (0) or was changed
-    /// after patching fails the check and never arms.
-    #[no_mangle]
-    #[used]
-    static FLINCH_FLASH_CRC: u32 = 0;
-    /// The production build checks its image with the production seed; every `qemu-clock` build
-    /// (the `qemu-io` bench and the serial test: their tick is scaled for QEMU), which must never run
-    /// the machine, is patched (xtask) and checked with its own, so its stored CRC fails the
-    /// production check (`integrity::Seed`; host test `a_bench_image_fails_the_production_check`).
-    #[cfg(not(feature = "qemu-clock"))]
-    const FLASH_SEED: integrity::Seed = integrity::Seed::Production;
-    #[cfg(feature = "qemu-clock")]
-    const FLASH_SEED: integrity::Seed = integrity::Seed::QemuBench;
-
-    extern "C" {
-        // cortex-m-rt's linker script (link.x): .data's run and load addresses, the end of .bss.
-        static mut __sdata: u32;
-        static mut __edata: u32;
-        static mut __ebss: u32;
-        static __sidata: u32;
-    }
-    const FLASH_START: u32 = 0x0800_0000;
-    const RAM_START: u32 = 0x2000_0000;
-    /// Stack kept out of the RAM test: main's and the test's own frames live there.
-    const STACK_KEEP: u32 = 1024;
-
-    /// The flash image: the vector table, .text and .rodata (contiguous from the start of flash, as
-    /// cortex-m-rt's link.x lays them out and xtask checks), then .data's load image.
-    fn flash_crc_ok() -> bool {
-        let end = core::ptr::addr_of!(__sidata) as u32 + (core::ptr::addr_of!(__edata) as u32 - core::ptr::addr_of!(__sdata) as u32);
-        let crc_at = core::ptr::addr_of!(FLINCH_FLASH_CRC) as u32;
-        // SAFETY: flash from its start to the end of .data's load image: mapped, read-only,
-        // never written while running.
-        let image = unsafe { core::slice::from_raw_parts(FLASH_START as *const u8, (end - FLASH_START) as usize) };
-        // SAFETY: a static in flash; volatile so that the compiler does not fold in the 0 it was
-        // linked with (xtask patched the ELF afterwards).
-        let stored = unsafe { read_volatile(core::ptr::addr_of!(FLINCH_FLASH_CRC)) };
-        integrity::image_crc_seeded(image, (crc_at - FLASH_START) as usize, FLASH_SEED) == stored
-    }
-
-    /// March C- with four data backgrounds over the RAM the firmware will use: .data and .bss, and
-    /// the stack region below the frames in use now (flip-link puts the stack at the bottom of RAM);
-    /// not the top `STACK_KEEP` bytes of the stack (the latch and the log are in backup SRAM, not RAM).
-    /// Restores .data from its load image afterwards (the test leaves zeros, which is .bss's value).
-    ///
-    /// # Safety
-    /// Only as the first thing in `main`: no reference to a static may be live.
-    unsafe fn ram_test() -> bool {
-        let sdata = core::ptr::addr_of_mut!(__sdata);
-        let data_words = (core::ptr::addr_of!(__edata) as usize - sdata as usize) / 4;
-        let ram_words = (core::ptr::addr_of!(__ebss) as usize - sdata as usize) / 4;
-        let sp = cortex_m::register::msp::read();
-        let stack_words = (sp.saturating_sub(STACK_KEEP).saturating_sub(RAM_START) / 4) as usize;
-        let statics_ok = integrity::march_c_minus(&mut integrity::RawRam::new(sdata, ram_words), &integrity::BACKGROUNDS).is_ok();
-        let stack_ok = integrity::march_c_minus(&mut integrity::RawRam::new(RAM_START as *mut u32, stack_words), &integrity::BACKGROUNDS).is_ok();
-        let sidata = core::ptr::addr_of!(__sidata);
-        for i in 0..data_words {
-            write_volatile(sdata.wrapping_add(i), read_volatile(sidata.wrapping_add(i)));
-        }
-        statics_ok && stack_ok
-    }
-
-    /// What failed at start-up: the [`Cause::SelfCheck`] event's flags.
-    const SELF_RAM: u8 = 1;
-    const SELF_FLASH: u8 = 2;
-    const SELF_BOR: u8 = 3;
-    /// A `qemu-clock` image (bench or serial test) found real GPIO (it runs on silicon, not in QEMU).
-    #[cfg(feature = "qemu-clock")]
-    const SELF_NOT_QEMU: u8 = 4;
-
-    /// The backup SRAM word the qemu-clock guard writes and reads back: past every record (the
-    /// latch, the log, the BOR-pending mark at word 96), inside the 1 KB QEMU maps.
-    #[cfg(feature = "qemu-clock")]
-    const NOT_QEMU_PROBE_AT: usize = BKPSRAM_WORDS - 1;
-    #[cfg(feature = "qemu-clock")]
-    const NOT_QEMU_PROBE: u32 = 0x5153_4D55; // "QEMU"
-
-    /// The qemu-clock guard: `None` only when two independent checks both say "QEMU". (1) GPIOD's
-    /// MODER, written by `early_outputs_low` after the clock enable and a DSB, reads back the
-    /// outputs on silicon and 0 in QEMU 7.2 (GPIO not modelled). (2) A test word written to the
-    /// backup SRAM (clocked and opened by `backup_on`, with DSBs) reads back on silicon and 0 in QEMU
-    /// (unimplemented device: writes ignored). Any non-zero read of either stops: on silicon a lost
-    /// write leaves the other check, and a backup SRAM whose write was lost reads its old (power-on:
-    /// arbitrary) content. The flags' detail: bit 0 = MODER, bit 1 = backup SRAM.
-    #[cfg(feature = "qemu-clock")]
-    fn not_qemu() -> Option<i32> {
-        let moder = gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0;
-        let mut b = Bkp;
-        b.write(NOT_QEMU_PROBE_AT, NOT_QEMU_PROBE);
-        cortex_m::asm::dsb();
-        let bkp = b.read(NOT_QEMU_PROBE_AT) != 0;
-        let which = i32::from(moder) | (i32::from(bkp) << 1);
-        if which != 0 {
-            Some(which)
-        } else {
-            None
-        }
-    }
-
-    /// The option bytes through the flash interface's registers (`flinch_firmware::option_bytes`:
-    /// BOR level 3 programmed once, error flags checked, verified at the next boot).
-    struct OptionRegs;
-    impl OptionBytes for OptionRegs {
-        fn bor_level(&mut self) -> u8 {
-            flash().optcr().read().bor_lev().bits()
-        }
-        fn status(&mut self) -> u32 {
-            flash().sr().read().bits()
-        }
-        fn clear_status(&mut self, flags: u32) {
-            // SAFETY: FLASH_SR's flags are write-1-to-clear; only error flags are passed.
-            flash().sr().write(|w| unsafe { w.bits(flags & option_bytes::SR_ERRORS) });
-        }
-        fn unlock(&mut self) {
-            // SAFETY (both): the option-byte unlock keys of RM0090 sec. 3.6.2.
-            flash().optkeyr().write(|w| unsafe { w.optkeyr().bits(0x0819_2A3B) });
-            flash().optkeyr().write(|w| unsafe { w.optkeyr().bits(0x4C5D_6E7F) });
-        }
-        fn program_bor(&mut self, level: u8) {
-            // SAFETY: a 2-bit BOR_LEV value; read-modify-write keeps RDP, WRP and the user bits.
-            flash().optcr().modify(|_, w| unsafe { w.bor_lev().bits(level) });
-            flash().optcr().modify(|_, w| w.optstrt().set_bit());
-        }
-        fn lock(&mut self) {
-            flash().optcr().modify(|_, w| w.optlock().set_bit());
-        }
-    }
-    /// The bound on the wait for FLASH_SR.BSY after OPTSTRT: status reads, about 10 cycles each at
-    /// 16 MHz, so about 10 s (an option-byte write takes milliseconds).
-    const BOR_BUSY_SPINS: u32 = 16_000_000;
-
-    // ---- Backup SRAM: the latch and the event log across resets (`flinch_firmware::backup`) -----
-    /// The backup SRAM (RM0090 sec. 2.3 and 5.1.2): 4 KB at 0x4002_4000 in the backup domain, which
-    /// no system reset clears (watchdog, software, pin, a brown-out with VDD back). Only its first
-    /// 1 KB is used (the records need 72 words): QEMU 7.2's netduinoplus2 maps 1 KB there, as an
-    /// unimplemented device (reads 0, writes ignored).
-    const BKPSRAM: u32 = 0x4002_4000;
-    const BKPSRAM_WORDS: usize = 256;
-
-    /// The backup SRAM as the library's `BackupRam`.
-    struct Bkp;
-    impl BackupRam for Bkp {
-        fn len(&self) -> usize {
-            BKPSRAM_WORDS
-        }
-        fn read(&mut self, i: usize) -> u32 {
-            if i >= BKPSRAM_WORDS {
-                return 0;
-            }
-            // SAFETY: a word in the backup SRAM's first KB, clocked by `backup_on`.
-            unsafe { read_volatile((BKPSRAM as *const u32).wrapping_add(i)) }
-        }
-        fn write(&mut self, i: usize, v: u32) {
-            if i < BKPSRAM_WORDS {
-                // SAFETY: as for `read`; DBP set by `backup_on`.
-                unsafe { write_volatile((BKPSRAM as *mut u32).wrapping_add(i), v) }
-            }
-        }
-    }
-
-    /// Clock the backup SRAM and open the backup domain to writes: PWREN, BKPSRAMEN, PWR_CR.DBP
-    /// (RM0090 sec. 5.1.2). Register writes only, no RAM: usable before the RAM test has passed and
-    /// from the fault handlers. The backup regulator (BRE) is left off: without a VBAT cell the
-    /// content does not survive a power cycle, and what a power-on leaves fails the records' CRCs,
-    /// i.e. reads as a clean power-on (`backup.rs`).
-    fn backup_on() {
-        rcc().apb1enr().modify(|_, w| w.pwren().set_bit());
-        rcc().ahb1enr().modify(|_, w| w.bkpsramen().set_bit());
-        // STM32F40x errata (ES0182, "Delay after an RCC peripheral clock enabling"): an access right
-        // after the enable can be lost; the DSB completes the enable first.
-        cortex_m::asm::dsb();
-        pwr().cr().modify(|_, w| w.dbp().set_bit());
-        cortex_m::asm::dsb();
-    }
-
-    /// The log's `next_seq` as `main` stored it (before any interrupt runs), for the drain.
-    static SAVED_SEQ: AtomicU32 = AtomicU32::new(u32::MAX);
-
-    /// The last latch written to the backup SRAM (cause, boot count): a store only when it changes,
-    /// so the tick writes 4 words of backup SRAM only on a change of the latch.
-    static STORED_CAUSE: AtomicU32 = AtomicU32::new(u32::MAX);
-    static STORED_BOOTS: AtomicU32 = AtomicU32::new(u32::MAX);
-
-    fn retained_store(r: Retained) {
-        // Called from SysTick and the bookkeeping, which share one priority (EXTI0 never calls it).
-        if STORED_CAUSE.load(Relaxed) == r.words[1] && STORED_BOOTS.load(Relaxed) == r.words[2] {
-            return;
-        }
-        backup::store_latch(&mut Bkp, r);
-        STORED_CAUSE.store(r.words[1], Relaxed);
-        STORED_BOOTS.store(r.words[2], Relaxed);
-    }
-
-    /// The boot count of the record in the backup SRAM (0 if there is none).
-    fn stored_boots() -> u32 {
-        backup::load_latch(&mut Bkp).decode().map_or(0, |(_, n)| n)
-    }
 
     /// A fault handler ran: outputs low first, then latch `FaultHandler` for the next start.
     #[inline(always)]
@@ -511,39 +164,6 @@ mod board {
         backup::store_latch(&mut Bkp, Retained::new(Some(Cause::FaultHandler), stored_boots()));
     }
 
-    /// A start-up integrity check failed: outputs low, the `SelfCheck` latch and an event (`what`,
-    /// `detail`) in the backup SRAM, then stopped for good. Nothing can re-arm: the IWDG is started
-    /// only after these checks (so no watchdog reset re-runs them), no interrupt is enabled, and no
-    /// `Firmware` exists; only a power cycle or the NRST pin starts the part again, and that start
-    /// is latched by the record until a reset press. Uses no static: after a failed RAM test
-    /// .data and .bss hold test patterns.
-    fn integrity_failed(what: u8, detail: i32) -> ! {
-        emergency_stop();
-        backup_on();
-        let mut b = Bkp;
-        backup::store_latch(&mut b, Retained::new(Some(Cause::SelfCheck), stored_boots()));
-        let mut log: EventLog<16> = backup::load_log(&mut b).unwrap_or_default();
-        log.push(Cause::SelfCheck, what, Micros(0), Micros(0), detail);
-        backup::store_log(&mut b, &log);
-        loop {
-            emergency_stop();
-            cortex_m::asm::wfi(); // no interrupt is enabled: sleeps for good
-        }
-    }
-
-    /// Before anything else, by register writes that need no RAM: GPIOD clocked, the stop,
-    /// escalation and sensor-supply pins written low (BSRR) and made outputs. A RAM test that fails
-    /// or hangs from here on leaves the outputs driven low, not floating.
-    #[inline(always)]
-    fn early_outputs_low() {
-        rcc().ahb1enr().modify(|_, w| w.gpioden().set_bit());
-        // The errata's delay after an RCC clock enable (see `backup_on`): without it the MODER write
-        // below can be lost on silicon, which would also blind the qemu-clock guard's MODER check.
-        cortex_m::asm::dsb();
-        // SAFETY: BSRR takes any pattern (reset PD12..14); MODER: two-bit fields, 0b01 = output.
-        gpio(GPIOD).bsrr().write(|w| unsafe { w.bits(0b111 << (12 + 16)) });
-        gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) });
-    }
 
     #[entry]
     fn main() -> ! {
@@ -675,77 +295,6 @@ mod board {
         loop {
             drain.run();
             cortex_m::asm::wfi();
-        }
-    }
-
-    /// Logging from thread mode only. The library's own messages are compiled out on the board
-    /// (`DEFMT_LOG` in firmware/.cargo/config.toml: `flinch_firmware=off`), because they would run in
-    /// the tick and the bookkeeping interrupts; instead the tick and the bookkeeping fill the
-    /// firmware's event log (a fixed 16-entry ring, `EventLog`) and this drain, in thread mode between
-    /// ticks, copies the new entries and the state out under a priority ceiling (BASEPRI = the tick's
-    /// priority: the tick and the bookkeeping cannot run meanwhile, the edge interrupt still can) and
-    /// logs them afterwards, with every interrupt enabled. defmt-rtt runs with `drop-on-contention`
-    /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
-    /// truncates the message; only an attached probe-rs switches it to blocking).
-    struct LogDrain {
-        /// The drain's own copy of the firmware's log, brought up to date from a snapshot of the new
-        /// events only (`EventLog::snapshot`/`follow`; its cursor is `None` until the first one, so
-        /// the whole restored log is new then; sequence numbers compare wrap-safely and continue
-        /// across resets). The backup SRAM store is made from this copy, with interrupts enabled.
-        copy: EventLog<16>,
-        state: Option<flinch_firmware::State>,
-        /// The log's `next_seq` when it was last written to the backup SRAM.
-        saved_seq: Option<u16>,
-    }
-
-    impl LogDrain {
-        fn run(&mut self) {
-            // SAFETY: BASEPRI = PRIO_TICK masks SysTick and the bookkeeping, FW's only other users
-            // (the edge, at priority 0, never touches FW), so this is the one reference meanwhile.
-            // Masked: at most DRAIN_BATCH new events (usually none), two counters and the state; this
-            // section is measured as `drain_masked` (`src/bin/qemu.rs`, README). A burst of events is
-            // taken over a few runs (one per interrupt), so it reaches the backup SRAM a few ticks
-            // later (the latch is stored at once by the tick and the bookkeeping).
-            let (snap, state) = unsafe {
-                cortex_m::register::basepri::write(PRIO_TICK);
-                let fw = FW.get();
-                let snap = fw.log().snapshot(self.copy.cursor(), flinch_firmware::event_log::DRAIN_BATCH);
-                let state = fw.state();
-                cortex_m::register::basepri::write(0);
-                (snap, state)
-            };
-            self.copy.follow(&snap);
-            // The log into the backup SRAM, with every interrupt enabled (the latch is stored by the
-            // tick and the bookkeeping themselves, 4 words, at once). The drain runs after every
-            // interrupt (`wfi`), so an event reaches the backup SRAM within a few ticks; a reset in the
-            // middle of the store loses the log (its CRC), never the latch (`backup.rs`).
-            // Only a copy that has caught up is stored: a partial one (a burst taken one event a
-            // run) would replace a whole record with a prefix of it.
-            if snap.complete && self.saved_seq != Some(self.copy.next_seq()) {
-                backup::store_log(&mut Bkp, &self.copy);
-                self.saved_seq = Some(self.copy.next_seq());
-            }
-            let batch = &snap.new;
-            for e in batch {
-                defmt::warn!(
-                    "event {=u16}: {=str} flags {=u8:#x} at {=u32} us (first seen {=u32} us), travel {=i32} um",
-                    e.seq,
-                    e.cause.name(),
-                    e.flags,
-                    e.at.0,
-                    e.first_seen.0,
-                    e.travel_um
-                );
-            }
-            if self.state != Some(state) {
-                self.state = Some(state);
-                match state {
-                    flinch_firmware::State::SelfTest(_) => defmt::info!("state: self-test"),
-                    flinch_firmware::State::Armed => defmt::info!("state: armed"),
-                    flinch_firmware::State::Tripped => defmt::warn!("state: tripped (stopped)"),
-                    flinch_firmware::State::Fault(c) => defmt::warn!("state: fault {=str} (stopped)", c.name()),
-                }
-            }
         }
     }
 
