@@ -68,7 +68,8 @@ fn board_split_edge_path_bookkeeping_after_the_stop_write() {
     rig.set_edge_interrupt(false);
     rig.advance_to(0.010_25);
     rig.set_travel_m(0.006);
-    rig.stop.set(false); // the edge handler's BSRR write
+    rig.stop_k1.set(false); // the edge handler's BSRR writes, K1 then K2
+    rig.stop_k2.set(false);
     let at = rig.micros_at(0.010_25);
     rig.advance_to(0.010_3); // no tick in between
     rig.fw.edge_stopped(at);
@@ -83,7 +84,8 @@ fn board_split_edge_path_bookkeeping_after_the_stop_write() {
     rig.set_edge_interrupt(false);
     rig.advance_to(0.010_25);
     rig.set_travel_m(0.006);
-    rig.stop.set(false);
+    rig.stop_k1.set(false);
+    rig.stop_k2.set(false);
     rig.advance_to(0.011);
     let n = rig.events().len();
     rig.fw.edge_stopped(rig.micros_at(0.010_25));
@@ -344,7 +346,7 @@ fn event_log_wraps_over_many_trips() {
 fn broken_stop_output_is_a_fault() {
     let mut rig = booted(cfg());
     rig.advance_to(0.01);
-    rig.stop.set_fault(PinFault::Broken);
+    rig.stop_k1.set_fault(PinFault::Broken);
     rig.set_travel_m(0.006);
     assert_eq!(rig.fw.state(), State::Fault(Cause::OutputFault));
     assert!(rig.category0_requested(), "the escalation output still drops");

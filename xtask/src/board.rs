@@ -17,7 +17,10 @@ const BOARD_RUN: Duration = Duration::from_secs(3);
 /// with the same core, RCC, GPIO, EXTI, TIM2 and IWDG addresses. QEMU 7.2 does not model the F405's
 /// RCC, GPIO or IWDG: it logs every access to them (`-d unimp`), so the log is the board's register
 /// trace. GPIO inputs read 0, i.e. the switch reads "tripped", the reset button is not pressed and
-/// both EDM relays read "not released": the firmware must stay stopped for the whole run.
+/// both EDM relays read "not released" while the stop channels are low: the firmware must stay
+/// stopped for the whole run, and latch a fault (on the part the EDM would; in QEMU, whose core
+/// clock is not the board's, the tick supervision first), which must starve the watchdog for good
+/// (`Firmware::feeds_watchdog`).
 pub fn run_board_qemu() -> Result<String, String> {
     run_board_elf(&elf_path("board"), "board-qemu.log")
 }
@@ -44,23 +47,47 @@ fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
     fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))
 }
 
+/// The three outputs' BSRR pages and "set" bits (PD12 K1, PE12 K2, PB12 escalation): a write that
+/// sets one of them energises it ("go" or no category 0).
+const OUTPUT_SETS: [(&str, u32, &str); 3] = [("GPIOD:", 1 << 12, "PD12 K1"), ("GPIOE:", 1 << 12, "PE12 K2"), ("GPIOB:", 1 << 12, "PB12 escalation")];
+
 /// Check the board's register trace (`-d unimp`): the boot sequence against
-/// `firmware/qemu/board-boot.txt`, then that "go" is never written and the tick keeps running.
+/// `firmware/qemu/board-boot.txt`; no output is ever energised; the tick keeps running (it reads the
+/// switch, GPIOA IDR, every tick); and the EDM latch (the relays read "not released" in QEMU) is
+/// stored in the backup SRAM after the settle time, after which the IWDG is never fed again.
 pub fn check_board_log(log: &str) -> Result<String, String> {
-    // GPIOD BSRR (offset 0x18): bits 12/13 set PD12 (stop) / PD13 (escalation) high = "go".
-    let writes: Vec<&str> = log.lines().filter(|l| l.contains("unimplemented device write")).collect();
+    let lines: Vec<&str> = log.lines().collect();
     let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
-    let go = writes.iter().filter(|l| l.starts_with("GPIOD:") && l.contains("offset 0x018")).filter(|l| value(l).is_some_and(|v| v & 0x3000 != 0)).count();
-    if go != 0 {
-        return Err(format!("the board wrote 'go' (BSRR set PD12/PD13) {go} times with the reset never pressed"));
+    let is_write = |l: &str| l.contains("unimplemented device write");
+    for (page, bit, name) in OUTPUT_SETS {
+        let go = lines.iter().filter(|l| is_write(l)).filter(|l| l.starts_with(page) && l.contains("offset 0x018")).filter(|l| value(l).is_some_and(|v| v & bit != 0)).count();
+        if go != 0 {
+            return Err(format!("the board energised {name} {go} times with the reset never pressed"));
+        }
     }
-    // The IWDG (QEMU names its page I2S2ext) is fed with 0xAAAA once per tick.
-    let ticks = writes.iter().filter(|l| value(l) == Some(0xAAAA)).count();
+    let ticks = lines.iter().filter(|l| l.starts_with("GPIOA:") && l.contains("read") && l.contains("offset 0x010")).count();
     if ticks < 100 {
-        return Err(format!("only {ticks} ticks (IWDG feeds) in {} s: the board is not running", BOARD_RUN.as_secs()));
+        return Err(format!("only {ticks} ticks (switch reads) in {} s: the board is not running", BOARD_RUN.as_secs()));
     }
-    // The boot: every access up to the first tick's first read of the switch (GPIOA IDR).
-    let boot: Vec<&str> = log.lines().take_while(|l| !(l.starts_with("GPIOA:") && l.contains("offset 0x010"))).collect();
+    // The IWDG (QEMU names its page I2S2ext) is fed with 0xAAAA by a tick that finds the firmware
+    // healthy. The first latched fault (the backup SRAM's latch word, offset 4, a cause other than
+    // 8 = the start latch) ends the feeds for good. In QEMU the production build's clocks are not
+    // QEMU's (SysTick runs from the 168 MHz core, the board assumes 16 MHz), so its tick supervision
+    // latches at once; on the part the EDM would (the relays read "not released" in QEMU).
+    let feed = |l: &&&str| l.starts_with("I2S2ext:") && is_write(l) && value(l) == Some(0xAAAA);
+    let latch = lines
+        .iter()
+        .position(|l| l.starts_with("BKPSRAM:") && is_write(l) && l.contains("offset 0x004") && value(l).is_some_and(|c| c != 8))
+        .ok_or("no fault latched in the backup SRAM in 3 s: the relays never read released in QEMU, so at least EDM must latch")?;
+    let cause = value(lines[latch]).unwrap_or(0);
+    let fed_before = lines[..latch].iter().filter(feed).count();
+    let fed_after = lines[latch..].iter().filter(feed).count();
+    if fed_before == 0 || fed_after != 0 {
+        return Err(format!("IWDG feeds: {fed_before} before the first latched fault (cause {cause}) (want > 0), {fed_after} after it (want 0: a latched fault starves the watchdog)"));
+    }
+    // The boot: every access up to the first tick's first read of an input register (the output
+    // read-back or the switch).
+    let boot: Vec<&str> = log.lines().take_while(|l| !(l.starts_with("GPIO") && l.contains("read") && l.contains("offset 0x010"))).collect();
     let expected_path = repo_root().join("firmware/qemu/board-boot.txt");
     let expected = fs::read_to_string(&expected_path).map_err(|e| format!("reading {}: {e}", expected_path.display()))?;
     let want: Vec<&str> = expected.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()).collect();
@@ -71,7 +98,10 @@ pub fn check_board_log(log: &str) -> Result<String, String> {
             want.join("\n")
         ));
     }
-    Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
+    Ok(format!(
+        "board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, no output ever energised, a fault (cause {cause}) latched after {fed_before} fed ticks and the IWDG never fed again",
+        boot.len()
+    ))
 }
 
 /// The board ELF's stack bound, bytes: asserted on the `qemu-io` build's painted stack (main, the
@@ -210,24 +240,35 @@ fn bench_marker(v: u32) -> &'static str {
 }
 
 /// The board edge run's trace reduced to what a person checks: the bench's markers and every change
-/// of the three outputs (PD12 stop, PD13 escalation, PD14 sensor supply; 1 = energised). Repeated
-/// de-energise writes of the stopped ticks change nothing and do not appear.
+/// of the four outputs (PD12 stop K1, PE12 stop K2, PB12 escalation, PD14 sensor supply; 1 =
+/// energised). Repeated de-energise writes of the stopped ticks change nothing and do not appear.
 fn board_edge_timeline(trace: &[&str]) -> Vec<String> {
     let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
-    let mut odr = 0u32;
+    let ports: [(&str, &[(u32, &str)]); 3] = [
+        ("GPIOD:", &[(12, "PD12 stop K1"), (14, "PD14 sensor supply")]),
+        ("GPIOE:", &[(12, "PE12 stop K2")]),
+        ("GPIOB:", &[(12, "PB12 escalation")]),
+    ];
+    let mut odr = [0u32; 3];
     let mut out = Vec::new();
     for l in trace {
         let Some(v) = value(l) else { continue };
-        if l.starts_with("GPIOI:") && l.contains("offset 0x018") {
+        if !l.contains("offset 0x018") {
+            continue;
+        }
+        if l.starts_with("GPIOI:") {
             out.push(format!("bench {v}: {}", bench_marker(v)));
-        } else if l.starts_with("GPIOD:") && l.contains("offset 0x018") {
-            let new = (odr & !(v >> 16)) | (v & 0xFFFF);
-            for (bit, name) in [(12, "PD12 stop"), (13, "PD13 escalation"), (14, "PD14 sensor supply")] {
-                if (new ^ odr) & (1 << bit) != 0 {
-                    out.push(format!("{name} -> {}", (new >> bit) & 1));
+        }
+        for (k, (page, pins)) in ports.iter().enumerate() {
+            if l.starts_with(page) {
+                let new = (odr[k] & !(v >> 16)) | (v & 0xFFFF);
+                for (bit, name) in pins.iter() {
+                    if (new ^ odr[k]) & (1 << bit) != 0 {
+                        out.push(format!("{name} -> {}", (new >> bit) & 1));
+                    }
                 }
+                odr[k] = new;
             }
-            odr = new;
         }
     }
     out
@@ -235,8 +276,9 @@ fn board_edge_timeline(trace: &[&str]) -> Vec<String> {
 
 /// Check the board edge run: the bench passed; the boot is the production board's
 /// (`firmware/qemu/board-boot.txt`); the markers and output changes equal
-/// `firmware/qemu/board-edge.txt`; and after each edge pended while armed the very next device
-/// access is the stop write (GPIOD BSRR 0x10000000): nothing, not even a tick, comes between.
+/// `firmware/qemu/board-edge.txt`; and after each edge pended while armed the very next two device
+/// accesses are the stop writes (GPIOD BSRR 0x10000000, K1; GPIOE BSRR 0x10000000, K2): nothing,
+/// not even a tick, comes between.
 pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
     if !out.contains("bench: PASS") {
         return Err(format!("the board edge bench did not pass:\n{out}"));
@@ -274,20 +316,23 @@ pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
             want.join("\n")
         ));
     }
-    let stop_write = "GPIOD: unimplemented device write (size 4, offset 0x018, value 0x10000000)";
+    let stop_writes = [
+        "GPIOD: unimplemented device write (size 4, offset 0x018, value 0x10000000)",
+        "GPIOE: unimplemented device write (size 4, offset 0x018, value 0x10000000)",
+    ];
     let mut direct = 0;
     for marker in ["value 0x00000003)", "value 0x00000006)"] {
         let i = rest
             .iter()
             .position(|l| l.starts_with("GPIOI:") && l.ends_with(marker))
             .ok_or_else(|| format!("no bench marker {marker} in the trace"))?;
-        match rest.get(i + 1) {
-            Some(next) if *next == stop_write => direct += 1,
+        match rest.get(i + 1..i + 3) {
+            Some(next) if next == stop_writes => direct += 1,
             next => {
                 return Err(format!(
-                    "after the edge pend ({}) the next device access is {:?}, not the stop write",
+                    "after the edge pend ({}) the next device accesses are {:?}, not the two stop writes (K1, K2)",
                     rest[i],
-                    next.copied().unwrap_or("nothing")
+                    next.unwrap_or(&[])
                 ))
             }
         }
@@ -295,7 +340,7 @@ pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
     let ticks = rest.iter().filter(|l| l.starts_with("I2S2ext:") && (l.ends_with("value 0xaaaa)") || l.ends_with("value 0x0000aaaa)"))).count();
     let stack = check_board_stack(out)?;
     Ok(format!(
-        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks; board stack {stack} B <= {BOARD_STACK_LIMIT} B (painted)",
+        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, both stop channels written as the next two accesses after {direct} edges (EXTI0, EXTI4), {ticks} ticks; board stack {stack} B <= {BOARD_STACK_LIMIT} B (painted)",
         got.len()
     ))
 }

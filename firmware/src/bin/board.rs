@@ -8,30 +8,38 @@
 //! | travel switch B   | PA4  | EXTI4 on both edges; the antivalent channel (a powered sensor driving low at rest, high when tripped); pull-up, so a cut wire or an unpowered sensor reads high = trip, and the start-up test sees both channels trip with the supply off |
 //! | reset input       | PA1  | pull-down, active high; acts on release (`flinch_firmware::reset`) |
 //! | EDM K1, K2        | PA2, PA3 | the stop relays' force-guided NC mirror contacts, high = released; pull-down (`flinch_firmware::edm`) |
-//! | stop out          | PD12 | high = energised = go; low = controlled stop (fit an external pull-down: a reset or dead MCU floats the pin) |
-//! | escalation out    | PD13 | high = energised; low = category-0 stop                           |
+//! | stop K1 out       | PD12 | GPIOD (AHB1ENR bit 3); drives relay K1; high = energised = go, low = controlled stop; external pull-down: a reset or dead MCU leaves it an input, the relay released |
+//! | stop K2 out       | PE12 | GPIOE (AHB1ENR bit 4); drives relay K2 (contacts in series with K1's); the same rules |
+//! | escalation out    | PB12 | GPIOB (AHB1ENR bit 1); high = energised; low = category-0 stop (drive power off); external pull-down |
 //! | sensor supply out | PD14 | high = powered; switched off by the start-up stuck-input test     |
+//!
+//! Each output is read back at its pin (IDR) every tick, and each relay at its mirror contact (EDM,
+//! PA2/PA3): `flinch_firmware::output_monitor`. firmware/README.md, "Output architecture", has the
+//! wiring and the diagnostic coverage claimed per channel.
 //!
 //! Time: TIM2, a 32-bit counter at 1 MHz, is the firmware's `Clock`. SysTick interrupts every
 //! `TICK_US` and calls `Firmware::tick`.
 //!
 //! Priorities (a bounded edge-to-stop): EXTI0, the switch edge, has the highest priority (0) and
-//! preempts everything else. It does not touch the `Firmware` object: it reads the switch (IDR) and
-//! whether the stop is energised (ODR: it is only while armed), writes the stop low through BSRR,
-//! clears its pending bit, and pends the bookkeeping interrupt (UART5's line, unused otherwise),
+//! preempts every other interrupt. It does not touch the `Firmware` object: it reads the switch
+//! (IDR), writes both stop channels low through their ports' BSRR (K1, then K2), clears its pending
+//! bit, and pends the bookkeeping interrupt (UART5's line, unused otherwise),
 //! which runs `Firmware::edge_stopped` (timestamp, budget, latch, log) or `Firmware::on_edge` at
 //! SysTick's priority (0x80). SysTick and the bookkeeping share that priority, so `IsrCell`'s rule
 //! (no two `&mut` at once, `support/isr_cell.rs`) holds between them; the edge shares only atomics.
 //! The core runs on the 16 MHz HSI, the reset default: no PLL code to get wrong, and the detection
 //! path is short enough at that speed (the QEMU build measures it in instructions).
 //!
-//! Failure handling: the independent watchdog (IWDG, LSI) is fed from the tick; a firmware that stops
-//! ticking resets the MCU within about 8 ms, and the reset state de-energises the outputs. The panic,
-//! HardFault and default (NMI, any unexpected interrupt) handlers write the stop and escalation pins
-//! low before anything else and record `Cause::FaultHandler` in the retained latch.
+//! Failure handling: the independent watchdog (IWDG, LSI) is fed from the tick, and only while the
+//! firmware is healthy and armed or healthy and stopped (`Firmware::feeds_watchdog`): every latched
+//! fault starves it, and so does a firmware that stops ticking, a missed avoidance step or a fault
+//! handler; the reset follows within about 8 ms, the reset state releases every pin (the relays
+//! de-energise through the external pull-downs) and the next start finds the latch. The panic,
+//! HardFault and default (NMI, any unexpected interrupt) handlers mask every interrupt, write the
+//! outputs low before anything else and record `Cause::FaultHandler` in the retained latch.
 //!
-//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, the stop, escalation and
-//! sensor-supply pins driven low by register writes (no RAM used), then a March C- RAM test over
+//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, the two stop channels, the
+//! escalation and the sensor-supply pins driven low by register writes (no RAM used), then a March C- RAM test over
 //! .data/.bss and the stack region, a CRC-32 of the flash image against `FLINCH_FLASH_CRC` (patched
 //! into the ELF by `cargo xtask`, with the `qemu-io` build's own seed), and the brown-out level (BOR
 //! level 3, `flinch_firmware::option_bytes`: programmed once, verified from the option bytes at the
@@ -89,12 +97,15 @@ mod log_drain;
 mod board {
     use super::isr_cell::IsrCell;
     use crate::backup::{backup_on, retained_store, stored_boots, Bkp, SAVED_SEQ};
-    use crate::hw::{emergency_stop, exti, gpio, idr, iwdg, odr, bsrr, rcc, syscfg, tim2, tim5, In, Out, Tim2, lsi_capture, CORE_HZ, GPIOA, GPIOD, LSI_HZ, TICK_US, TIM2_HZ};
+    use crate::hw::{
+        bsrr, emergency_stop, exti, gpio, idr, iwdg, lsi_capture, rcc, syscfg, tim2, tim5, In, Out, Tim2, CORE_HZ, ESC_PIN,
+        ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, LSI_HZ, PA, SUPPLY_PIN, SUPPLY_PORT, TICK_US, TIM2_HZ,
+    };
     #[cfg(feature = "qemu-clock")]
     use crate::startup::{not_qemu, SELF_NOT_QEMU};
     use crate::startup::{early_outputs_low, flash_crc_ok, integrity_failed, ram_test, OptionRegs, BOR_BUSY_SPINS, SELF_BOR, SELF_FLASH, SELF_RAM};
     use crate::log_drain::LogDrain;
-    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
+    use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering::Relaxed};
     use cortex_m::peripheral::scb::SystemHandler;
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m::peripheral::NVIC;
@@ -103,8 +114,8 @@ mod board {
     use flinch_firmware::option_bytes::{self, BorOutcome};
     use flinch_firmware::backup;
     use flinch_firmware::{
-        Boot, EventLog, BudgetConfig, Cause, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
-        SwitchKind,
+        Boot, EventLog, BudgetConfig, Cause, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, Outputs, ResetCause, Retained,
+        State, SwitchKind,
     };
 
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
@@ -117,8 +128,11 @@ mod board {
     const PRIO_EDGE: u8 = 0x00;
     pub(crate) const PRIO_TICK: u8 = 0x80;
 
-    pub(crate) type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
-    pub(crate) type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>, 16, Edm<In<GPIOA, 2>, In<GPIOA, 3>>>;
+    pub(crate) type Switch = DualSwitch<In<PA, 0>, In<PA, 4>, Out<SUPPLY_PORT, SUPPLY_PIN>>;
+    type K1 = Out<K1_PORT, K1_PIN>;
+    type K2 = Out<K2_PORT, K2_PIN>;
+    type Esc = Out<ESC_PORT, ESC_PIN>;
+    pub(crate) type Fw = Firmware<Tim2, Switch, K1, K2, Esc, In<PA, 1>, 16, Edm<In<PA, 2>, In<PA, 3>>>;
     pub(crate) static FW: IsrCell<Fw> = IsrCell::new();
 
     /// The installation's configuration. The numbers are those of the thesis's Ch. 3 set-up and
@@ -159,6 +173,7 @@ mod board {
     /// A fault handler ran: outputs low first, then latch `FaultHandler` for the next start.
     #[inline(always)]
     fn fault_handler_stop() {
+        STARVE.store(true, Relaxed);
         emergency_stop();
         backup_on();
         backup::store_latch(&mut Bkp, Retained::new(Some(Cause::FaultHandler), stored_boots()));
@@ -196,17 +211,17 @@ mod board {
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
             emergency_stop();
         });
-        // Clocks for GPIOA, GPIOD, TIM2, SYSCFG.
-        rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioden().set_bit());
+        // Clocks for GPIOA (inputs), GPIOB, GPIOD, GPIOE (the three output ports), TIM2, TIM5, SYSCFG.
+        rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioben().set_bit().gpioden().set_bit().gpioeen().set_bit());
         rcc().apb1enr().modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
         rcc().apb2enr().modify(|_, w| w.syscfgen().set_bit());
         cortex_m::asm::dsb(); // the errata's delay after an RCC clock enable (see `backup_on`)
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
-        // SAFETY (the three): two-bit mode fields, 0b01 = output, 0b00 = input; pull 0b10 = down, 0b01 = up.
-        gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) }); // PD12..14 output
-        gpio(GPIOA).moder().modify(|r, w| unsafe { w.bits(r.bits() & !0x3FF) }); // PA0..PA4 input
-        gpio(GPIOA).pupdr().modify(|r, w| unsafe { w.bits((r.bits() & !0x3FF) | 0b01_10_10_10_10) }); // PA0..PA3 pull-down, PA4 pull-up
+        crate::startup::outputs_mode();
+        // SAFETY (both): two-bit fields, mode 0b00 = input; pull 0b10 = down, 0b01 = up.
+        gpio(PA).moder().modify(|r, w| unsafe { w.bits(r.bits() & !0x3FF) }); // PA0..PA4 input
+        gpio(PA).pupdr().modify(|r, w| unsafe { w.bits((r.bits() & !0x3FF) | 0b01_10_10_10_10) }); // PA0..PA3 pull-down, PA4 pull-up
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
         // SAFETY: PSC is 16 bits (15 here, 999 in the qemu-io build); ARR takes any 32-bit value.
         tim2().psc().write(|w| unsafe { w.psc().bits((TIM2_HZ / 1_000_000 - 1) as u16) });
@@ -235,12 +250,13 @@ mod board {
         rcc().csr().modify(|_, w| w.rmvf().set_bit());
         let boot = Boot { cause, retained: backup::load_latch(&mut Bkp) };
 
-        let sensor = DualSwitch::new(In::<GPIOA, 0>, SWITCH_KIND, In::<GPIOA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
-            .with_supply(Out::<GPIOD, 14>);
-        match Firmware::after_reset(config(), boot, Tim2, sensor, Out, Out, In) {
+        let sensor = DualSwitch::new(In::<PA, 0>, SWITCH_KIND, In::<PA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
+            .with_supply(Out::<SUPPLY_PORT, SUPPLY_PIN>);
+        let outputs = Outputs { k1: K1 {}, k2: K2 {}, escalation: Esc {} };
+        match Firmware::after_reset(config(), boot, Tim2, sensor, outputs, In) {
             Ok(fw) => {
                 // The log saved before the reset first, then this start's reset-cause event.
-                let fw = fw.with_feedback(Edm::new(In::<GPIOA, 2>, In::<GPIOA, 3>)).with_saved_log(backup::load_log(&mut Bkp));
+                let fw = fw.with_feedback(Edm::new(In::<PA, 2>, In::<PA, 3>)).with_saved_log(backup::load_log(&mut Bkp));
                 retained_store(fw.retained());
                 backup::store_log(&mut Bkp, fw.log());
                 SAVED_SEQ.store(u32::from(fw.log().next_seq()), Relaxed);
@@ -334,20 +350,20 @@ mod board {
         }
     }
 
-    /// A switch edge (EXTI0: channel A, EXTI4: channel B; `line` is its EXTI_PR bit), highest
-    /// priority: the detect-to-stop path. Armed (the stop reads back energised), unfiltered and either
-    /// channel at its trip level (1oo2): the stop write first, then this line's pending bit, then the
-    /// hand-over. Everything else is the bookkeeping's, at the tick's priority.
+    /// A switch edge (EXTI0: channel A, EXTI4: channel B; `line` is its EXTI_PR bit), the highest
+    /// interrupt priority: the detect-to-stop path. Unfiltered and either channel at its trip level
+    /// (1oo2): both stop channels written low first (K1, then K2, each on its own port, whatever the
+    /// state: a stop write is harmless when stopped, and needs no read of the outputs, which a frozen
+    /// port would falsify), then this line's pending bit, then the hand-over. Everything else is the
+    /// bookkeeping's, at the tick's priority (`Firmware::edge_stopped` commits a trip only if armed).
     #[inline(always)]
     fn edge(line: u32) {
-        let idr = idr(GPIOA);
-        if EDGE_FAST.load(Relaxed)
-            && odr(GPIOD) & (1 << 12) != 0
-            && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B)
-        {
-            bsrr(GPIOD, 1 << (12 + 16)); // the stop
+        let idr = idr(PA);
+        if EDGE_FAST.load(Relaxed) && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B) {
+            bsrr(K1_PORT, 1 << (K1_PIN + 16)); // the stop, channel 1
+            bsrr(K2_PORT, 1 << (K2_PIN + 16)); // channel 2
             // SAFETY (both PR writes): one pending bit, write 1 to clear.
-            exti().pr().write(|w| unsafe { w.bits(line) }); // right after the stop write: a new edge from here on pends again
+            exti().pr().write(|w| unsafe { w.bits(line) }); // right after the stop writes: a new edge from here on pends again
             EDGE_AT.store(tim2().cnt().read().bits(), Relaxed);
             EDGE_STOPPED.store(true, Relaxed);
         } else {
@@ -366,7 +382,35 @@ mod board {
             fw.on_edge();
         }
         retained_store(fw.retained());
+        publish_state(fw.state());
     }
+
+    /// The firmware's state for the rest of the board (the avoidance's velocity frames): 0 armed,
+    /// 1 self-test, 2 tripped (the collision latch), 3 a fault or the start latch after a reset.
+    /// Written by the tick and the bookkeeping, read anywhere.
+    static STATE: AtomicU8 = AtomicU8::new(3);
+
+    fn publish_state(s: State) {
+        let code = match s {
+            State::Armed => 0,
+            State::SelfTest(_) => 1,
+            State::Tripped => 2,
+            State::Fault(_) => 3,
+        };
+        STATE.store(code, Relaxed);
+    }
+
+    /// The stop is latched: tripped (the collision latch), a fault, or the start latch after a
+    /// reset; only a person's reset press ends it. For `board_avoid.rs` (the velocity frame's
+    /// "stopped: latched", issue 29): readable from any interrupt, lock-free.
+    #[allow(dead_code)] // read by the avoidance once its frame carries the status
+    pub(crate) fn stop_latched() -> bool {
+        STATE.load(Relaxed) >= 2
+    }
+
+    /// Set by the panic and fault handlers: the tick must never feed the watchdog again, even if it
+    /// still runs (a panic in thread mode leaves the interrupts running).
+    pub(crate) static STARVE: AtomicBool = AtomicBool::new(false);
 
     #[exception]
     fn SysTick() {
@@ -375,22 +419,33 @@ mod board {
         let fw = unsafe { FW.get() };
         fw.tick();
         retained_store(fw.retained());
-        // The tick ran and the avoidance step kept its deadline: feed the watchdog (SAFETY: the reload key).
-        if super::board_avoid::on_tick() {
+        publish_state(fw.state());
+        // Every tick counts for the avoidance step's deadline (and pends the step).
+        let step_on_time = super::board_avoid::on_tick();
+        // Feed the watchdog only if the tick ran, the firmware is healthy and armed or healthy and
+        // stopped (every latched fault starves it: the reset releases the pins), no fault handler
+        // has run, and the avoidance step kept its deadline (SAFETY: the reload key).
+        if fw.feeds_watchdog() && step_on_time && !STARVE.load(Relaxed) {
             iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
         }
     }
 
     #[exception]
     unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
+        cortex_m::interrupt::disable();
         fault_handler_stop();
         loop {
             cortex_m::asm::nop(); // the IWDG resets the part
         }
     }
 
+    /// A panic in any context (thread mode too: no panicking path is meant to exist, the lints keep
+    /// them out, this is the last line): every interrupt masked first, so the tick can never feed
+    /// the watchdog again, then the outputs low and the latch; the IWDG resets the part.
     #[panic_handler]
     fn panic(_info: &core::panic::PanicInfo) -> ! {
+        cortex_m::interrupt::disable();
+        STARVE.store(true, Relaxed);
         fault_handler_stop();
         defmt::error!("panic: outputs de-energised");
         loop {
@@ -401,6 +456,7 @@ mod board {
     /// NMI and every interrupt without a handler: de-energise and latch, then let the IWDG reset.
     #[exception]
     unsafe fn DefaultHandler(_irqn: i16) {
+        cortex_m::interrupt::disable();
         fault_handler_stop();
         loop {
             cortex_m::asm::nop();

@@ -3,12 +3,13 @@
 //! QEMU 7.2's `netduinoplus2` (STM32F405) does not model GPIO: every GPIO read returns 0, and its
 //! EXTI ignores writes to `EXTI_SWIER` (it keeps the value, raises nothing). So with the production
 //! build the board never arms in QEMU and its edge handler can never run. This feature changes exactly
-//! three things in `board.rs`, all in the pin accessors:
+//! two things in `board_hw.rs`, both in the pin accessors:
 //!
-//! * a GPIO input read (`IDR`) returns `PINS`, a RAM word this bench sets, instead of GPIOA's IDR;
-//! * the stop-energised read-back (`ODR`) returns `ODR_D`, a RAM image of GPIOD's output register;
-//! * every BSRR write still goes to GPIOD's real BSRR address (QEMU logs it with `-d unimp`: that log
-//!   is what `cargo xtask board-qemu` checks) and is also applied to `ODR_D`.
+//! * an input register read (`IDR`) returns `PINS`, a RAM word this bench sets, for GPIOA, and for
+//!   the output ports (B, D, E) the RAM image of their output register: the pins follow their
+//!   outputs, as healthy pins do (the output read-back, `flinch_firmware::output_monitor`);
+//! * every BSRR write still goes to the port's real BSRR address (QEMU logs it with `-d unimp`: that
+//!   log is what `cargo xtask board-qemu` checks) and is also applied to the port's RAM image.
 //!
 //! Everything else (main, the register set-up, NVIC priorities, the vector table, SysTick, TIM2 as the
 //! clock, the edge and bookkeeping handlers, the library, the retained latch) is the board binary's
@@ -26,40 +27,82 @@
 //! stops, obstacle gone, reset, re-arm, an edge on channel B (EXTI4) stops, end. The bench reports
 //! over semihosting and exits QEMU; xtask compares the trace with `firmware/qemu/board-edge.txt`.
 
+use crate::hw::{gpio, ESC_PIN, ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, PA, PB, PD, PE, PI, SUPPLY_PIN, SUPPLY_PORT};
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
 use cortex_m_semihosting::{debug, hprintln};
 
 /// GPIOA's input register as the bench drives it.
 pub static PINS: AtomicU32 = AtomicU32::new(0);
-/// GPIOD's output register as the BSRR writes leave it.
-pub static ODR_D: AtomicU32 = AtomicU32::new(0);
+/// The output registers of GPIOB, GPIOD and GPIOE as the BSRR writes leave them.
+static ODR_B: AtomicU32 = AtomicU32::new(0);
+static ODR_D: AtomicU32 = AtomicU32::new(0);
+static ODR_E: AtomicU32 = AtomicU32::new(0);
 
-/// Apply a BSRR write to the RAM image (set wins over reset, as on the part).
+/// The RAM image of an output port's register (`None` for a port without outputs).
+fn image(port: u8) -> Option<&'static AtomicU32> {
+    match port {
+        PB => Some(&ODR_B),
+        PD => Some(&ODR_D),
+        PE => Some(&ODR_E),
+        _ => None,
+    }
+}
+
+/// An input register as the board reads it: GPIOA's from the bench, an output port's from its
+/// image (the pins follow their outputs), 0 elsewhere (as QEMU reads every GPIO).
 #[inline(always)]
-pub fn bsrr(v: u32) {
-    ODR_D.fetch_and(!(v >> 16), Relaxed);
-    ODR_D.fetch_or(v & 0xFFFF, Relaxed);
+pub fn idr(port: u8) -> u32 {
+    if port == PA {
+        PINS.load(Relaxed)
+    } else {
+        image(port).map_or(0, |i| i.load(Relaxed))
+    }
+}
+
+/// Apply a BSRR write to the port's RAM image (set wins over reset, as on the part).
+#[inline(always)]
+pub fn bsrr(port: u8, v: u32) {
+    if let Some(i) = image(port) {
+        i.fetch_and(!(v >> 16), Relaxed);
+        i.fetch_or(v & 0xFFFF, Relaxed);
+    }
+}
+
+/// Stop channel K1's output is high.
+fn k1_high() -> bool {
+    idr(K1_PORT) & (1 << K1_PIN) != 0
+}
+/// Either stop channel's output is high (the stop circuit is closed only if both are).
+fn stop_energised() -> bool {
+    k1_high() && idr(K2_PORT) & (1 << K2_PIN) != 0
+}
+/// Both stop channels' outputs are low.
+fn both_stopped() -> bool {
+    idr(K1_PORT) & (1 << K1_PIN) == 0 && idr(K2_PORT) & (1 << K2_PIN) == 0
+}
+#[allow(dead_code)]
+fn escalation_high() -> bool {
+    idr(ESC_PORT) & (1 << ESC_PIN) != 0
 }
 
 const A: u32 = 1 << 0; // PA0: channel A, high at rest
 const RESET: u32 = 1 << 1; // PA1
-const EDM: u32 = (1 << 2) | (1 << 3); // PA2, PA3: high = released
+const EDM_K1: u32 = 1 << 2; // PA2: high = K1 released
+const EDM_K2: u32 = 1 << 3; // PA3: high = K2 released
 const B: u32 = 1 << 4; // PA4: channel B, high when tripped
-const STOP: u32 = 1 << 12;
-const SUPPLY: u32 = 1 << 14;
 
-/// GPIOI BSRR: the marker port.
-const MARK: u32 = 0x4002_2000 + 0x18;
-/// NVIC_ISPR0: set-pending for IRQs 0..31 (EXTI0 = 6, EXTI4 = 10).
-const NVIC_ISPR0: u32 = 0xE000_E200;
-
-fn write(addr: u32, v: u32) {
-    // SAFETY: GPIOI BSRR (unused by the board) and NVIC_ISPR0, valid aligned registers.
-    unsafe { core::ptr::write_volatile(addr as *mut u32, v) }
+/// A bench marker: a write to GPIOI's BSRR (GPIOI is unused on the board; QEMU logs the write).
+fn mark(v: u32) {
+    // SAFETY: BSRR takes any pattern; GPIOI's pins are not used.
+    gpio(PI).bsrr().write(|w| unsafe { w.bits(v) });
 }
 
-/// NVIC_ISPR1: set-pending for IRQs 32..63 (TIM5 = 50).
-const NVIC_ISPR1: u32 = 0xE000_E204;
+/// Pend interrupt `irq` (the GPIO edge detector's or the capture unit's request, which QEMU does
+/// not model) through the NVIC's set-pending register.
+fn pend(irq: u32) {
+    // SAFETY: one set-pending bit of a line the board owns; the NVIC's register block from cortex-m.
+    unsafe { (*cortex_m::peripheral::NVIC::PTR).ispr[(irq / 32) as usize].write(1 << (irq % 32)) };
+}
 /// One TIM5 capture per 8 LSI periods at a nominal 32 kHz: every 250 us.
 const LSI_CAPTURE_US: u32 = 250;
 
@@ -80,8 +123,7 @@ struct World<F: FnMut()> {
 impl<F: FnMut()> World<F> {
     /// The input register the MCU sees now.
     fn pins(&self) -> u32 {
-        let odr = ODR_D.load(Relaxed);
-        let powered = odr & SUPPLY != 0;
+        let powered = idr(SUPPLY_PORT) & (1 << SUPPLY_PIN) != 0;
         let mut p = 0;
         if powered && !self.a_tripped {
             p |= A;
@@ -92,8 +134,12 @@ impl<F: FnMut()> World<F> {
         if self.reset {
             p |= RESET;
         }
-        if odr & STOP == 0 {
-            p |= EDM;
+        // Each relay follows its own stop channel (released while its coil's pin is low).
+        if idr(K1_PORT) & (1 << K1_PIN) == 0 {
+            p |= EDM_K1;
+        }
+        if idr(K2_PORT) & (1 << K2_PIN) == 0 {
+            p |= EDM_K2;
         }
         p
     }
@@ -107,7 +153,7 @@ impl<F: FnMut()> World<F> {
         }
         let next = *self.lsi_next.get_or_insert(now);
         if now.wrapping_sub(next) < 0x8000_0000 {
-            write(NVIC_ISPR1, 1 << (50 - 32));
+            pend(50);
             self.lsi_next = Some(next.wrapping_add(LSI_CAPTURE_US));
         }
     }
@@ -127,7 +173,7 @@ fn until_stop<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, want: bool, 
     let start = now();
     while now().wrapping_sub(start) < us {
         w.step(now());
-        if (ODR_D.load(Relaxed) & STOP != 0) == want {
+        if stop_energised() == want && (want || both_stopped()) {
             return true;
         }
     }
@@ -144,10 +190,10 @@ fn fail(what: &str) -> ! {
 
 /// Press and release the reset input for `press_us`.
 fn reset_press<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, press_us: u32) {
-    write(MARK, 1); // marker 1: reset pressed
+    mark(1); // marker 1: reset pressed
     w.reset = true;
     run(w, now, press_us);
-    write(MARK, 2); // marker 2: reset released
+    mark(2); // marker 2: reset released
     w.reset = false;
     run(w, now, 1_000);
 }
@@ -178,11 +224,11 @@ impl Channel {
         }
     }
 
-    /// Its EXTI line's bit in NVIC_ISPR0.
-    fn pend_bit(self) -> u32 {
+    /// Its EXTI line's interrupt (EXTI0 = 6, EXTI4 = 10).
+    fn irq(self) -> u32 {
         match self {
-            Channel::A => 1 << 6,
-            Channel::B => 1 << 10,
+            Channel::A => 6,
+            Channel::B => 10,
         }
     }
 }
@@ -190,13 +236,13 @@ impl Channel {
 /// The obstacle moves channel `ch`'s contact: marker `mark`, the channel reads "tripped" and its
 /// edge is pended.
 fn trip<F: FnMut()>(w: &mut World<F>, ch: Channel, mark: u32) {
-    write(MARK, mark);
+    self::mark(mark);
     match ch {
         Channel::A => w.a_tripped = true,
         Channel::B => w.b_tripped = true,
     }
     PINS.store(w.pins(), Relaxed);
-    write(NVIC_ISPR0, ch.pend_bit());
+    pend(ch.irq());
 }
 
 /// The obstacle: channel `first`'s contact, then the other's 1 ms later, as a real actuator moves
@@ -205,7 +251,7 @@ fn trip<F: FnMut()>(w: &mut World<F>, ch: Channel, mark: u32) {
 fn obstacle<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, first: Channel, marks: [u32; 2]) {
     trip(w, first, marks[0]);
     // The edge has priority 0 and thread mode none: it ran before this line.
-    let stopped = ODR_D.load(Relaxed) & STOP == 0;
+    let stopped = both_stopped();
     run(w, now, 1_000);
     trip(w, first.other(), marks[1]);
     run(w, now, 100_000);
@@ -219,7 +265,7 @@ fn obstacle<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, first: Channel
 
 /// The obstacle goes: both channels back at rest (marker 5), 100 ms.
 fn obstacle_gone<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32) {
-    write(MARK, 5); // marker 5: obstacle gone
+    mark(5); // marker 5: obstacle gone
     w.a_tripped = false;
     w.b_tripped = false;
     run(w, now, 100_000);
@@ -229,7 +275,7 @@ fn obstacle_gone<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32) {
 pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     let mut w = World { idle, a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
     run(&mut w, &now, 200_000); // latched after the reset: nothing happens untouched
-    if ODR_D.load(Relaxed) & STOP != 0 {
+    if k1_high() {
         fail("'go' before any reset press");
     }
     arm(&mut w, &now, "not armed within 2 s of the reset press");
@@ -240,7 +286,7 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
 
     // Obstacle gone, then a reset: re-arm. This time channel B moves first (markers 6 and 7).
     obstacle_gone(&mut w, &now);
-    if ODR_D.load(Relaxed) & STOP != 0 {
+    if k1_high() {
         fail("re-armed without a reset press");
     }
     arm(&mut w, &now, "not re-armed within 2 s of the second reset press");
@@ -253,7 +299,7 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     obstacle_gone(&mut w, &now);
     arm(&mut w, &now, "not re-armed within 2 s of the third reset press");
     run(&mut w, &now, 50_000);
-    write(MARK, 9); // marker 9: the LSI stops
+    mark(9); // marker 9: the LSI stops
     w.lsi_on = false;
     let t0 = now();
     if !until_stop(&mut w, &now, false, 250_000) {
@@ -262,7 +308,7 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     let took_ms = now().wrapping_sub(t0) / 1_000;
     hprintln!("bench: LSI stopped while armed: stopped (clock check) after {} ms", took_ms);
     run(&mut w, &now, 10_000);
-    write(MARK, 8); // marker 8: end
+    mark(8); // marker 8: end
     let (used, painted) = stack_used();
     hprintln!("bench: stack used={} B of the board ELF (painted {} B; main, the drain, the bench and every interrupt)", used, painted);
     hprintln!("bench: PASS");

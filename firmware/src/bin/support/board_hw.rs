@@ -1,6 +1,7 @@
-//! The board's registers and pins: the `stm32f4` PAC's register blocks, the clock constants, the
-//! three pin accesses (GPIO, or the QEMU bench's RAM with `qemu-io`), the zero-sized pin types, TIM2
-//! as the firmware's `Clock` and TIM5's capture of the LSI (the clock check's reference).
+//! The board's registers and pins: the `stm32f4` PAC's register blocks, the pin map, the clock
+//! constants, the two pin accesses (GPIO, or the QEMU bench's RAM with `qemu-io`), the zero-sized
+//! pin types, TIM2 as the firmware's `Clock` and TIM5's capture of the LSI (the clock check's
+//! reference).
 
 use core::convert::Infallible;
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
@@ -9,10 +10,30 @@ use flinch_firmware::{Clock, Micros};
 
 // ---- Registers: the `stm32f4` PAC (feature stm32f407, generated from ST's SVD; RM0090 Rev 19) ---
 use stm32f4::stm32f407 as pac;
-/// GPIOA's and GPIOD's base addresses (RM0090 sec. 2.3), as the pins' const-generic port; the
-/// registers behind them are the PAC's (`gpio`).
-pub(crate) const GPIOA: u32 = 0x4002_0000;
-pub(crate) const GPIOD: u32 = 0x4002_0C00;
+/// The GPIO ports by letter (A = 0 .. I = 8), the pins' const-generic port; `gpio` gives the PAC's
+/// register block of each.
+pub(crate) const PA: u8 = 0;
+pub(crate) const PB: u8 = 1;
+pub(crate) const PD: u8 = 3;
+pub(crate) const PE: u8 = 4;
+/// GPIOI: unused on the board; the `qemu-io` bench writes its markers to its BSRR.
+pub(crate) const PI: u8 = 8;
+
+// ---- The pin map (firmware/README.md "Output architecture"): inputs on GPIOA; the two stop
+// channels and the category-0 escalation on three other ports, one each, each with its own RCC
+// AHB1ENR clock-enable bit, so a frozen port (clock gated) or a dead port takes one output only ----
+/// Stop channel K1: PD12 (GPIOD, AHB1ENR.GPIODEN; the Discovery's green LED shows it).
+pub(crate) const K1_PORT: u8 = PD;
+pub(crate) const K1_PIN: u32 = 12;
+/// Stop channel K2: PE12 (GPIOE, AHB1ENR.GPIOEEN).
+pub(crate) const K2_PORT: u8 = PE;
+pub(crate) const K2_PIN: u32 = 12;
+/// The category-0 escalation: PB12 (GPIOB, AHB1ENR.GPIOBEN).
+pub(crate) const ESC_PORT: u8 = PB;
+pub(crate) const ESC_PIN: u32 = 12;
+/// The sensor supply: PD14 (with K1 on GPIOD).
+pub(crate) const SUPPLY_PORT: u8 = PD;
+pub(crate) const SUPPLY_PIN: u32 = 14;
 
 /// The PAC's register blocks. SAFETY (all of them): fixed peripheral addresses of this part,
 /// valid for the whole program; every access through them is a volatile register access.
@@ -48,14 +69,27 @@ pub(crate) fn flash() -> &'static pac::flash::RegisterBlock {
 pub(crate) fn pwr() -> &'static pac::pwr::RegisterBlock {
     unsafe { &*pac::PWR::ptr() }
 }
-/// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4; `PORT` is GPIOA or
-/// GPIOD above). Only MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so
-/// GPIOA's reset values in the PAC's type never leak into another port.
+/// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4), from the PAC's own
+/// pointer of each port (its `gpiob`/`gpioi` types have the same layout as `gpioa`'s). Only
+/// MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so GPIOA's reset values
+/// in the PAC's type never leak into another port. `port` is one of the constants above (a
+/// constant at every call, so the match folds away); the pin types check that at compile time.
 #[inline(always)]
-pub(crate) fn gpio(port: u32) -> &'static pac::gpioa::RegisterBlock {
-    unsafe { &*(port as *const pac::gpioa::RegisterBlock) }
+pub(crate) fn gpio(port: u8) -> &'static pac::gpioa::RegisterBlock {
+    let p: *const pac::gpioa::RegisterBlock = match port {
+        PA => pac::GPIOA::ptr(),
+        PB => pac::GPIOB::ptr().cast(),
+        PD => pac::GPIOD::ptr().cast(),
+        PE => pac::GPIOE::ptr().cast(),
+        _ => pac::GPIOI::ptr().cast(),
+    };
+    // SAFETY: a GPIO port's register block, valid for the whole program.
+    unsafe { &*p }
 }
-
+/// Whether `port` is one the board uses (the pin types assert it at compile time).
+const fn known_port(port: u8) -> bool {
+    matches!(port, PA | PB | PD | PE | PI)
+}
 
 /// The core clock (SysTick) and TIM2's input clock: the 16 MHz HSI on the board. QEMU 7.2's
 /// netduinoplus2 clocks the core at 168 MHz and its timers at 1 GHz whatever RCC says, so the
@@ -74,57 +108,68 @@ pub(crate) const TICK_US: u32 = 1_000;
 // `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_bench.rs`) -------------------
 /// A port's input register.
 #[inline(always)]
-pub(crate) fn idr(port: u32) -> u32 {
+pub(crate) fn idr(port: u8) -> u32 {
     #[cfg(not(feature = "qemu-io"))]
     return gpio(port).idr().read().bits();
     #[cfg(feature = "qemu-io")]
-    return if port == GPIOA { super::bench::PINS.load(Relaxed) } else { gpio(port).idr().read().bits() };
-}
-/// A port's output register (the stop's read-back).
-#[inline(always)]
-pub(crate) fn odr(port: u32) -> u32 {
-    #[cfg(not(feature = "qemu-io"))]
-    return gpio(port).odr().read().bits();
-    #[cfg(feature = "qemu-io")]
-    return if port == GPIOD { super::bench::ODR_D.load(Relaxed) } else { gpio(port).odr().read().bits() };
+    return super::bench::idr(port);
 }
 /// A write to a port's bit set/reset register.
 #[inline(always)]
-pub(crate) fn bsrr(port: u32, v: u32) {
+pub(crate) fn bsrr(port: u8, v: u32) {
     // SAFETY: BSRR takes any bit pattern (a set or reset request per pin).
     gpio(port).bsrr().write(|w| unsafe { w.bits(v) });
     #[cfg(feature = "qemu-io")]
-    if port == GPIOD {
-        super::bench::bsrr(v);
-    }
+    super::bench::bsrr(port, v);
 }
 
 // ---- Pins: zero-sized, the port and pin are constants, so a write is a single `str` ------------
-/// A push-pull output on `PORT`, pin `N`, written through BSRR (atomic, no read-modify-write).
-pub(crate) struct Out<const PORT: u32, const N: u32>;
-impl<const PORT: u32, const N: u32> ErrorType for Out<PORT, N> {
+/// A push-pull output on `PORT`, pin `N`, written through BSRR (atomic, no read-modify-write), and
+/// read back at the pin through IDR (`InputPin`): the level the pin really has, which a stuck pin
+/// or a frozen port no longer makes follow the write (`flinch_firmware::output_monitor`).
+pub(crate) struct Out<const PORT: u8, const N: u32>;
+impl<const PORT: u8, const N: u32> Out<PORT, N> {
+    const CHECKED: () = assert!(known_port(PORT) && N < 16);
+}
+impl<const PORT: u8, const N: u32> ErrorType for Out<PORT, N> {
     type Error = Infallible;
 }
-impl<const PORT: u32, const N: u32> OutputPin for Out<PORT, N> {
+impl<const PORT: u8, const N: u32> OutputPin for Out<PORT, N> {
     #[inline(always)]
     fn set_low(&mut self) -> Result<(), Infallible> {
+        let () = Self::CHECKED;
         bsrr(PORT, 1 << (N + 16));
         Ok(())
     }
     #[inline(always)]
     fn set_high(&mut self) -> Result<(), Infallible> {
+        let () = Self::CHECKED;
         bsrr(PORT, 1 << N);
         Ok(())
     }
 }
-/// An input on `PORT`, pin `N`, read from IDR.
-pub(crate) struct In<const PORT: u32, const N: u32>;
-impl<const PORT: u32, const N: u32> ErrorType for In<PORT, N> {
-    type Error = Infallible;
-}
-impl<const PORT: u32, const N: u32> InputPin for In<PORT, N> {
+impl<const PORT: u8, const N: u32> InputPin for Out<PORT, N> {
     #[inline(always)]
     fn is_high(&mut self) -> Result<bool, Infallible> {
+        Ok(idr(PORT) & (1 << N) != 0)
+    }
+    #[inline(always)]
+    fn is_low(&mut self) -> Result<bool, Infallible> {
+        Ok(idr(PORT) & (1 << N) == 0)
+    }
+}
+/// An input on `PORT`, pin `N`, read from IDR.
+pub(crate) struct In<const PORT: u8, const N: u32>;
+impl<const PORT: u8, const N: u32> In<PORT, N> {
+    const CHECKED: () = assert!(known_port(PORT) && N < 16);
+}
+impl<const PORT: u8, const N: u32> ErrorType for In<PORT, N> {
+    type Error = Infallible;
+}
+impl<const PORT: u8, const N: u32> InputPin for In<PORT, N> {
+    #[inline(always)]
+    fn is_high(&mut self) -> Result<bool, Infallible> {
+        let () = Self::CHECKED;
         Ok(idr(PORT) & (1 << N) != 0)
     }
     #[inline(always)]
@@ -170,8 +215,11 @@ pub(crate) fn lsi_capture() {
     LSI_PERIODS.fetch_add(n, Relaxed);
 }
 
-/// Drop both outputs with raw register writes (usable from any context, even before init).
+/// Drop every output with three register writes, K1, K2, then the escalation (usable from any
+/// context, even before init or with no usable stack: no RAM besides the registers).
 #[inline(always)]
 pub(crate) fn emergency_stop() {
-    bsrr(GPIOD, (1 << (12 + 16)) | (1 << (13 + 16)));
+    bsrr(K1_PORT, 1 << (K1_PIN + 16));
+    bsrr(K2_PORT, 1 << (K2_PIN + 16));
+    bsrr(ESC_PORT, 1 << (ESC_PIN + 16));
 }

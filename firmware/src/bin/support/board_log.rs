@@ -37,7 +37,7 @@ impl LogDrain {
         let (snap, state) = unsafe {
             cortex_m::register::basepri::write(PRIO_TICK);
             let fw = FW.get();
-            let snap = fw.log().snapshot(self.copy.cursor(), flinch_firmware::event_log::DRAIN_BATCH);
+            let snap = fw.log().snapshot::<{ flinch_firmware::event_log::DRAIN_BATCH }>(self.copy.cursor());
             let state = fw.state();
             cortex_m::register::basepri::write(0);
             (snap, state)

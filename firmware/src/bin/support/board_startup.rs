@@ -6,7 +6,7 @@
 use crate::backup::{backup_on, stored_boots, Bkp};
 #[cfg(feature = "qemu-clock")]
 use crate::backup::BKPSRAM_WORDS;
-use crate::hw::{emergency_stop, flash, gpio, rcc, GPIOD};
+use crate::hw::{emergency_stop, flash, gpio, rcc, ESC_PIN, ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, SUPPLY_PIN, SUPPLY_PORT};
 use core::ptr::{read_volatile, write_volatile};
 use flinch_firmware::option_bytes::{self, OptionBytes};
 #[cfg(feature = "qemu-clock")]
@@ -101,7 +101,7 @@ pub(crate) const NOT_QEMU_PROBE: u32 = 0x5153_4D55; // "QEMU"
 /// arbitrary) content. The flags' detail: bit 0 = MODER, bit 1 = backup SRAM.
 #[cfg(feature = "qemu-clock")]
 pub(crate) fn not_qemu() -> Option<i32> {
-    let moder = gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0;
+    let moder = gpio(K1_PORT).moder().read().bits() & ((0b11 << (2 * K1_PIN)) | (0b11 << (2 * SUPPLY_PIN))) != 0;
     let mut b = Bkp;
     b.write(NOT_QEMU_PROBE_AT, NOT_QEMU_PROBE);
     cortex_m::asm::dsb();
@@ -166,16 +166,33 @@ pub(crate) fn integrity_failed(what: u8, detail: i32) -> ! {
     }
 }
 
-/// Before anything else, by register writes that need no RAM: GPIOD clocked, the stop,
-/// escalation and sensor-supply pins written low (BSRR) and made outputs. A RAM test that fails
-/// or hangs from here on leaves the outputs driven low, not floating.
+/// Before anything else, by register writes that need no RAM: the three output ports clocked
+/// (GPIOB, GPIOD, GPIOE), both stop channels, the escalation and the sensor supply written low
+/// (BSRR) and made outputs. A RAM test that fails or hangs from here on leaves the outputs driven
+/// low, not floating.
 #[inline(always)]
 pub(crate) fn early_outputs_low() {
-    rcc().ahb1enr().modify(|_, w| w.gpioden().set_bit());
-    // The errata's delay after an RCC clock enable (see `backup_on`): without it the MODER write
+    rcc().ahb1enr().modify(|_, w| w.gpioben().set_bit().gpioden().set_bit().gpioeen().set_bit());
+    // The errata's delay after an RCC clock enable (see `backup_on`): without it the MODER writes
     // below can be lost on silicon, which would also blind the qemu-clock guard's MODER check.
     cortex_m::asm::dsb();
-    // SAFETY: BSRR takes any pattern (reset PD12..14); MODER: two-bit fields, 0b01 = output.
-    gpio(GPIOD).bsrr().write(|w| unsafe { w.bits(0b111 << (12 + 16)) });
-    gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) });
+    // SAFETY (all four): BSRR takes any pattern (a reset request per pin). Written directly, not
+    // through `hw::bsrr`: the qemu-io bench's RAM must not be touched before the RAM test.
+    gpio(K1_PORT).bsrr().write(|w| unsafe { w.bits((1 << (K1_PIN + 16)) | (1 << (SUPPLY_PIN + 16))) });
+    gpio(K2_PORT).bsrr().write(|w| unsafe { w.bits(1 << (K2_PIN + 16)) });
+    gpio(ESC_PORT).bsrr().write(|w| unsafe { w.bits(1 << (ESC_PIN + 16)) });
+    outputs_mode();
+}
+
+/// The output pins become outputs (after they were written low, so they never glitch high): K1,
+/// the sensor supply, K2, the escalation. Read-modify-writes of MODER, registers only.
+#[inline(always)]
+pub(crate) fn outputs_mode() {
+    const _: () = assert!(K1_PORT == SUPPLY_PORT, "one MODER write for K1 and the supply");
+    let d = (0b11 << (2 * K1_PIN)) | (0b11 << (2 * SUPPLY_PIN));
+    let d_out = (0b01 << (2 * K1_PIN)) | (0b01 << (2 * SUPPLY_PIN));
+    // SAFETY (all three): two-bit mode fields, 0b01 = general-purpose output.
+    gpio(K1_PORT).moder().modify(|r, w| unsafe { w.bits((r.bits() & !d) | d_out) });
+    gpio(K2_PORT).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11 << (2 * K2_PIN))) | (0b01 << (2 * K2_PIN))) });
+    gpio(ESC_PORT).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11 << (2 * ESC_PIN))) | (0b01 << (2 * ESC_PIN))) });
 }

@@ -11,7 +11,7 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
 use cortex_m::peripheral::NVIC;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use flinch_firmware::event_log::{self, FLAG_EDGE};
-use flinch_firmware::{Boot, Cause, DigitalSwitch, Firmware, Micros, State, SwitchKind};
+use flinch_firmware::{Boot, Cause, DigitalSwitch, Firmware, Micros, Outputs, State, SwitchKind};
 
 pub(crate) const SYST_CVR: u32 = 0xE000_E018;
 
@@ -48,6 +48,8 @@ pub(crate) static M_LEVEL: AtomicBool = AtomicBool::new(true);
 pub(crate) static M_SUPPLY: AtomicBool = AtomicBool::new(false);
 pub(crate) static M_STUCK: AtomicBool = AtomicBool::new(false);
 pub(crate) static M_ESC: AtomicBool = AtomicBool::new(true);
+/// Stop channel K2 (the library's writes and the edge handler's).
+pub(crate) static M_STOP2: AtomicBool = AtomicBool::new(true);
 pub(crate) static M_RESET: AtomicBool = AtomicBool::new(false);
 pub(crate) static M_NOW: AtomicU32 = AtomicU32::new(0);
 /// `Firmware::edge_stops_directly`, a configuration constant stored once before the edge runs.
@@ -68,6 +70,14 @@ pub(crate) struct MeasuredStop;
 impl ErrorType for MeasuredStop {
     type Error = Infallible;
 }
+impl embedded_hal::digital::InputPin for MeasuredStop {
+    fn is_high(&mut self) -> Result<bool, Infallible> {
+        Ok(STOP_LEVEL.load(Relaxed))
+    }
+    fn is_low(&mut self) -> Result<bool, Infallible> {
+        Ok(!STOP_LEVEL.load(Relaxed))
+    }
+}
 impl OutputPin for MeasuredStop {
     // The library's own writes (the bookkeeping's idempotent one, the tick's) are not timed: only
     // the edge handler's write is.
@@ -82,8 +92,9 @@ impl OutputPin for MeasuredStop {
 }
 #[inline(always)]
 pub(crate) fn stop_write_and_time() {
-    // The write first, then the time: the count includes the write.
+    // The writes first (K1, then K2, as on the board), then the time: the count includes both.
     STOP_LEVEL.store(false, Relaxed);
+    M_STOP2.store(false, Relaxed);
     // SAFETY: SysTick's current-value register, always readable.
     STOP_CVR.store(unsafe { read_volatile(SYST_CVR as *const u32) }, Relaxed);
 }
@@ -94,15 +105,14 @@ pub(crate) type MeasuredFw = Firmware<
     MeasuredStop,
     Level<'static>,
     Level<'static>,
+    Level<'static>,
 >;
 pub(crate) static MFW: IsrCell<MeasuredFw> = IsrCell::new();
 
-/// The edge (highest priority): the stop reads back energised (armed) and the switch reads
-/// "tripped" (the inductive switch reads low, or the supply is off, unless stuck high) -> stop
-/// write, then hand over.
+/// The edge (highest priority), as on the board: the switch reads "tripped" (the inductive switch
+/// reads low, or the supply is off, unless stuck high) -> both stop channels written, then hand over.
 pub(crate) unsafe extern "C" fn edge_handler() {
     if M_FAST.load(Relaxed)
-        && STOP_LEVEL.load(Relaxed)
         && !M_STUCK.load(Relaxed)
         && !(M_SUPPLY.load(Relaxed) && M_LEVEL.load(Relaxed))
     {
@@ -226,13 +236,13 @@ pub(crate) struct Measured {
 /// to the tick's priority, a snapshot of `log`'s events new to `copy`, the firmware's state,
 /// BASEPRI 0. Returns the SysTick values read right before and right after.
 #[inline(never)]
-pub(crate) fn drain_masked_section(log: &flinch_firmware::EventLog<16>, copy: &flinch_firmware::EventLog<16>, out: &mut Option<(flinch_firmware::LogSnapshot<16>, State)>) -> (u32, u32) {
+pub(crate) fn drain_masked_section(log: &flinch_firmware::EventLog<16>, copy: &flinch_firmware::EventLog<16>, out: &mut Option<(flinch_firmware::LogSnapshot<{ event_log::DRAIN_BATCH }>, State)>) -> (u32, u32) {
     // SAFETY: SysTick's current-value register; BASEPRI as on the board; MFW's users (the tick
     // and the bookkeeping) are masked by it and by NVIC here.
     unsafe {
         let t0 = read_volatile(SYST_CVR as *const u32);
         cortex_m::register::basepri::write(PRIO_TICK);
-        let snap = log.snapshot(copy.cursor(), event_log::DRAIN_BATCH);
+        let snap = log.snapshot::<{ event_log::DRAIN_BATCH }>(copy.cursor());
         let state = MFW.get().state();
         cortex_m::register::basepri::write(0);
         let t1 = read_volatile(SYST_CVR as *const u32);
@@ -270,7 +280,7 @@ pub(crate) fn arm(round: u32) -> Check {
 /// After a measured trip: the edge handler wrote the stop and the bookkeeping latched it as a
 /// trip. Returns the SysTick value read right after the edge's stop write.
 pub(crate) fn check_stopped(what: &'static str) -> Result<u32, &'static str> {
-    ensure(!STOP_LEVEL.load(Relaxed), what)?;
+    ensure(!STOP_LEVEL.load(Relaxed) && !M_STOP2.load(Relaxed), what)?;
     let cvr = STOP_CVR.load(Relaxed);
     ensure(cvr != NOT_WRITTEN, "the edge handler did not write the stop itself (did it preempt?)")?;
     NVIC::mask(Irq(IRQ_TICK));
@@ -289,7 +299,8 @@ pub(crate) fn measure(nvic: &mut NVIC) -> Result<Measured, &'static str> {
         SwitchKind::Inductive,
         5_000,
     );
-    let fw = Firmware::after_reset(bench_config(BUDGET), Boot::POWER_ON, Time(&M_NOW), sensor, MeasuredStop, Level(&M_ESC), Level(&M_RESET))
+    let outputs = Outputs { k1: MeasuredStop, k2: Level(&M_STOP2), escalation: Level(&M_ESC) };
+    let fw = Firmware::after_reset(bench_config(BUDGET), Boot::POWER_ON, Time(&M_NOW), sensor, outputs, Level(&M_RESET))
         .map_err(|_| "config")?;
     M_FAST.store(fw.edge_stops_directly(), Relaxed);
     // SAFETY: once, before the handlers that use it are unmasked.

@@ -10,7 +10,7 @@ use flinch_firmware::event_log::{self, FLAG_EDGE, FLAG_ESCALATED};
 use flinch_firmware::{
     stopping_distance_um, AnalogConfig, AnalogTravel, BudgetConfig, Cause, ChatterGuard, Clock, Config,
     Boot, DigitalSwitch, Filter, Firmware, Micros, Mm, ResetCause, ResetPolicy, ResetPress, Retained, StartPolicy,
-    RamBackup, State, SwitchKind, Unconnected,
+    Outputs, RamBackup, State, SwitchKind, Unconnected,
 };
 
 pub(crate) const T: u32 = 1_000;
@@ -82,6 +82,7 @@ pub(crate) struct Bench {
     supply: AtomicBool,
     stuck: AtomicBool,
     stop: AtomicBool,
+    stop2: AtomicBool,
     esc: AtomicBool,
     reset: AtomicBool,
     now: AtomicU32,
@@ -93,6 +94,7 @@ impl Bench {
             supply: AtomicBool::new(false),
             stuck: AtomicBool::new(false),
             stop: AtomicBool::new(true),
+            stop2: AtomicBool::new(true),
             esc: AtomicBool::new(true),
             reset: AtomicBool::new(false),
             now: AtomicU32::new(start),
@@ -108,7 +110,8 @@ impl Bench {
             SwitchKind::Inductive,
             5_000,
         );
-        Firmware::after_reset(cfg, boot, Time(&self.now), sensor, Level(&self.stop), Level(&self.esc), Level(&self.reset))
+        let outputs = Outputs { k1: Level(&self.stop), k2: Level(&self.stop2), escalation: Level(&self.esc) };
+        Firmware::after_reset(cfg, boot, Time(&self.now), sensor, outputs, Level(&self.reset))
             .ok()
     }
     fn ticks(&self, fw: &mut BenchFw<'_>, n: u32) {
@@ -127,13 +130,13 @@ impl Bench {
         false
     }
     fn stop_requested(&self) -> bool {
-        !self.stop.load(Relaxed)
+        !self.stop.load(Relaxed) && !self.stop2.load(Relaxed)
     }
     fn cat0_requested(&self) -> bool {
         !self.esc.load(Relaxed)
     }
 }
-pub(crate) type BenchFw<'a> = Firmware<Time<'a>, DigitalSwitch<Switch<'a>, Level<'a>>, Level<'a>, Level<'a>, Level<'a>>;
+pub(crate) type BenchFw<'a> = Firmware<Time<'a>, DigitalSwitch<Switch<'a>, Level<'a>>, Level<'a>, Level<'a>, Level<'a>, Level<'a>>;
 
 /// Tables 5-7: V_c = 0.05 m/s, DT = 16 ms; d = 1 m/s^2, C = 10 mm chosen for the self-test.
 pub(crate) const BUDGET: BudgetConfig =
@@ -329,9 +332,10 @@ pub(crate) fn analog_fixed_point() -> Check {
     }
     let acfg = AnalogConfig::linear_12bit(200, Mm::from_num(20), Mm::from_num(1.5));
     let raw = AtomicU32::new(u32::from(acfg.counts_for(Mm::ZERO)));
-    let (stop, esc, now) = (AtomicBool::new(true), AtomicBool::new(true), AtomicU32::new(0));
+    let (stop, stop2, esc, now) = (AtomicBool::new(true), AtomicBool::new(true), AtomicBool::new(true), AtomicU32::new(0));
+    let outputs = Outputs { k1: Level(&stop), k2: Level(&stop2), escalation: Level(&esc) };
     let sensor = AnalogTravel::new(Raw(&raw), acfg);
-    let mut fw = Firmware::<_, _, _, _, _>::after_reset(bench_config(BUDGET), Boot::POWER_ON, Time(&now), sensor, Level(&stop), Level(&esc), Unconnected)
+    let mut fw = Firmware::<_, _, _, _, _, _>::after_reset(bench_config(BUDGET), Boot::POWER_ON, Time(&now), sensor, outputs, Unconnected)
         .map_err(|_| "config")?;
     for k in 1..10u32 {
         now.store(k * T, Relaxed);
