@@ -205,12 +205,18 @@ pub fn check_board_vectors(path: &Path) -> Result<String, String> {
 /// Run the `qemu-io` board ELF on netduinoplus2 until its bench exits (semihosting), deterministic
 /// time (`-icount shift=3`); returns the bench's output and the `-d unimp` register trace.
 pub fn run_board_edge() -> Result<(String, String), String> {
-    let log = target_dir().join("board-edge.log");
+    run_board_bench("edges")
+}
+
+/// The `qemu-io` bench in `mode` (its semihosting command line, `board_bench.rs`): "edges", or a
+/// fault that ends the run: "panic" (in thread mode), "overflow" (the stack into the MPU guard).
+fn run_board_bench(mode: &str) -> Result<(String, String), String> {
+    let log = target_dir().join(format!("board-{mode}.log"));
     let _ = fs::remove_file(&log);
     let elf = qemu_io_dir().join(TARGET).join("release").join("board");
     let mut cmd = Command::new("qemu-system-arm");
     cmd.args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none"])
-        .args(["-semihosting-config", "enable=on,target=native", "-icount", "shift=3"])
+        .args(["-semihosting-config", &format!("enable=on,target=native,arg=board,arg={mode}"), "-icount", "shift=3"])
         .args(["-d", "unimp,guest_errors", "-D"])
         .arg(&log)
         .arg("-kernel")
@@ -235,6 +241,9 @@ fn bench_marker(v: u32) -> &'static str {
         7 => "edge on channel A pended (EXTI0)",
         8 => "end",
         9 => "the LSI stops (the clock check's reference)",
+        10 => "a panic in thread mode",
+        11 => "a stack overflow in thread mode",
+        12 => "the fault handler held 20 ms",
         _ => "unknown marker",
     }
 }
@@ -343,4 +352,49 @@ pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
         "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, both stop channels written as the next two accesses after {direct} edges (EXTI0, EXTI4), {ticks} ticks; board stack {stack} B <= {BOARD_STACK_LIMIT} B (painted)",
         got.len()
     ))
+}
+
+/// The faults that end a run (`board_bench.rs`, mode "panic" and "overflow") on the `qemu-io` board
+/// ELF: armed and fed, then a panic in thread mode, or a stack overflow into the MPU guard. After
+/// the bench's marker the trace must show the three outputs written low (K1, K2, escalation), the
+/// `FaultHandler` latch (cause 9) stored in the backup SRAM, the fault handler's 20 ms hold (marker
+/// 12) and not one IWDG feed from the marker on (on main a panic in thread mode left SysTick feeding
+/// the watchdog, and an overflow locked the core up before any handler ran).
+pub fn check_board_faults() -> Result<String, String> {
+    let mut done = Vec::new();
+    for (mode, marker, what) in [("panic", 10, "a panic in thread mode"), ("overflow", 11, "a stack overflow")] {
+        let (out, trace) = run_board_bench(mode)?;
+        if !out.contains("bench: PASS") {
+            return Err(format!("{what}: the bench did not end in the fault handler:\n{out}"));
+        }
+        let lines: Vec<&str> = trace.lines().collect();
+        let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+        let is = |l: &str, page: &str, off: &str, v: u32| l.starts_with(page) && l.contains("write") && l.contains(off) && value(l) == Some(v);
+        let at = lines
+            .iter()
+            .position(|l| is(l, "GPIOI:", "offset 0x018", marker))
+            .ok_or_else(|| format!("{what}: no bench marker {marker} in the trace"))?;
+        let after = &lines[at..];
+        let feed = |l: &&&str| l.starts_with("I2S2ext:") && value(l) == Some(0xAAAA);
+        let (before, since) = (lines[..at].iter().filter(feed).count(), after.iter().filter(feed).count());
+        let dropped = ["GPIOD:", "GPIOE:", "GPIOB:"].iter().all(|p| after.iter().any(|l| is(l, p, "offset 0x018", 1 << 28)));
+        let latched = after.iter().any(|l| is(l, "BKPSRAM:", "offset 0x004", 9));
+        let held = after.iter().any(|l| is(l, "GPIOI:", "offset 0x018", 12));
+        if before == 0 || since != 0 || !dropped || !latched || !held {
+            return Err(format!(
+                "{what}: IWDG feeds {before} before (want > 0) and {since} after (want 0), outputs dropped {dropped}, FaultHandler latched {latched}, handler held 20 ms {held}"
+            ));
+        }
+        // The overflow must have hit the MPU guard: MMFSR.DACCVIOL (CFSR bit 1), the handler's report.
+        let cfsr = out
+            .lines()
+            .find_map(|l| l.split("CFSR 0x").nth(1))
+            .and_then(|v| u32::from_str_radix(v.trim(), 16).ok())
+            .ok_or_else(|| format!("{what}: no CFSR in the bench's report:\n{out}"))?;
+        if mode == "overflow" && cfsr & 0x02 == 0 {
+            return Err(format!("{what}: CFSR {cfsr:#010x} has no MemManage data access violation: the MPU guard did not catch it"));
+        }
+        done.push(format!("{what}: outputs low, FaultHandler latched, 0 IWDG feeds after it ({before} before), CFSR {cfsr:#x}"));
+    }
+    Ok(done.join("; "))
 }

@@ -31,8 +31,10 @@
 //!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
 //!   against `firmware/qemu/board-serial.txt`.
 //! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stages
-//!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop; and
-//!   "board ELF edge in QEMU": the `qemu-io` build's edges against `firmware/qemu/board-edge.txt`).
+//!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop, the
+//!   first latched fault ending the IWDG feeds; "board ELF edge in QEMU": the `qemu-io` build's edges
+//!   against `firmware/qemu/board-edge.txt`; "board faults in QEMU": a panic in thread mode and a
+//!   stack overflow into the MPU guard, each ending with the outputs low, the latch and no feed).
 //!
 //! Every build of the firmware patches the board ELF's flash CRC (`flash::patch_flash_crc`).
 //!
@@ -52,7 +54,7 @@ mod qemu;
 mod size;
 
 use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_avoid_cost};
-use board::{check_board_corrupt, check_board_edge, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
+use board::{check_board_corrupt, check_board_edge, check_board_faults, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
 use board_serial::board_serial;
 use common::{elf_path, which, TARGET};
 use firmware::{build_board_qemu_clock, build_board_qemu_io, build_firmware, firmware_clippy, target_installed};
@@ -87,6 +89,7 @@ fn main() -> ExitCode {
             let (out, log) = run_board_edge()?;
             print!("{out}");
             println!("{}", check_board_edge(&out, &log)?);
+            println!("{}", check_board_faults()?);
             Ok(())
         }),
         Some("python") => single(|| match python_stage() {
@@ -218,6 +221,17 @@ fn test() -> ExitCode {
                     print!("{out}");
                     check_board_edge(&out, &log)
                 }) {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
+        results.push((
+            "board faults in QEMU",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match check_board_faults() {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }

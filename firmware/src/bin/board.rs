@@ -94,9 +94,13 @@ mod backup;
 mod log_drain;
 
 #[cfg(target_os = "none")]
+#[path = "support/board_faults.rs"]
+mod faults;
+
+#[cfg(target_os = "none")]
 mod board {
     use super::isr_cell::IsrCell;
-    use crate::backup::{backup_on, retained_store, stored_boots, Bkp, SAVED_SEQ};
+    use crate::backup::{backup_on, retained_store, Bkp, SAVED_SEQ};
     use crate::hw::{
         bsrr, emergency_stop, exti, gpio, idr, iwdg, lsi_capture, rcc, syscfg, tim2, tim5, In, Out, Tim2, CORE_HZ, ESC_PIN,
         ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, LSI_HZ, PA, SUPPLY_PIN, SUPPLY_PORT, TICK_US, TIM2_HZ,
@@ -109,12 +113,13 @@ mod board {
     use cortex_m::peripheral::scb::SystemHandler;
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m::peripheral::NVIC;
-    use cortex_m_rt::{entry, exception, ExceptionFrame};
+    use crate::faults::{stack_guard_on, STARVE};
+    use cortex_m_rt::{entry, exception};
     use defmt_rtt as _;
     use flinch_firmware::option_bytes::{self, BorOutcome};
     use flinch_firmware::backup;
     use flinch_firmware::{
-        Boot, EventLog, BudgetConfig, Cause, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, Outputs, ResetCause, Retained,
+        Boot, EventLog, BudgetConfig, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, Outputs, ResetCause,
         State, SwitchKind,
     };
 
@@ -125,7 +130,10 @@ mod board {
     /// TIM5's line (RM0090 Table 61): its channel 4 captures the LSI (the clock check's reference).
     const TIM5_IRQ: u16 = 50;
     /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
-    const PRIO_EDGE: u8 = 0x00;
+    /// The edge at 0x10, not 0: the configurable faults (MemManage, BusFault, UsageFault) are at 0,
+    /// above every interrupt, so a stack overflow in any handler is taken, not escalated
+    /// (`support/board_faults.rs`).
+    const PRIO_EDGE: u8 = 0x10;
     pub(crate) const PRIO_TICK: u8 = 0x80;
 
     pub(crate) type Switch = DualSwitch<In<PA, 0>, In<PA, 4>, Out<SUPPLY_PORT, SUPPLY_PIN>>;
@@ -170,14 +178,6 @@ mod board {
     defmt::timestamp!("{=u32:us}", tim2().cnt().read().bits());
 
 
-    /// A fault handler ran: outputs low first, then latch `FaultHandler` for the next start.
-    #[inline(always)]
-    fn fault_handler_stop() {
-        STARVE.store(true, Relaxed);
-        emergency_stop();
-        backup_on();
-        backup::store_latch(&mut Bkp, Retained::new(Some(Cause::FaultHandler), stored_boots()));
-    }
 
 
     #[entry]
@@ -211,6 +211,9 @@ mod board {
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
             emergency_stop();
         });
+        // The stack guard and the fault priorities, before any interrupt can run (the RAM test,
+        // which writes the guard region, is done).
+        stack_guard_on(&mut cp);
         // Clocks for GPIOA (inputs), GPIOB, GPIOD, GPIOE (the three output ports), TIM2, TIM5, SYSCFG.
         rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioben().set_bit().gpioden().set_bit().gpioeen().set_bit());
         rcc().apb1enr().modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
@@ -408,9 +411,6 @@ mod board {
         STATE.load(Relaxed) >= 2
     }
 
-    /// Set by the panic and fault handlers: the tick must never feed the watchdog again, even if it
-    /// still runs (a panic in thread mode leaves the interrupts running).
-    pub(crate) static STARVE: AtomicBool = AtomicBool::new(false);
 
     #[exception]
     fn SysTick() {
@@ -427,39 +427,6 @@ mod board {
         // has run, and the avoidance step kept its deadline (SAFETY: the reload key).
         if fw.feeds_watchdog() && step_on_time && !STARVE.load(Relaxed) {
             iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
-        }
-    }
-
-    #[exception]
-    unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
-        cortex_m::interrupt::disable();
-        fault_handler_stop();
-        loop {
-            cortex_m::asm::nop(); // the IWDG resets the part
-        }
-    }
-
-    /// A panic in any context (thread mode too: no panicking path is meant to exist, the lints keep
-    /// them out, this is the last line): every interrupt masked first, so the tick can never feed
-    /// the watchdog again, then the outputs low and the latch; the IWDG resets the part.
-    #[panic_handler]
-    fn panic(_info: &core::panic::PanicInfo) -> ! {
-        cortex_m::interrupt::disable();
-        STARVE.store(true, Relaxed);
-        fault_handler_stop();
-        defmt::error!("panic: outputs de-energised");
-        loop {
-            cortex_m::asm::nop(); // the IWDG resets the part
-        }
-    }
-
-    /// NMI and every interrupt without a handler: de-energise and latch, then let the IWDG reset.
-    #[exception]
-    unsafe fn DefaultHandler(_irqn: i16) {
-        cortex_m::interrupt::disable();
-        fault_handler_stop();
-        loop {
-            cortex_m::asm::nop();
         }
     }
 

@@ -271,10 +271,78 @@ fn obstacle_gone<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32) {
     run(w, now, 100_000);
 }
 
+/// What this run does, from the semihosting command line (`-semihosting-config arg=...`): the edge
+/// scenario, or one of the faults that end the run (a panic in thread mode, a stack overflow).
+#[derive(Copy, Clone, PartialEq, Eq)]
+enum Mode {
+    Edges,
+    Panic,
+    Overflow,
+}
+
+fn mode() -> Mode {
+    let mut buf = [0u8; 64];
+    let mut block = [buf.as_mut_ptr() as usize, buf.len()];
+    // SAFETY: SYS_GET_CMDLINE writes at most `buf.len()` bytes into `buf` and the length into
+    // `block[1]`; both outlive the call.
+    let failed = unsafe { cortex_m_semihosting::syscall(cortex_m_semihosting::nr::GET_CMDLINE, &mut block) } != 0;
+    let line = buf.get(..block[1].min(buf.len())).unwrap_or(&[]);
+    let has = |w: &[u8]| !failed && line.windows(w.len()).any(|x| x == w);
+    if has(b"panic") {
+        Mode::Panic
+    } else if has(b"overflow") {
+        Mode::Overflow
+    } else {
+        Mode::Edges
+    }
+}
+
+/// Recurse with a 256-byte frame that the compiler cannot drop, until the stack runs into the MPU
+/// guard (the fault handler never returns here).
+#[inline(never)]
+fn overflow(depth: u32) -> u32 {
+    let mut frame = [0u32; 64];
+    // SAFETY: a volatile write into this frame's own array, so the frame is really used.
+    unsafe { core::ptr::write_volatile(frame.as_mut_ptr().wrapping_add((depth % 64) as usize), depth) };
+    let below = if depth < u32::MAX { overflow(depth.wrapping_add(1)) } else { 0 };
+    // SAFETY: as above (a read after the call keeps the frame alive across it).
+    below.wrapping_add(unsafe { core::ptr::read_volatile(frame.as_ptr()) })
+}
+
+/// From the fault paths (`board_faults.rs`, qemu-io only): the outputs are low and the latch
+/// written; hold 20 ms of TIM2 time with every interrupt masked (no tick, so no feed: xtask checks
+/// the trace), then report and end the run.
+pub fn fault_report(what: &str) -> ! {
+    let t = || crate::hw::tim2().cnt().read().bits();
+    let t0 = t();
+    while t().wrapping_sub(t0) < 20_000 {}
+    mark(12); // marker 12: the fault handler held 20 ms
+    // SAFETY: a read of the SCB's configurable fault status register (cortex-m's register block).
+    let cfsr = unsafe { (*cortex_m::peripheral::SCB::PTR).cfsr.read() };
+    hprintln!("bench: {} ran: outputs low, FaultHandler latched, 20 ms held with no tick; CFSR {:#010x}", what, cfsr);
+    hprintln!("bench: PASS");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
 /// The scenario; `now` reads TIM2 (microseconds of firmware time).
 pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     let mut w = World { idle, a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
+    let mode = mode();
     run(&mut w, &now, 200_000); // latched after the reset: nothing happens untouched
+    if mode != Mode::Edges {
+        arm(&mut w, &now, "not armed within 2 s of the reset press");
+        run(&mut w, &now, 50_000); // armed, the tick feeding the watchdog
+        if mode == Mode::Panic {
+            mark(10); // marker 10: a panic in thread mode
+            panic!("bench: a panic in thread mode");
+        }
+        mark(11); // marker 11: a stack overflow in thread mode
+        let n = overflow(0);
+        fail(if n == 0 { "the stack overflow returned" } else { "the stack overflow returned a value" });
+    }
     if k1_high() {
         fail("'go' before any reset press");
     }
@@ -343,11 +411,12 @@ pub fn paint_stack() {
     }
 }
 
-/// (bytes used below the stack's top, bytes painted).
+/// (bytes used below the stack's top, bytes painted). The MPU guard at the bottom is not read (no
+/// access there).
 fn stack_used() -> (u32, u32) {
     // The linker's symbol; only its address is used.
     let top = core::ptr::addr_of!(_stack_start) as u32;
-    let mut a = RAM_START;
+    let mut a = RAM_START + crate::faults::GUARD_BYTES;
     // SAFETY: reads of the stack region, word-aligned.
     while a < top && unsafe { core::ptr::read_volatile(a as *const u32) } == PAINT {
         a += 4;
