@@ -25,7 +25,7 @@ pub fn run_board_qemu() -> Result<String, String> {
     run_board_elf(&elf_path("board"), "board-qemu.log")
 }
 
-fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
+pub fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
     let log = target_dir().join(log_name);
     let _ = fs::remove_file(&log);
     let mut child = Command::new("qemu-system-arm")

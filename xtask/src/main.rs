@@ -26,6 +26,10 @@
 //!   there a missing target, QEMU or tool is a failure, never a quiet pass.
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
+//! * `cargo xtask flash [ELF] [probe-rs args]`: patch the start-up flash CRC into the board ELF (built
+//!   first without one), check it with the firmware's own routine, then `probe-rs run` it. cargo's
+//!   runner (`firmware/scripts/flash-runner`) calls it, so `cargo run --release --bin board` in
+//!   firmware/ flashes an image that arms.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
 //! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-clock` board ELF
 //!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
@@ -99,6 +103,11 @@ fn main() -> ExitCode {
             }
             Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
         }),
+        Some("flash") => single(|| flash::flash(&args[1..])),
+        Some("flash-image") => single(|| {
+            build_firmware()?;
+            flash::check_flash_image().map(|m| println!("{m}"))
+        }),
         Some("size") => single(|| {
             build_firmware()?;
             let s = elf_size(&elf_path("board"))?;
@@ -106,7 +115,7 @@ fn main() -> ExitCode {
             check_size(&s)
         }),
         _ => {
-            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|python>");
+            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|board-serial|flash [ELF]|python>");
             ExitCode::from(2)
         }
     }
@@ -221,6 +230,17 @@ fn test() -> ExitCode {
                     print!("{out}");
                     check_board_edge(&out, &log)
                 }) {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
+        results.push((
+            "flash image",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match flash::check_flash_image() {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }
