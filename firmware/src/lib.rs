@@ -134,6 +134,7 @@ panic_free_modules! {
     reset;
     selftest;
     sensor;
+    serial_rx;
     stop_output;
     stroke_budget;
     watchdog;

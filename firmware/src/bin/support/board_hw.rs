@@ -69,6 +69,10 @@ pub(crate) fn flash() -> &'static pac::flash::RegisterBlock {
 pub(crate) fn pwr() -> &'static pac::pwr::RegisterBlock {
     unsafe { &*pac::PWR::ptr() }
 }
+#[inline(always)]
+pub(crate) fn usart1() -> &'static pac::usart1::RegisterBlock {
+    unsafe { &*pac::USART1::ptr() }
+}
 /// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4), from the PAC's own
 /// pointer of each port (its `gpiob`/`gpioi` types have the same layout as `gpioa`'s). Only
 /// MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so GPIOA's reset values
