@@ -555,6 +555,11 @@ where
 
     /// [`Firmware::fault`] with extra event flags (the channels of an output fault).
     fn fault_flags(&mut self, cause: Cause, now: Micros, flags: u8) {
+        self.fault_event(cause, now, flags, self.last_sample.travel_um);
+    }
+
+    /// [`Firmware::fault_flags`] with the event's travel field given (a diagnostic's detail).
+    fn fault_event(&mut self, cause: Cause, now: Micros, flags: u8, travel_um: i32) {
         self.out.drop_all();
         match self.state {
             // A real fault found while latched after a reset replaces the start latch, so the state
@@ -567,8 +572,15 @@ where
         self.resetter.begin_latch();
         self.retained = Retained::new(Some(cause), self.boots);
         self.state = State::Fault(cause);
-        self.log.push(cause, FLAG_ESCALATED | flags, now, now, self.last_sample.travel_um);
+        self.log.push(cause, FLAG_ESCALATED | flags, now, now, travel_um);
         warn!("fault {=str} at {=u32} us", cause.name(), now.0);
+    }
+
+    /// A periodic self-test failed (`diagnostics.rs`): latch [`Cause::Diagnostic`]; the event's flags
+    /// carry the check in bits 4..6, its travel field `detail` (what was read).
+    pub fn diagnostic_failed(&mut self, check: crate::diagnostics::Check, detail: i32) {
+        let now = self.clock.now();
+        self.fault_event(Cause::Diagnostic, now, (check as u8) << 4, detail);
     }
 
     /// The record to keep in retained RAM (backup SRAM): the latch in force and the boot count. The

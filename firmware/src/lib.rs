@@ -123,6 +123,7 @@ panic_free_modules! {
     clock_check;
     debounce;
     detector;
+    diagnostics;
     dual;
     edm;
     event_log;

@@ -244,6 +244,7 @@ fn bench_marker(v: u32) -> &'static str {
         10 => "a panic in thread mode",
         11 => "a stack overflow in thread mode",
         12 => "the fault handler held 20 ms",
+        13 => "a configuration bit flipped",
         _ => "unknown marker",
     }
 }
@@ -396,5 +397,18 @@ pub fn check_board_faults() -> Result<String, String> {
         }
         done.push(format!("{what}: outputs low, FaultHandler latched, 0 IWDG feeds after it ({before} before), CFSR {cfsr:#x}"));
     }
+    // A configuration bit flipped while armed (EXTI0's NVIC priority): the periodic read-back
+    // (`board_diag.rs`, every 16 ticks) latches Diagnostic (cause 15) and every output drops.
+    let (out, trace) = run_board_bench("config")?;
+    let stopped = out.lines().find(|l| l.starts_with("bench: a flipped configuration bit: stopped after")).ok_or_else(|| format!("a flipped configuration bit: the bench did not stop:\n{out}"))?;
+    let lines: Vec<&str> = trace.lines().collect();
+    let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+    let at = lines.iter().position(|l| l.starts_with("GPIOI:") && value(l) == Some(13)).ok_or("no marker 13 in the trace")?;
+    let latched = lines[at..].iter().any(|l| l.starts_with("BKPSRAM:") && l.contains("write") && l.contains("offset 0x004") && value(l) == Some(15));
+    let esc_low = lines[at..].iter().any(|l| l.starts_with("GPIOB:") && l.contains("offset 0x018") && value(l) == Some(1 << 28));
+    if !latched || !esc_low {
+        return Err(format!("a flipped configuration bit: Diagnostic latched {latched}, escalation dropped {esc_low}"));
+    }
+    done.push(format!("a flipped configuration bit: Diagnostic latched, every output low ({})", stopped.trim_start_matches("bench: a flipped configuration bit: ")));
     Ok(done.join("; "))
 }

@@ -98,6 +98,10 @@ mod log_drain;
 mod faults;
 
 #[cfg(target_os = "none")]
+#[path = "support/board_diag.rs"]
+mod diag;
+
+#[cfg(target_os = "none")]
 mod board {
     use super::isr_cell::IsrCell;
     use crate::backup::{backup_on, retained_store, Bkp, SAVED_SEQ};
@@ -133,7 +137,7 @@ mod board {
     /// The edge at 0x10, not 0: the configurable faults (MemManage, BusFault, UsageFault) are at 0,
     /// above every interrupt, so a stack overflow in any handler is taken, not escalated
     /// (`support/board_faults.rs`).
-    const PRIO_EDGE: u8 = 0x10;
+    pub(crate) const PRIO_EDGE: u8 = 0x10;
     pub(crate) const PRIO_TICK: u8 = 0x80;
 
     pub(crate) type Switch = DualSwitch<In<PA, 0>, In<PA, 4>, Out<SUPPLY_PORT, SUPPLY_PIN>>;
@@ -307,12 +311,18 @@ mod board {
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
         let mut drain = LogDrain { copy: EventLog::new(), state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
-        // The bench plays the world in thread mode and runs the drain on every pass.
+        // The periodic self-tests, one step a tick, after the drain (`support/board_diag.rs`).
+        let mut diag = crate::diag::Diag::new();
+        // The bench plays the world in thread mode and runs the drain and the self-tests on every pass.
         #[cfg(feature = "qemu-io")]
-        super::bench::run_scenario(|| tim2().cnt().read().bits(), || drain.run());
+        super::bench::run_scenario(|| tim2().cnt().read().bits(), || {
+            drain.run();
+            diag.run();
+        });
         #[cfg(not(feature = "qemu-io"))]
         loop {
             drain.run();
+            diag.run();
             cortex_m::asm::wfi();
         }
     }
@@ -418,6 +428,11 @@ mod board {
         // was enabled.
         let fw = unsafe { FW.get() };
         fw.tick();
+        // A periodic self-test (thread mode, `board_diag.rs`) failed: latch it.
+        if let Some((check, detail)) = crate::diag::take_failure() {
+            fw.diagnostic_failed(check, detail);
+        }
+        crate::diag::TICKS.fetch_add(1, Relaxed);
         retained_store(fw.retained());
         publish_state(fw.state());
         // Every tick counts for the avoidance step's deadline (and pends the step).

@@ -278,6 +278,7 @@ enum Mode {
     Edges,
     Panic,
     Overflow,
+    Config,
 }
 
 fn mode() -> Mode {
@@ -292,6 +293,8 @@ fn mode() -> Mode {
         Mode::Panic
     } else if has(b"overflow") {
         Mode::Overflow
+    } else if has(b"config") {
+        Mode::Config
     } else {
         Mode::Edges
     }
@@ -338,6 +341,21 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
         if mode == Mode::Panic {
             mark(10); // marker 10: a panic in thread mode
             panic!("bench: a panic in thread mode");
+        }
+        if mode == Mode::Config {
+            // A configuration bit flips while armed (a stray write, an upset): EXTI0's NVIC priority
+            // from 0x10 to 0x90, below the tick. The periodic read-back must latch and stop.
+            mark(13); // marker 13: a configuration bit flipped
+            // SAFETY: one priority byte of the NVIC (cortex-m's register block).
+            unsafe { (*cortex_m::peripheral::NVIC::PTR).ipr[6].write(0x90) };
+            let t0 = now();
+            if !until_stop(&mut w, &now, false, 100_000) {
+                fail("still 'go' 100 ms after a configuration bit flipped");
+            }
+            hprintln!("bench: a flipped configuration bit: stopped after {} us (read-back every 16 ticks)", now().wrapping_sub(t0));
+            run(&mut w, &now, 10_000);
+            hprintln!("bench: PASS");
+            debug::exit(debug::EXIT_SUCCESS);
         }
         mark(11); // marker 11: a stack overflow in thread mode
         let n = overflow(0);

@@ -44,6 +44,13 @@ pub(crate) const STACK_KEEP: u32 = 1024;
 /// The flash image: the vector table, .text and .rodata (contiguous from the start of flash, as
 /// cortex-m-rt's link.x lays them out and xtask checks), then .data's load image.
 pub(crate) fn flash_crc_ok() -> bool {
+    let (image, crc_at, stored) = flash_image();
+    integrity::image_crc_seeded(image, crc_at, FLASH_SEED) == stored
+}
+
+/// The flash image as the CRC covers it, the stored word's offset in it, and the stored word; for
+/// the start-up check and the periodic one (`board_diag.rs`).
+pub(crate) fn flash_image() -> (&'static [u8], usize, u32) {
     let end = core::ptr::addr_of!(__sidata) as u32 + (core::ptr::addr_of!(__edata) as u32 - core::ptr::addr_of!(__sdata) as u32);
     let crc_at = core::ptr::addr_of!(FLINCH_FLASH_CRC) as u32;
     // SAFETY: flash from its start to the end of .data's load image: mapped, read-only,
@@ -52,7 +59,7 @@ pub(crate) fn flash_crc_ok() -> bool {
     // SAFETY: a static in flash; volatile so that the compiler does not fold in the 0 it was
     // linked with (xtask patched the ELF afterwards).
     let stored = unsafe { read_volatile(core::ptr::addr_of!(FLINCH_FLASH_CRC)) };
-    integrity::image_crc_seeded(image, (crc_at - FLASH_START) as usize, FLASH_SEED) == stored
+    (image, (crc_at - FLASH_START) as usize, stored)
 }
 
 /// March C- with four data backgrounds over the RAM the firmware will use: .data and .bss, and
