@@ -18,8 +18,6 @@ pub trait UsartRx {
     fn status(&mut self) -> u32;
     /// Read the data register (DR): the received byte, and the second half of the ORE clear.
     fn data(&mut self) -> u8;
-    /// Turn the receive interrupt (RXNEIE) off or on.
-    fn set_rx_interrupt(&mut self, on: bool);
 }
 
 /// Where the received bytes go (the board's `heapless::spsc` producer).
@@ -51,14 +49,16 @@ pub struct RxServiced {
     pub bytes: u32,
     /// Overruns seen (each lost at least one byte).
     pub overruns: u32,
-    /// The queue was full: the receive interrupt is now off, the byte left in DR; turn it back on
-    /// after draining ([`UsartRx::set_rx_interrupt`]).
-    pub paused: bool,
+    /// Bytes read and dropped because the queue was full (the frame they belong to is refused by
+    /// its CRC, as after an overrun).
+    pub dropped: u32,
 }
 
 /// The receive interrupt's work: at most `max` passes, each reading SR, then DR when SR shows RXNE
-/// or ORE, the bytes into `sink`. Returns with neither RXNE nor ORE pending (so the interrupt is not
-/// raised again by what it saw), or paused.
+/// or ORE, the bytes into `sink` (or dropped and counted when it is full: the data register is
+/// always read, so the interrupt request is always withdrawn, on the part and in QEMU's model, whose
+/// interrupt line does not drop when RXNEIE is cleared). Returns with neither RXNE nor ORE pending
+/// (so the interrupt is not raised again by what it saw).
 pub fn service<U: UsartRx, S: RxSink>(usart: &mut U, sink: &mut S, max: u32) -> RxServiced {
     let mut did = RxServiced::default();
     for _ in 0..max {
@@ -74,15 +74,13 @@ pub fn service<U: UsartRx, S: RxSink>(usart: &mut U, sink: &mut S, max: u32) -> 
             }
             return did;
         }
-        if !sink.room() {
-            // Full: the byte stays in DR until the consumer drains the queue (an overrun may follow:
-            // the frame is then refused by its CRC).
-            usart.set_rx_interrupt(false);
-            did.paused = true;
-            return did;
+        let b = usart.data(); // SR then DR: clears RXNE and ORE
+        if sink.room() {
+            sink.push(b);
+            did.bytes = did.bytes.saturating_add(1);
+        } else {
+            did.dropped = did.dropped.saturating_add(1);
         }
-        sink.push(usart.data()); // SR then DR: clears RXNE and ORE
-        did.bytes = did.bytes.saturating_add(1);
     }
     did
 }
@@ -99,7 +97,6 @@ mod tests {
         rxne: bool,
         ore: bool,
         sr_saw_ore: bool,
-        rxneie: bool,
     }
     impl FakeUsart {
         fn receive(&mut self, b: u8) {
@@ -110,9 +107,9 @@ mod tests {
                 self.rxne = true;
             }
         }
-        /// The interrupt line: RXNEIE and (RXNE or ORE).
+        /// The interrupt line: RXNE or ORE (RXNEIE on).
         fn pending(&self) -> bool {
-            self.rxneie && (self.rxne || self.ore)
+            self.rxne || self.ore
         }
     }
     impl UsartRx for FakeUsart {
@@ -127,9 +124,6 @@ mod tests {
             }
             self.dr
         }
-        fn set_rx_interrupt(&mut self, on: bool) {
-            self.rxneie = on;
-        }
     }
 
     fn run(u: &mut FakeUsart, q: &mut heapless::Vec<u8, 8>) -> RxServiced {
@@ -138,10 +132,10 @@ mod tests {
 
     #[test]
     fn bytes_in_order_one_per_entry() {
-        let (mut u, mut q) = (FakeUsart { rxneie: true, ..Default::default() }, heapless::Vec::new());
+        let (mut u, mut q) = (FakeUsart::default(), heapless::Vec::new());
         for b in [1u8, 2, 3] {
             u.receive(b);
-            assert_eq!(run(&mut u, &mut q), RxServiced { bytes: 1, overruns: 0, paused: false });
+            assert_eq!(run(&mut u, &mut q), RxServiced { bytes: 1, overruns: 0, dropped: 0 });
             assert!(!u.pending());
         }
         assert_eq!(&q[..], &[1, 2, 3]);
@@ -149,10 +143,10 @@ mod tests {
 
     #[test]
     fn usart_overrun_with_a_byte_keeps_the_byte_and_clears_the_flag() {
-        let (mut u, mut q) = (FakeUsart { rxneie: true, ..Default::default() }, heapless::Vec::new());
+        let (mut u, mut q) = (FakeUsart::default(), heapless::Vec::new());
         u.receive(7);
         u.receive(8); // lost: overrun
-        assert_eq!(run(&mut u, &mut q), RxServiced { bytes: 1, overruns: 1, paused: false });
+        assert_eq!(run(&mut u, &mut q), RxServiced { bytes: 1, overruns: 1, dropped: 0 });
         assert_eq!(&q[..], &[7]);
         assert!(!u.pending(), "ORE cleared by the SR-then-DR read");
     }
@@ -160,7 +154,7 @@ mod tests {
     #[test]
     fn usart_overrun_without_rxne_is_cleared_so_the_interrupt_does_not_re_raise() {
         // The race: an entry reads SR (RXNE only), the next byte overruns, the entry reads DR.
-        let (mut u, mut q) = (FakeUsart { rxneie: true, ..Default::default() }, heapless::Vec::<u8, 8>::new());
+        let (mut u, mut q) = (FakeUsart::default(), heapless::Vec::<u8, 8>::new());
         u.receive(1);
         assert_eq!(u.status(), SR_RXNE);
         u.receive(2); // overrun after the SR read
@@ -176,7 +170,7 @@ mod tests {
         assert_eq!(entries, 1, "one entry clears it: no interrupt storm above the tick");
         assert_eq!(&q[..], &[1]);
         // A handler that reads DR only when RXNE is set (main before issue 25) never clears it.
-        let mut old = FakeUsart { rxneie: true, ore: true, ..Default::default() };
+        let mut old = FakeUsart { ore: true, ..Default::default() };
         for _ in 0..10 {
             let sr = old.status();
             if sr & SR_RXNE != 0 {
@@ -187,22 +181,19 @@ mod tests {
     }
 
     #[test]
-    fn a_full_queue_pauses_the_interrupt_and_resumes_after_draining() {
-        let (mut u, mut q) = (FakeUsart { rxneie: true, ..Default::default() }, heapless::Vec::new());
+    fn a_full_queue_drops_and_counts_and_the_interrupt_is_withdrawn() {
+        let (mut u, mut q) = (FakeUsart::default(), heapless::Vec::new());
         for b in 0..8u8 {
             u.receive(b);
             run(&mut u, &mut q);
         }
         u.receive(100);
-        let did = run(&mut u, &mut q);
-        assert!(did.paused && !u.rxneie && u.rxne, "paused, the byte left in DR");
-        u.receive(101); // overruns meanwhile, no interrupt while paused
-        assert!(!u.pending());
+        assert_eq!(run(&mut u, &mut q), RxServiced { bytes: 0, overruns: 0, dropped: 1 });
+        assert!(!u.pending(), "the byte read and dropped: no request left");
         q.clear();
-        u.set_rx_interrupt(true);
-        assert_eq!(run(&mut u, &mut q), RxServiced { bytes: 1, overruns: 1, paused: false });
-        assert_eq!(&q[..], &[100]);
-        assert!(!u.pending());
+        u.receive(101);
+        assert_eq!(run(&mut u, &mut q), RxServiced { bytes: 1, overruns: 0, dropped: 0 });
+        assert_eq!(&q[..], &[101]);
     }
 
     #[test]
@@ -215,7 +206,6 @@ mod tests {
             fn data(&mut self) -> u8 {
                 0
             }
-            fn set_rx_interrupt(&mut self, _: bool) {}
         }
         let mut q: heapless::Vec<u8, 32> = heapless::Vec::new();
         let did = service(&mut Stuck, &mut q, 16);

@@ -56,6 +56,7 @@ mod host;
 mod python;
 mod qemu;
 mod size;
+mod worst;
 
 use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_avoid_cost};
 use board::{check_board_corrupt, check_board_edge, check_board_faults, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
@@ -93,6 +94,7 @@ fn main() -> ExitCode {
             let (out, log) = run_board_edge()?;
             print!("{out}");
             println!("{}", check_board_edge(&out, &log)?);
+            println!("{}", worst::check_board_worst(&out)?);
             println!("{}", check_board_faults()?);
             Ok(())
         }),
@@ -221,18 +223,34 @@ fn test() -> ExitCode {
                 }
             },
         ));
+        let edge_run = if which("qemu-system-arm").is_none() {
+            Err("qemu-system-arm not found".to_string())
+        } else {
+            build_board_qemu_io().and_then(|()| run_board_edge())
+        };
         results.push((
             "board ELF edge in QEMU",
-            if which("qemu-system-arm").is_none() {
-                Outcome::Skip("qemu-system-arm not found".into())
-            } else {
-                match build_board_qemu_io().and_then(|()| run_board_edge()).and_then(|(out, log)| {
+            match &edge_run {
+                Ok((out, log)) => {
                     print!("{out}");
-                    check_board_edge(&out, &log)
-                }) {
+                    match check_board_edge(out, log) {
+                        Ok(m) => Outcome::Pass(m),
+                        Err(e) => Outcome::Fail(e),
+                    }
+                }
+                Err(e) if e.contains("not found") => Outcome::Skip(e.clone()),
+                Err(e) => Outcome::Fail(e.clone()),
+            },
+        ));
+        results.push((
+            "board worst case",
+            match &edge_run {
+                Ok((out, _)) => match worst::check_board_worst(out) {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
-                }
+                },
+                Err(e) if e.contains("not found") => Outcome::Skip(e.clone()),
+                Err(_) => Outcome::Fail("no board edge run".into()),
             },
         ));
         results.push((

@@ -375,6 +375,8 @@ mod board {
         if EDGE_FAST.load(Relaxed) && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B) {
             bsrr(K1_PORT, 1 << (K1_PIN + 16)); // the stop, channel 1
             bsrr(K2_PORT, 1 << (K2_PIN + 16)); // channel 2
+            #[cfg(feature = "qemu-io")]
+            crate::bench::edge_stop_written();
             // SAFETY (both PR writes): one pending bit, write 1 to clear.
             exti().pr().write(|w| unsafe { w.bits(line) }); // right after the stop writes: a new edge from here on pends again
             EDGE_AT.store(tim2().cnt().read().bits(), Relaxed);
@@ -383,10 +385,14 @@ mod board {
             exti().pr().write(|w| unsafe { w.bits(line) });
         }
         NVIC::pend(Book);
+        #[cfg(feature = "qemu-io")]
+        crate::bench::edge_end();
     }
 
     /// The bookkeeping of an edge, at SysTick's priority.
     fn book() {
+        #[cfg(feature = "qemu-io")]
+        let t0 = crate::bench::start();
         // SAFETY: same priority as SysTick (the only other user), initialised before unmasking.
         let fw = unsafe { FW.get() };
         if EDGE_STOPPED.swap(false, Relaxed) {
@@ -396,6 +402,8 @@ mod board {
         }
         retained_store(fw.retained());
         publish_state(fw.state());
+        #[cfg(feature = "qemu-io")]
+        crate::bench::note(&crate::bench::W_BOOK, t0, true);
     }
 
     /// The firmware's state for the rest of the board (the avoidance's velocity frames): 0 armed,
@@ -424,6 +432,8 @@ mod board {
 
     #[exception]
     fn SysTick() {
+        #[cfg(feature = "qemu-io")]
+        let t0 = crate::bench::start();
         // SAFETY: same priority as the bookkeeping (the only other user), initialised before SysTick
         // was enabled.
         let fw = unsafe { FW.get() };
@@ -443,6 +453,8 @@ mod board {
         if fw.feeds_watchdog() && step_on_time && !STARVE.load(Relaxed) {
             iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
         }
+        #[cfg(feature = "qemu-io")]
+        crate::bench::note(&crate::bench::W_TICK, t0, true);
     }
 
     // ---- Vector table: the 82 STM32F407 interrupts, EXTI0 wired, the rest to DefaultHandler --------
@@ -473,7 +485,11 @@ mod board {
         edge(1 << 4)
     }
     unsafe extern "C" fn tim5_entry() {
-        lsi_capture()
+        #[cfg(feature = "qemu-io")]
+        let t0 = crate::bench::start();
+        lsi_capture();
+        #[cfg(feature = "qemu-io")]
+        crate::bench::note(&crate::bench::W_TIM5, t0, true);
     }
     unsafe extern "C" fn book_entry() {
         book()

@@ -23,10 +23,10 @@
 //! * Receive: the USART interrupt (`flinch_firmware::serial_rx::service`: host-tested, including the
 //!   overrun without a received byte, which it clears so the interrupt is not raised again above
 //!   the tick) moves each byte into a 255-byte `heapless::spsc` queue (its producer is the
-//!   interrupt's, its consumer the step's). A full queue turns the receive interrupt off (the step
-//!   turns it back on after draining); on the part the next bytes then overrun (ORE, counted) and
-//!   the receiver refuses the damaged frame by its CRC. In QEMU the model holds the input meanwhile
-//!   (it offers a byte only when RXNE is clear).
+//!   interrupt's, its consumer the step's). A full queue drops the byte (read, counted): the
+//!   receiver refuses the damaged frame by its CRC. The data register is always read, so the request
+//!   is always withdrawn (turning RXNEIE off instead left QEMU 7.2's interrupt line high: an
+//!   interrupt storm above the tick once the queue filled).
 //! * The step (its interrupt, priority 0xC0): drains the queue into the receiver's ring (`Receiver::push`), runs
 //!   `Link::step` (which services at most `budget_bytes` of the ring), queues the velocity frame
 //!   (a 63-byte `heapless::spsc` queue: the step produces, the USART side consumes) and starts
@@ -85,10 +85,10 @@ const RXQ: usize = 256;
 static mut RX_QUEUE: Queue<u8, RXQ> = Queue::new();
 static RX_PROD: IsrCell<Producer<'static, u8>> = IsrCell::new();
 static RX_CONS: IsrCell<Consumer<'static, u8>> = IsrCell::new();
-/// The receive interrupt is off because the queue was full.
-static RX_PAUSED: AtomicBool = AtomicBool::new(false);
 /// Receive overruns (ORE) seen.
 pub static RX_OVERRUN: AtomicU32 = AtomicU32::new(0);
+/// Bytes dropped because the receive queue was full.
+pub static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 
 /// Transmit: 63 bytes, one velocity frame (36) at a time. Produced by the step, consumed by the
 /// USART interrupt and by the step's start of sending, which runs with the USART masked (BASEPRI).
@@ -153,8 +153,7 @@ unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
     }
 }
 
-/// USART1's receive side for `serial_rx::service`. The CR1 read-modify-writes happen only at the
-/// USART's priority (its interrupt, or the step under BASEPRI).
+/// USART1's receive side for `serial_rx::service`.
 struct Usart1Rx;
 impl UsartRx for Usart1Rx {
     fn status(&mut self) -> u32 {
@@ -162,9 +161,6 @@ impl UsartRx for Usart1Rx {
     }
     fn data(&mut self) -> u8 {
         usart1().dr().read().dr().bits() as u8
-    }
-    fn set_rx_interrupt(&mut self, on: bool) {
-        usart1().cr1().modify(|_, w| w.rxneie().bit(on));
     }
 }
 
@@ -181,6 +177,8 @@ impl serial_rx::RxSink for RxQueue<'_> {
 
 /// USART1: received bytes into the queue; the velocity frame's next bytes out.
 fn usart_irq() {
+    #[cfg(feature = "qemu-io")]
+    let t0 = crate::bench::start();
     // SAFETY: the receive producer's only user (the USART's priority), initialised before unmasking.
     let prod = unsafe { RX_PROD.get() };
     // Bounded: at most a queue's worth of bytes per entry (the model and the part offer one).
@@ -188,10 +186,18 @@ fn usart_irq() {
     if did.overruns != 0 {
         RX_OVERRUN.fetch_add(did.overruns, Relaxed);
     }
-    if did.paused {
-        RX_PAUSED.store(true, Relaxed);
+    if did.dropped != 0 {
+        RX_DROPPED.fetch_add(did.dropped, Relaxed);
     }
     tx_pump();
+    #[cfg(feature = "qemu-io")]
+    {
+        crate::bench::N_USART.fetch_add(1, Relaxed);
+        if did.bytes + did.dropped <= 1 {
+            crate::bench::note(&crate::bench::W_USART_1, t0, false);
+        }
+        crate::bench::note(&crate::bench::W_USART, t0, true);
+    }
 }
 
 /// Send queued bytes while the data register is empty; TXE interrupt on while bytes are left.
@@ -263,9 +269,6 @@ fn step_irq() {
         }
         link.receiver().push(chunk.get(..n).unwrap_or(&[]), now);
     }
-    if RX_PAUSED.swap(false, Relaxed) {
-        with_usart_masked(|| Usart1Rx.set_rx_interrupt(true));
-    }
     let v = link.step(now);
     let frame = encode_velocity(&v);
     // SAFETY: the transmit producer's only user is the step.
@@ -287,7 +290,11 @@ fn with_usart_masked(f: impl FnOnce()) {
     let old = cortex_m::register::basepri::read();
     // SAFETY: raising BASEPRI only masks; restored below.
     unsafe { cortex_m::register::basepri::write(PRIO_USART) };
+    #[cfg(feature = "qemu-io")]
+    let t0 = crate::bench::start();
     f();
+    #[cfg(feature = "qemu-io")]
+    crate::bench::note(&crate::bench::W_MASK_STEP, t0, false);
     // SAFETY: the value read above.
     unsafe { cortex_m::register::basepri::write(old) };
 }

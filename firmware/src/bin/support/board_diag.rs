@@ -37,6 +37,7 @@ pub(crate) static TICKS: AtomicU32 = AtomicU32::new(0);
 /// The registers read back, by index (`read`).
 #[derive(Copy, Clone)]
 #[repr(u8)]
+#[cfg_attr(feature = "qemu-clock", allow(dead_code))] // the unmodelled ones are read on the part only
 enum Reg {
     ExtiImr,
     ExtiRtsr,
@@ -220,8 +221,12 @@ impl Diag {
             // lowered, so no reader ever sees the test patterns. The words are inside FW's static.
             let r = unsafe {
                 cortex_m::register::basepri::write(PRIO_TICK);
+                #[cfg(feature = "qemu-io")]
+                let t0 = crate::bench::start();
                 let base = core::ptr::addr_of!(FW) as *mut u32;
                 let r = march_block_transparent(&mut RawRam::new(base, words), at, RAM_BLOCK, BACKGROUNDS.get(bg..=bg).unwrap_or(&[]));
+                #[cfg(feature = "qemu-io")]
+                crate::bench::note(&crate::bench::W_MASK_DIAG, t0, false);
                 cortex_m::register::basepri::write(0);
                 r
             };

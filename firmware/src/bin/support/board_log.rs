@@ -36,9 +36,13 @@ impl LogDrain {
         // later (the latch is stored at once by the tick and the bookkeeping).
         let (snap, state) = unsafe {
             cortex_m::register::basepri::write(PRIO_TICK);
+            #[cfg(feature = "qemu-io")]
+            let t0 = crate::bench::start();
             let fw = FW.get();
             let snap = fw.log().snapshot::<{ flinch_firmware::event_log::DRAIN_BATCH }>(self.copy.cursor());
             let state = fw.state();
+            #[cfg(feature = "qemu-io")]
+            crate::bench::note(&crate::bench::W_MASK_DRAIN, t0, false);
             cortex_m::register::basepri::write(0);
             (snap, state)
         };
