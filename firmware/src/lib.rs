@@ -9,7 +9,10 @@
 //! One concern per module: [`clock`] (wrap-safe microseconds), [`sensor`] (travel switch, analog
 //! travel with velocity estimate), [`debounce`] (glitch filter with its latency, chatter guard),
 //! [`detector`] (states and reset policy), [`selftest`] (stuck input at start-up), [`watchdog`] (clock
-//! stall, missed tick deadline), [`stop_output`] (fail-safe outputs), [`backup`] (the latch and the
+//! stall, missed tick deadline), [`stop_output`] (fail-safe outputs: two stop channels and the
+//! category-0 escalation), [`output_monitor`] (each output read back at its pin and its relay),
+//! [`diagnostics`] (periodic self-tests while running), [`serial_rx`] (the USART receive service),
+//! [`backup`] (the latch and the
 //! event log across resets, in backup SRAM), [`option_bytes`] (the brown-out level, verified at the
 //! next boot), [`event_log`] (ring of trips,
 //! serialisable), [`stroke_budget`] (stopping distance vs. remaining stroke), [`firmware`] (all of it

@@ -14,6 +14,13 @@
 //!      a 15 x 15 grid for every number type (issue 4); and the step plus its share of frame handling
 //!      (receiver fed one 10 ms step's bytes) at most 5,000 for the shipped grids and frame rates (issue 11).
 //!
+//!   Board ELF stages (netduinoplus2): "board ELF in QEMU" (boot trace, vectors, a corrupted image,
+//!   the first latched fault ending the IWDG feeds), "board ELF edge in QEMU" (the qemu-io bench's
+//!   edges, with USART traffic), "board worst case" (the board ELF's own edge-to-stop and
+//!   tick-to-output from that run, `worst.rs`), "flash image" (the bytes cargo's runner hands
+//!   probe-rs pass the firmware's flash check and boot), "board faults in QEMU" (a panic, a stack
+//!   overflow, a flipped configuration bit), "board serial in QEMU".
+//!
 //!   8. loader fuzz: tests/fuzz.rs for `FLINCH_FUZZ_SECS` seconds (default 60), the cases run
 //!      printed (issue 18).
 //!   7. no fontconfig: the `flinch` binary built with `PKG_CONFIG_PATH` pointing nowhere and
