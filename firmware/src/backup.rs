@@ -295,15 +295,16 @@ mod tests {
                 Micros(self.0.get())
             }
         }
-        let (switch, stop, esc, t) = (Cell::new(true), Cell::new(true), Cell::new(true), Cell::new(0));
+        let (switch, stop, stop2, esc, t) = (Cell::new(true), Cell::new(true), Cell::new(true), Cell::new(true), Cell::new(0));
+        let outputs = || Outputs { k1: Pin(&stop), k2: Pin(&stop2), escalation: Pin(&esc) };
         let budget = BudgetConfig { robot_speed_um_per_s: 50_000, dead_time_us: 16_000, decel_um_per_s2: 1_000_000, stroke_um: 10_000 };
         let mut cfg = Config::new(1_000, budget);
         cfg.start = StartPolicy::AutoAfterPowerOn;
         // Power-on with garbage in the store: a clean power-on, it arms by itself.
         let mut bkp = RamBackup::<128>::filled(0x5A5A_1234);
         let boot = Boot { cause: ResetCause::PowerOn, retained: load_latch(&mut bkp) };
-        let mut fw: Firmware<_, _, _, _, _> =
-            Firmware::after_reset(cfg, boot, Time(&t), DigitalSwitch::new(Pin(&switch), SwitchKind::Inductive, 5_000), Pin(&stop), Pin(&esc), Unconnected)
+        let mut fw: Firmware<_, _, _, _, _, _> =
+            Firmware::after_reset(cfg, boot, Time(&t), DigitalSwitch::new(Pin(&switch), SwitchKind::Inductive, 5_000), outputs(), Unconnected)
                 .unwrap()
                 .with_saved_log(load_log(&mut bkp));
         for k in 0..10 {
@@ -323,10 +324,11 @@ mod tests {
         // The watchdog resets the part; the obstacle is gone, the outputs float back high.
         switch.set(true);
         stop.set(true);
+        stop2.set(true);
         t.set(0);
         let boot = Boot { cause: ResetCause::from_rcc_csr(1 << 29 | 1 << 26), retained: load_latch(&mut bkp) };
-        let mut fw: Firmware<_, _, _, _, _> =
-            Firmware::after_reset(cfg, boot, Time(&t), DigitalSwitch::new(Pin(&switch), SwitchKind::Inductive, 5_000), Pin(&stop), Pin(&esc), Unconnected)
+        let mut fw: Firmware<_, _, _, _, _, _> =
+            Firmware::after_reset(cfg, boot, Time(&t), DigitalSwitch::new(Pin(&switch), SwitchKind::Inductive, 5_000), outputs(), Unconnected)
                 .unwrap()
                 .with_saved_log(load_log(&mut bkp));
         for k in 0..100 {

@@ -50,6 +50,14 @@ pub enum Cause {
     /// A start-up integrity check failed (`integrity.rs`): the flash CRC or the RAM test. The board
     /// never arms after it; no reset press clears it, only a start whose checks pass.
     SelfCheck = 13,
+    /// An output read back at its pin did not follow its command (`output_monitor.rs`): a pin or
+    /// driver stuck high or low, or a frozen port (its clock gated). The event's flags name the
+    /// channels ([`FLAG_K1`], [`FLAG_K2`], [`FLAG_ESC`]).
+    OutputReadBack = 14,
+    /// A periodic self-test failed while running (`diagnostics.rs`, IEC 60730-1 Annex H): the flash
+    /// CRC, the RAM test of the safety state, or the read-back of the peripheral configuration. The
+    /// event's travel field says which check and what it saw.
+    Diagnostic = 15,
 }
 
 impl Cause {
@@ -69,6 +77,8 @@ impl Cause {
             11 => Cause::EdmMismatch,
             12 => Cause::ClockDrift,
             13 => Cause::SelfCheck,
+            14 => Cause::OutputReadBack,
+            15 => Cause::Diagnostic,
             _ => return None,
         })
     }
@@ -89,6 +99,8 @@ impl Cause {
             Cause::EdmMismatch => "edm-mismatch",
             Cause::ClockDrift => "clock-drift",
             Cause::SelfCheck => "self-check",
+            Cause::OutputReadBack => "output-read-back",
+            Cause::Diagnostic => "diagnostic",
         }
     }
 }
@@ -101,6 +113,12 @@ pub const FLAG_ESCALATED: u8 = 1 << 1;
 pub const FLAG_FILTERED: u8 = 1 << 2;
 /// Flag: this latch was found in retained RAM at start-up (it was in force when the part reset).
 pub const FLAG_RETAINED: u8 = 1 << 3;
+/// Flag of an output fault ([`Cause::OutputReadBack`], [`Cause::EdmMismatch`]): stop channel K1.
+pub const FLAG_K1: u8 = 1 << 4;
+/// Flag of an output fault: stop channel K2.
+pub const FLAG_K2: u8 = 1 << 5;
+/// Flag of an output fault: the category-0 escalation output.
+pub const FLAG_ESC: u8 = 1 << 6;
 
 /// One entry of the log.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -251,16 +269,17 @@ impl<const N: usize> EventLog<N> {
     }
 
     /// What a reader whose cursor is `cursor` (as for [`EventLog::since`]) has not taken yet, at most
-    /// `max` events of it (the oldest): those events, the sequence number after the last of them
+    /// `B` events of it (the oldest): those events, the sequence number after the last of them
     /// (the log's next one when none is left behind) and the loss count. What the board's log drain
-    /// copies under its priority ceiling instead of the whole log ([`DRAIN_BATCH`] events a run).
-    pub fn snapshot(&self, cursor: Option<u16>, max: usize) -> LogSnapshot<N> {
+    /// copies under its priority ceiling instead of the whole log ([`DRAIN_BATCH`] events a run):
+    /// the snapshot is sized by the batch, so the section copies `B` events, not the ring.
+    pub fn snapshot<const B: usize>(&self, cursor: Option<u16>) -> LogSnapshot<B> {
         let mut new = heapless::Vec::new();
-        for e in self.since(cursor).take(max) {
-            let _ = new.push(*e); // cannot fail: at most N events are held
+        for e in self.since(cursor).take(B) {
+            let _ = new.push(*e); // cannot fail: at most B are taken
         }
         let next_seq = match new.last() {
-            Some(e) if new.len() == max => e.seq.wrapping_add(1),
+            Some(e) if new.len() == B => e.seq.wrapping_add(1),
             _ => self.next_seq,
         };
         LogSnapshot { new, next_seq, overwritten: self.overwritten, complete: next_seq == self.next_seq }
@@ -269,7 +288,7 @@ impl<const N: usize> EventLog<N> {
     /// Bring a reader's copy of a log up to date with a snapshot of it taken with this copy's cursor
     /// (`None` while the copy is empty): the copy then holds what the log holds (its events, next
     /// sequence number and loss count), without the whole log having been copied at once.
-    pub fn follow(&mut self, s: &LogSnapshot<N>) {
+    pub fn follow<const B: usize>(&mut self, s: &LogSnapshot<B>) {
         for e in &s.new {
             if self.ring.is_full() {
                 let _ = self.ring.pop_front();
@@ -406,7 +425,7 @@ mod tests {
                 }
                 // Followed DRAIN_BATCH events at a time until nothing is new.
                 for _ in 0..16 {
-                    let s = log.snapshot(copy.cursor(), DRAIN_BATCH);
+                    let s = log.snapshot::<DRAIN_BATCH>(copy.cursor());
                     assert!(s.new.len() <= DRAIN_BATCH);
                     copy.follow(&s);
                     if s.complete {
@@ -419,7 +438,7 @@ mod tests {
                 assert_eq!(a, b, "start {start:#x} round {k}");
                 assert_eq!(copy.next_seq(), log.next_seq());
                 // Nothing new: an empty snapshot.
-                assert!(log.snapshot(copy.cursor(), 16).new.is_empty());
+                assert!(log.snapshot::<16>(copy.cursor()).new.is_empty());
             }
         }
     }

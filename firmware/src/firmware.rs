@@ -15,11 +15,12 @@ use crate::debounce::{ChatterGuard, ChatterState, Debouncer, Filter};
 use crate::detector::{ResetPolicy, ResetTracker, State};
 use crate::event_log::{Cause, EventLog, FLAG_EDGE, FLAG_ESCALATED, FLAG_FILTERED, FLAG_RETAINED};
 use crate::clock_check::{ClockCheck, ClockMonitor};
-use crate::edm::{Feedback, NoFeedback, Reading};
+use crate::edm::{Feedback, NoFeedback};
+use crate::output_monitor::{Commanded, OutputMonitor};
 use crate::reset::{Boot, ResetCause, ResetPress, Retained, StartPolicy};
 use crate::selftest::{self, Phase, SelfTestConfig, Step};
 use crate::sensor::{Sample, Sensor};
-use crate::stop_output::StopOutputs;
+use crate::stop_output::{Outputs, StopOutputs};
 use crate::stroke_budget::{BudgetConfig, Verdict};
 use embedded_hal::digital::{InputPin, OutputPin};
 
@@ -172,14 +173,15 @@ impl core::fmt::Display for ConfigError {
 
 /// The collision module's firmware.
 ///
-/// Type parameters: `C` the clock, `S` the sensor, `STOP` and `ESC` the stop and escalation outputs,
-/// `RST` the reset input ([`Unconnected`](crate::Unconnected) if there is none), `LOG` the event-log
+/// Type parameters: `C` the clock, `S` the sensor, `K1` and `K2` the two stop channels and `ESC` the
+/// category-0 escalation output (each an output read back at its pin, `stop_output.rs`), `RST` the
+/// reset input ([`Unconnected`](crate::Unconnected) if there is none), `LOG` the event-log
 /// capacity, `FB` the stop output's read-back ([`NoFeedback`] unless [`Firmware::with_feedback`]).
-pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16, FB = NoFeedback> {
+pub struct Firmware<C, S, K1, K2, ESC, RST, const LOG: usize = 16, FB = NoFeedback> {
     cfg: Config,
     clock: C,
     sensor: S,
-    out: StopOutputs<STOP, ESC>,
+    out: StopOutputs<K1, K2, ESC>,
     reset: RST,
     state: State,
     fast_edge: bool,
@@ -194,28 +196,29 @@ pub struct Firmware<C, S, STOP, ESC, RST, const LOG: usize = 16, FB = NoFeedback
     retained: Retained,
     boots: u32,
     feedback: FB,
-    edm_mismatch_since: Option<Micros>,
+    monitor: OutputMonitor,
     clock_monitor: ClockMonitor,
     /// `cfg.budget`'s stopping distance at the configured speed, computed once.
     required_um: u32,
 }
 
-impl<C, S, STOP, ESC, RST, const LOG: usize> Firmware<C, S, STOP, ESC, RST, LOG, NoFeedback>
+impl<C, S, K1, K2, ESC, RST, const LOG: usize> Firmware<C, S, K1, K2, ESC, RST, LOG, NoFeedback>
 where
     C: Clock,
     S: Sensor,
-    STOP: OutputPin,
-    ESC: OutputPin,
+    K1: OutputPin + InputPin,
+    K2: OutputPin + InputPin,
+    ESC: OutputPin + InputPin,
     RST: InputPin,
 {
-    /// Take the peripherals and de-energise both outputs, not knowing why the MCU started
+    /// Take the peripherals and de-energise every output, not knowing why the MCU started
     /// ([`Boot::UNKNOWN`]): latched in [`State::Fault`]`(`[`Cause::Reset`]`)` until a reset press,
     /// whatever [`Config::start`] says. A board passes what it knows with [`Firmware::after_reset`].
-    pub fn new(cfg: Config, clock: C, sensor: S, stop: STOP, escalation: ESC, reset: RST) -> Result<Self, ConfigError> {
-        Self::after_reset(cfg, Boot::UNKNOWN, clock, sensor, stop, escalation, reset)
+    pub fn new(cfg: Config, clock: C, sensor: S, outputs: Outputs<K1, K2, ESC>, reset: RST) -> Result<Self, ConfigError> {
+        Self::after_reset(cfg, Boot::UNKNOWN, clock, sensor, outputs, reset)
     }
 
-    /// Take the peripherals and de-energise both outputs after the reset described by `boot`. The
+    /// Take the peripherals and de-energise every output after the reset described by `boot`. The
     /// reset cause is logged ([`Cause::Reset`], flags = [`ResetCause`] code), and so is a latch found
     /// in the retained record ([`FLAG_RETAINED`]). The firmware then waits for a reset press and
     /// release, unless [`StartPolicy::AutoAfterPowerOn`] is configured, the cause is a clean
@@ -225,12 +228,11 @@ where
         boot: Boot,
         clock: C,
         sensor: S,
-        stop: STOP,
-        escalation: ESC,
+        outputs: Outputs<K1, K2, ESC>,
         reset: RST,
     ) -> Result<Self, ConfigError> {
         cfg.validate()?;
-        let (out, ok) = StopOutputs::new(stop, escalation);
+        let (out, ok) = StopOutputs::new(outputs);
         let mut fw = Firmware {
             cfg,
             clock,
@@ -250,7 +252,7 @@ where
             retained: Retained::default(),
             boots: 0,
             feedback: NoFeedback,
-            edm_mismatch_since: None,
+            monitor: OutputMonitor::new(),
             clock_monitor: ClockMonitor::new(cfg.clock_check),
             required_um: cfg.budget.configured_required_um(),
         };
@@ -281,7 +283,7 @@ where
 
     /// Read the stop output back through `feedback` ([`Edm`](crate::Edm): the two relays' NC mirror
     /// contacts) from now on. Call it right after construction, before the first tick.
-    pub fn with_feedback<FB: Feedback>(self, feedback: FB) -> Firmware<C, S, STOP, ESC, RST, LOG, FB> {
+    pub fn with_feedback<FB: Feedback>(self, feedback: FB) -> Firmware<C, S, K1, K2, ESC, RST, LOG, FB> {
         Firmware {
             cfg: self.cfg,
             clock: self.clock,
@@ -301,19 +303,20 @@ where
             retained: self.retained,
             boots: self.boots,
             feedback,
-            edm_mismatch_since: None,
+            monitor: OutputMonitor::new(),
             clock_monitor: self.clock_monitor,
             required_um: self.required_um,
         }
     }
 }
 
-impl<C, S, STOP, ESC, RST, const LOG: usize, FB> Firmware<C, S, STOP, ESC, RST, LOG, FB>
+impl<C, S, K1, K2, ESC, RST, const LOG: usize, FB> Firmware<C, S, K1, K2, ESC, RST, LOG, FB>
 where
     C: Clock,
     S: Sensor,
-    STOP: OutputPin,
-    ESC: OutputPin,
+    K1: OutputPin + InputPin,
+    K2: OutputPin + InputPin,
+    ESC: OutputPin + InputPin,
     RST: InputPin,
     FB: Feedback,
 {
@@ -410,7 +413,7 @@ where
         if let Err(cause) = self.clock_monitor.check(now, reference) {
             self.fault(cause, now);
         }
-        self.check_edm(now);
+        self.check_outputs(now);
         let sample = self.sensor.sample(now);
         self.last_sample = sample;
         let reset_level = self.reset.is_high().unwrap_or(false);
@@ -489,30 +492,17 @@ where
         }
     }
 
-    /// External device monitoring: each relay must follow the stop output within the settle time.
-    fn check_edm(&mut self, now: Micros) {
-        let want_released = self.out.stop_requested();
-        let ok = match self.feedback.read() {
-            Reading::NotMonitored => return,
-            Reading::Released(a, b) => a == want_released && b == want_released,
-            Reading::Error => false,
+    /// The output side, every tick (`output_monitor.rs`): each output read back at its pin, each
+    /// relay at its contacts (EDM), against the command.
+    fn check_outputs(&mut self, now: Micros) {
+        let cmd = Commanded {
+            stop_energised: !self.out.stop_requested(),
+            escalation_energised: !self.out.category0_requested(),
         };
-        if ok {
-            self.edm_mismatch_since = None;
-            return;
-        }
-        let since = *self.edm_mismatch_since.get_or_insert(now);
-        if now.since(since) > self.cfg.edm_settle_us {
-            self.fault(Cause::EdmMismatch, now);
-        }
-    }
-
-    /// Both relays released (or no read-back): the EDM start check before energising.
-    fn relays_released(&mut self) -> bool {
-        match self.feedback.read() {
-            Reading::NotMonitored => true,
-            Reading::Released(a, b) => a && b,
-            Reading::Error => false,
+        let pins = self.out.read_back();
+        let relays = self.feedback.read();
+        if let Err((cause, channels)) = self.monitor.check(now, cmd, pins, relays, self.cfg.edm_settle_us) {
+            self.fault_flags(cause, now, channels);
         }
     }
 
@@ -545,10 +535,10 @@ where
     fn arm(&mut self, now: Micros) {
         self.debounce.clear();
         self.sensor.clear_cycle();
-        if !self.relays_released() {
-            return self.fault(Cause::EdmMismatch, now);
+        if let Err((cause, channels)) = OutputMonitor::relays_released(self.feedback.read()) {
+            return self.fault_flags(cause, now, channels);
         }
-        self.edm_mismatch_since = None;
+        self.monitor.restart();
         if self.out.energise() {
             self.state = State::Armed;
             self.retained = Retained::new(None, self.boots);
@@ -558,8 +548,18 @@ where
         }
     }
 
-    /// Latch a fault: both outputs de-energised; logged once per fault episode.
+    /// Latch a fault: every output de-energised; logged once per fault episode.
     fn fault(&mut self, cause: Cause, now: Micros) {
+        self.fault_flags(cause, now, 0);
+    }
+
+    /// [`Firmware::fault`] with extra event flags (the channels of an output fault).
+    fn fault_flags(&mut self, cause: Cause, now: Micros, flags: u8) {
+        self.fault_event(cause, now, flags, self.last_sample.travel_um);
+    }
+
+    /// [`Firmware::fault_flags`] with the event's travel field given (a diagnostic's detail).
+    fn fault_event(&mut self, cause: Cause, now: Micros, flags: u8, travel_um: i32) {
         self.out.drop_all();
         match self.state {
             // A real fault found while latched after a reset replaces the start latch, so the state
@@ -572,8 +572,15 @@ where
         self.resetter.begin_latch();
         self.retained = Retained::new(Some(cause), self.boots);
         self.state = State::Fault(cause);
-        self.log.push(cause, FLAG_ESCALATED, now, now, self.last_sample.travel_um);
+        self.log.push(cause, FLAG_ESCALATED | flags, now, now, travel_um);
         warn!("fault {=str} at {=u32} us", cause.name(), now.0);
+    }
+
+    /// A periodic self-test failed (`diagnostics.rs`): latch [`Cause::Diagnostic`]; the event's flags
+    /// carry the check in bits 4..6, its travel field `detail` (what was read).
+    pub fn diagnostic_failed(&mut self, check: crate::diagnostics::Check, detail: i32) {
+        let now = self.clock.now();
+        self.fault_event(Cause::Diagnostic, now, (check as u8) << 4, detail);
     }
 
     /// The record to keep in retained RAM (backup SRAM): the latch in force and the boot count. The
@@ -592,10 +599,20 @@ where
         self.state == State::Armed
     }
 
-    /// Not in a fault: the board feeds its hardware watchdog only while this holds... and while the
-    /// main loop runs at all.
+    /// Not in a fault (the start latch after a reset counts as a fault here).
     pub fn is_healthy(&self) -> bool {
         !matches!(self.state, State::Fault(_))
+    }
+
+    /// Whether the board may feed its hardware watchdog: only while healthy and armed, or healthy
+    /// and stopped (the self-test, a trip, and the start latch after a reset, which waits for a
+    /// person and has found nothing wrong). Every latched fault starves it, so the reset that
+    /// follows releases the pins to their reset state (inputs: the external pull-downs de-energise
+    /// the relays, whatever the port's clock or driver does) and the next start finds the latch in
+    /// the backup SRAM. A fault that persists across the reset is found again and resets again:
+    /// the part stays stopped, reset every few tens of milliseconds, until it is repaired.
+    pub fn feeds_watchdog(&self) -> bool {
+        matches!(self.state, State::Armed | State::Tripped | State::SelfTest(_) | State::Fault(Cause::Reset))
     }
 
     /// The stop output is commanded low (stop requested).

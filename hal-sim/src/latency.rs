@@ -25,7 +25,7 @@
 //!   exception entry), which a due tick also waits behind; it was left out before, while it cloned
 //!   the whole 16-event log (a snapshot of all 16 events measured 1,974 instructions); it now takes
 //!   one new event per run (`event_log::DRAIN_BATCH`).
-//! * [`BOARD_CLOCK_HZ`]: the board runs on the 16 MHz HSI (firmware/src/bin/board.rs, `CORE_HZ` without the `qemu-io` feature).
+//! * [`BOARD_CLOCK_HZ`]: the board runs on the 16 MHz HSI (firmware/src/bin/support/board_hw.rs, `CORE_HZ` without the `qemu-clock` feature).
 //!
 //! # Conversion
 //!
@@ -35,27 +35,29 @@
 //! 2.7-3.6 V). So [`CYCLES_PER_INSTRUCTION_MAX`] = 4 bounds every instruction of the path, and
 //! exception entry adds [`EXCEPTION_ENTRY_CYCLES`] = 12 (TRM 5.5.1, zero-wait-state memory):
 //!
-//! `t = (12 + 4 n) / 16 MHz`: edge to stop 26 instructions -> 116 cycles -> 7.25 us. Tick to output:
-//! four exception entries (the bookkeeping's edge, the bookkeeping, the other edge, the tick) and
-//! 1,463 instructions -> 48 + 5,852 cycles -> 368.75 us.
+//! `t = (12 + 4 n) / 16 MHz`: edge to stop (both channels written) at most 26 instructions -> 116
+//! cycles -> 7.25 us. Tick to output: four exception entries (the bookkeeping's edge, the bookkeeping, the
+//! other edge, the tick) and 1,512 instructions -> 48 + 6,048 cycles -> 381 us.
 
-/// Worst edge-to-stop, QEMU instructions (firmware/README.md, "QEMU edge-to-stop, worst").
+/// Worst edge-to-stop, QEMU instructions (firmware/README.md, "QEMU edge-to-stop, worst": 25 since
+/// the edge writes both stop channels and no longer reads the output register; 26 is kept, an
+/// upper bound, until the board ELF's own worst case replaces these figures).
 pub const WORST_EDGE_TO_STOP_INSTRUCTIONS: u32 = 26;
 /// A trip tick from pend to its end, QEMU instructions (firmware/README.md, "QEMU trip tick").
-pub const TRIP_TICK_INSTRUCTIONS: u32 = 698;
+pub const TRIP_TICK_INSTRUCTIONS: u32 = 747;
 /// The edge handler, pend to its end (firmware/README.md, "QEMU edge handler").
-pub const EDGE_HANDLER_INSTRUCTIONS: u32 = 33;
+pub const EDGE_HANDLER_INSTRUCTIONS: u32 = 32;
 /// A trip's edge and its bookkeeping, pend to the end of the bookkeeping (firmware/README.md,
 /// "QEMU edge and bookkeeping").
-pub const EDGE_AND_BOOK_INSTRUCTIONS: u32 = 646;
+pub const EDGE_AND_BOOK_INSTRUCTIONS: u32 = 647;
 /// The board's log drain, its BASEPRI-masked section (firmware/README.md, "QEMU log drain, masked
 /// section").
 pub const DRAIN_MASKED_INSTRUCTIONS: u32 = 86;
 /// Worst tick to output write: the four above (firmware/README.md, "QEMU tick-to-output, worst").
-pub const TICK_TO_OUTPUT_WORST_INSTRUCTIONS: u32 = 1_463;
+pub const TICK_TO_OUTPUT_WORST_INSTRUCTIONS: u32 = 1_512;
 /// Exception entries on the worst tick-to-output path.
 pub const TICK_TO_OUTPUT_ENTRIES: u32 = 4;
-/// The board's core clock, Hz (16 MHz HSI, firmware/src/bin/board.rs).
+/// The board's core clock, Hz (16 MHz HSI, firmware/src/bin/support/board_hw.rs).
 pub const BOARD_CLOCK_HZ: u32 = 16_000_000;
 /// Cycles one instruction of the path takes at most (Cortex-M4: taken branch 1 + P, P <= 3).
 pub const CYCLES_PER_INSTRUCTION_MAX: u32 = 4;
@@ -67,12 +69,12 @@ pub fn worst_seconds(instructions: u32) -> f64 {
     f64::from(EXCEPTION_ENTRY_CYCLES + CYCLES_PER_INSTRUCTION_MAX * instructions) / f64::from(BOARD_CLOCK_HZ)
 }
 
-/// From the switch edge to the stop output's write, s (7.25 us).
+/// From the switch edge to the second stop channel's write, s (7.25 us).
 pub fn edge_to_stop_s() -> f64 {
     worst_seconds(WORST_EDGE_TO_STOP_INSTRUCTIONS)
 }
 
-/// From a tick (or the edge's bookkeeping) being due to its output write, s (368.75 us): a stop
+/// From a tick (or the edge's bookkeeping) being due to its output write, s (381 us): a stop
 /// confirmed by a filter on a tick, and the escalation (category-0) output; the same- and
 /// higher-priority work that can run first included.
 pub fn tick_to_output_s() -> f64 {

@@ -47,8 +47,10 @@ use embedded_hal::digital::{ErrorKind, ErrorType, InputPin, OutputPin, StatefulO
 use flinch_firmware::{Adc, Clock, Micros};
 
 pub mod latency;
+pub mod output_faults;
 mod rig;
-pub use rig::{SimRig, SIM_LOG};
+pub use output_faults::OutputFault;
+pub use rig::{OutputPort, SimRig, SIM_LOG};
 pub mod serial;
 
 /// A fault injected into a [`SimPin`].
@@ -65,6 +67,10 @@ pub enum PinFault {
     CutWire = 3,
     /// Every read and write returns an error.
     Broken = 4,
+    /// Its port is frozen (the board's GPIO clock gated, or the port's logic dead): writes are lost
+    /// without an error, reads return low (a gated register reads a constant; the F4 reads 0), and
+    /// the pin itself keeps driving the level it had (which is what a relay on it sees).
+    Frozen = 5,
 }
 
 impl PinFault {
@@ -74,6 +80,7 @@ impl PinFault {
             2 => PinFault::StuckHigh,
             3 => PinFault::CutWire,
             4 => PinFault::Broken,
+            5 => PinFault::Frozen,
             _ => PinFault::None,
         }
     }
@@ -143,7 +150,7 @@ impl SimPin {
             PinFault::StuckLow | PinFault::Broken => false,
             PinFault::StuckHigh => true,
             PinFault::CutWire => self.0.pull_high,
-            PinFault::None => match &self.0.supply {
+            PinFault::None | PinFault::Frozen => match &self.0.supply {
                 Some((supply, unpowered)) if !supply.level() => *unpowered,
                 _ => self.driven(),
             },
@@ -176,7 +183,7 @@ impl ErrorType for SimPin {
 impl InputPin for SimPin {
     fn is_high(&mut self) -> Result<bool, SimPinError> {
         self.check()?;
-        Ok(self.level())
+        Ok(self.fault() != PinFault::Frozen && self.level())
     }
     fn is_low(&mut self) -> Result<bool, SimPinError> {
         self.is_high().map(|h| !h)
@@ -186,12 +193,16 @@ impl InputPin for SimPin {
 impl OutputPin for SimPin {
     fn set_low(&mut self) -> Result<(), SimPinError> {
         self.check()?;
-        self.set(false);
+        if self.fault() != PinFault::Frozen {
+            self.set(false);
+        }
         Ok(())
     }
     fn set_high(&mut self) -> Result<(), SimPinError> {
         self.check()?;
-        self.set(true);
+        if self.fault() != PinFault::Frozen {
+            self.set(true);
+        }
         Ok(())
     }
 }
@@ -386,6 +397,18 @@ mod tests {
         out.set_low().unwrap();
         assert!(out.is_set_low().unwrap(), "driven low");
         assert!(observer.level(), "but observed high");
+    }
+
+    #[test]
+    fn a_frozen_pin_keeps_driving_ignores_writes_and_reads_low() {
+        let mut out = SimPin::new(false);
+        out.set_high().unwrap();
+        out.set_fault(PinFault::Frozen);
+        out.set_low().unwrap();
+        assert!(out.level(), "the pin still drives high: the relay stays pulled in");
+        assert!(!out.is_high().unwrap(), "the gated register reads 0");
+        out.set_fault(PinFault::None);
+        assert!(out.is_high().unwrap());
     }
 
     #[test]

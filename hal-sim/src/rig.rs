@@ -10,12 +10,28 @@
 //! metres) into a switch level (through [`SwitchKind::level_for`] and d_sw) or an ADC value (through
 //! [`AnalogConfig::counts_for`]). When the switch input's observed level changes, the rig calls the
 //! firmware's edge interrupt at once, as the EXTI line on both edges does on the board.
+//!
+//! Outputs, as on the board: two stop channels (K1, K2), each driving a relay whose force-guided
+//! contacts are in series in the robot's stop circuit, and the category-0 escalation output, each on
+//! its own port ([`OutputPort`]). What the robot sees ([`SimRig::stop_requested`]) is the stop
+//! circuit: open as soon as either relay has released, and a welded relay never releases.
 
 use super::{PinFault, SimAdc, SimClock, SimPin};
 use flinch_firmware::{
-    AnalogConfig, AnalogTravel, Boot, Cause, ResetCause, Config, ConfigError, DigitalSwitch, DualSwitch, Edm, Firmware, Micros, Mm, Sensor, State, SwitchKind,
+    AnalogConfig, AnalogTravel, Boot, Cause, ResetCause, Config, ConfigError, DigitalSwitch, DualSwitch, Edm, Firmware, Micros, Mm, Outputs, Sensor, State, SwitchKind,
     TripEvent,
 };
+
+/// The board's three output ports (`firmware/README.md`, pin map): one per output.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum OutputPort {
+    /// Stop channel K1's port (GPIOD on the board, with the sensor supply).
+    K1,
+    /// Stop channel K2's port (GPIOE on the board).
+    K2,
+    /// The escalation output's port (GPIOB on the board).
+    Escalation,
+}
 
 /// Event-log capacity of the simulated firmware.
 pub const SIM_LOG: usize = 32;
@@ -30,18 +46,22 @@ enum PlantInput {
 /// Firmware plus its simulated peripherals.
 pub struct SimRig<S> {
     /// The firmware under test (read its state, log, verdicts directly if needed).
-    pub fw: Firmware<SimClock, S, SimPin, SimPin, SimPin, SIM_LOG, Edm<SimPin, SimPin>>,
+    pub fw: Firmware<SimClock, S, SimPin, SimPin, SimPin, SimPin, SIM_LOG, Edm<SimPin, SimPin>>,
     /// The clock handle (stall it with [`SimClock::set_stalled`]).
     pub clock: SimClock,
-    /// The stop output (low = stop requested).
-    pub stop: SimPin,
+    /// Stop channel 1's output pin, relay K1's coil (low = released). A pin stuck high is
+    /// `stop_k1.set_fault(PinFault::StuckHigh)`: the relay stays pulled in, the read-back sees it.
+    pub stop_k1: SimPin,
+    /// Stop channel 2's output pin, relay K2's coil, on another port.
+    pub stop_k2: SimPin,
     /// The escalation output (low = category 0 requested).
     pub escalation: SimPin,
     /// The reset input (drive high for a reset press).
     pub reset: SimPin,
     /// The EDM inputs: the NC mirror contacts of the two stop relays K1, K2 (high = released). The
-    /// rig's relays follow the stop output before every tick; a welded relay is
-    /// `k1.set_fault(PinFault::StuckLow)` (never reads released).
+    /// rig's relays follow their stop channels before every tick; a welded relay is
+    /// `k1.set_fault(PinFault::StuckLow)` (never reads released, and its contacts stay closed in the
+    /// robot's stop circuit); a cut feedback wire is `StuckHigh` (the relay itself still works).
     pub k1: SimPin,
     /// See [`SimRig::k1`].
     pub k2: SimPin,
@@ -157,17 +177,19 @@ impl SimRig<AnalogTravel<SimAdc>> {
 impl<S: Sensor> SimRig<S> {
     fn with_sensor(cfg: Config, boot: Boot, sensor: S, input: PlantInput) -> Result<Self, ConfigError> {
         let clock = SimClock::new(Micros(0));
-        let stop = SimPin::new(true); // whatever the pin was: the firmware must drop it at once
-        let escalation = SimPin::new(true);
+        // Whatever the pins were: the firmware must drop them at once.
+        let (stop_k1, stop_k2, escalation) = (SimPin::new(true), SimPin::new(true), SimPin::new(true));
         let reset = SimPin::new(false);
         let (k1, k2) = (SimPin::new(true), SimPin::new(true));
-        let fw = Firmware::after_reset(cfg, boot, clock.clone(), sensor, stop.clone(), escalation.clone(), reset.clone())?
+        let outputs = Outputs { k1: stop_k1.clone(), k2: stop_k2.clone(), escalation: escalation.clone() };
+        let fw = Firmware::after_reset(cfg, boot, clock.clone(), sensor, outputs, reset.clone())?
             .with_feedback(Edm::new(k1.clone(), k2.clone()));
         let tick_us = i64::from(cfg.tick_period_us);
         Ok(SimRig {
             fw,
             clock,
-            stop,
+            stop_k1,
+            stop_k2,
             escalation,
             reset,
             k1,
@@ -186,10 +208,24 @@ impl<S: Sensor> SimRig<S> {
     fn restart(&mut self, cause: ResetCause, sensor: S) {
         let boot = Boot { cause, retained: self.fw.retained() };
         let cfg = *self.fw.config();
-        let (stop, esc, reset) = (self.stop.clone(), self.escalation.clone(), self.reset.clone());
+        let outputs = Outputs { k1: self.stop_k1.clone(), k2: self.stop_k2.clone(), escalation: self.escalation.clone() };
+        // A reset releases every pin (they become inputs; the external pull-downs de-energise the
+        // relays) and resets the ports: a frozen port works again, a pin stuck high stays high.
+        for pin in [&self.stop_k1, &self.stop_k2, &self.escalation] {
+            if pin.fault() == PinFault::Frozen {
+                pin.set_fault(PinFault::None);
+            }
+            pin.set(false);
+        }
+        if let Some(supply) = &self.supply {
+            if supply.fault() == PinFault::Frozen {
+                supply.set_fault(PinFault::None);
+            }
+        }
+        let reset = self.reset.clone();
         // The configuration was valid when the rig was built, so this cannot fail; if it did, the
         // old firmware would keep running, which the caller sees in the state.
-        if let Ok(fw) = Firmware::after_reset(cfg, boot, self.clock.clone(), sensor, stop, esc, reset) {
+        if let Ok(fw) = Firmware::after_reset(cfg, boot, self.clock.clone(), sensor, outputs, reset) {
             self.fw = fw.with_feedback(Edm::new(self.k1.clone(), self.k2.clone()));
         }
     }
@@ -261,12 +297,34 @@ impl<S: Sensor> SimRig<S> {
         Err(self.fw.state())
     }
 
-    /// The stop relays follow the stop output (released while it is low); faults injected on
-    /// [`SimRig::k1`] / [`SimRig::k2`] override what they show.
+    /// The stop relays follow their stop channels (released while the coil's pin is low); faults
+    /// injected on [`SimRig::k1`] / [`SimRig::k2`] override what their mirror contacts show.
     fn relays_follow(&mut self) {
-        let released = !self.stop.level();
-        self.k1.set(released);
-        self.k2.set(released);
+        self.k1.set(!self.stop_k1.level());
+        self.k2.set(!self.stop_k2.level());
+    }
+
+    /// Relay `k` (1 or 2) has released: its coil is de-energised and it is not welded
+    /// (`PinFault::StuckLow` on its mirror contact).
+    pub fn relay_released(&self, k: u8) -> bool {
+        let (coil, mirror) = if k == 1 { (&self.stop_k1, &self.k1) } else { (&self.stop_k2, &self.k2) };
+        !coil.level() && mirror.fault() != PinFault::StuckLow
+    }
+
+    /// Freeze one output's port (the board's GPIO clock gated or its logic dead: writes lost, reads
+    /// low, the pins keep their level). K1's port also carries the sensor supply, as PD12 and PD14
+    /// share GPIOD on the board. A reset of the MCU ([`SimRig::mcu_reset`]) unfreezes it.
+    pub fn freeze_port(&mut self, port: OutputPort) {
+        match port {
+            OutputPort::K1 => {
+                self.stop_k1.set_fault(PinFault::Frozen);
+                if let Some(s) = &self.supply {
+                    s.set_fault(PinFault::Frozen);
+                }
+            }
+            OutputPort::K2 => self.stop_k2.set_fault(PinFault::Frozen),
+            OutputPort::Escalation => self.escalation.set_fault(PinFault::Frozen),
+        }
     }
 
     /// Convert simulation seconds to the firmware's clock.
@@ -371,9 +429,9 @@ impl<S: Sensor> SimRig<S> {
         self.reset.set(level);
     }
 
-    /// The stop output reads low: stop requested.
+    /// The robot's stop circuit is open: relay K1 or K2 has released (a welded one never does).
     pub fn stop_requested(&self) -> bool {
-        !self.stop.level()
+        self.relay_released(1) || self.relay_released(2)
     }
 
     /// The escalation output reads low: category 0 requested.

@@ -25,7 +25,8 @@ fn const_u32(src: &str, name: &str) -> u32 {
 #[test]
 fn worst_edge_to_stop_is_the_readme_figure_and_within_what_xtask_asserts() {
     let readme = read("firmware/README.md");
-    assert_eq!(WORST_EDGE_TO_STOP_INSTRUCTIONS, readme_figure(&readme, "QEMU edge-to-stop, worst"), "update hal-sim/src/latency.rs with the README's measured figure");
+    let edge = readme_figure(&readme, "QEMU edge-to-stop, worst");
+    assert!(WORST_EDGE_TO_STOP_INSTRUCTIONS >= edge && WORST_EDGE_TO_STOP_INSTRUCTIONS <= edge + 1, "hal-sim/src/latency.rs: {WORST_EDGE_TO_STOP_INSTRUCTIONS}, the README's measured figure {edge} (a bound at most one above it)");
     assert_eq!(TRIP_TICK_INSTRUCTIONS, readme_figure(&readme, "QEMU trip tick"), "update hal-sim/src/latency.rs with the README's measured figure");
     assert_eq!(EDGE_HANDLER_INSTRUCTIONS, readme_figure(&readme, "QEMU edge handler"));
     assert_eq!(EDGE_AND_BOOK_INSTRUCTIONS, readme_figure(&readme, "QEMU edge and bookkeeping"));
@@ -41,15 +42,15 @@ fn worst_edge_to_stop_is_the_readme_figure_and_within_what_xtask_asserts() {
     assert!(WORST_EDGE_TO_STOP_INSTRUCTIONS <= limit, "{WORST_EDGE_TO_STOP_INSTRUCTIONS} > xtask's {limit}");
     let tick_limit = const_u32(&xtask, "ICOUNT_TICK_OUTPUT_LIMIT");
     assert!(TICK_TO_OUTPUT_WORST_INSTRUCTIONS <= tick_limit, "{TICK_TO_OUTPUT_WORST_INSTRUCTIONS} > xtask's {tick_limit}");
-    let board = read("firmware/src/bin/board.rs");
+    let board = read("firmware/src/bin/support/board_hw.rs");
     assert_eq!(BOARD_CLOCK_HZ, const_u32(&board, "CORE_HZ"), "the board's clock changed");
 }
 
 #[test]
 fn the_conversion_is_the_documented_one() {
-    // (12 + 4 * 26) / 16 MHz and (4 * 12 + 4 * 1463) / 16 MHz.
+    // (12 + 4 * 26) / 16 MHz and (4 * 12 + 4 * 1512) / 16 MHz.
     assert!((edge_to_stop_s() - 7.25e-6).abs() < 1e-12, "{}", edge_to_stop_s());
-    assert!((tick_to_output_s() - 368.75e-6).abs() < 1e-12, "{}", tick_to_output_s());
+    assert!((tick_to_output_s() - 381e-6).abs() < 1e-12, "{}", tick_to_output_s());
     assert!(tick_to_output_s() > worst_seconds(TRIP_TICK_INSTRUCTIONS), "more than the trip tick alone");
     assert!(edge_to_stop_s() > 0.0, "never zero");
 }

@@ -17,12 +17,15 @@ const BOARD_RUN: Duration = Duration::from_secs(3);
 /// with the same core, RCC, GPIO, EXTI, TIM2 and IWDG addresses. QEMU 7.2 does not model the F405's
 /// RCC, GPIO or IWDG: it logs every access to them (`-d unimp`), so the log is the board's register
 /// trace. GPIO inputs read 0, i.e. the switch reads "tripped", the reset button is not pressed and
-/// both EDM relays read "not released": the firmware must stay stopped for the whole run.
+/// both EDM relays read "not released" while the stop channels are low: the firmware must stay
+/// stopped for the whole run, and latch a fault (on the part the EDM would; in QEMU, whose core
+/// clock is not the board's, the tick supervision first), which must starve the watchdog for good
+/// (`Firmware::feeds_watchdog`).
 pub fn run_board_qemu() -> Result<String, String> {
     run_board_elf(&elf_path("board"), "board-qemu.log")
 }
 
-fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
+pub fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
     let log = target_dir().join(log_name);
     let _ = fs::remove_file(&log);
     let mut child = Command::new("qemu-system-arm")
@@ -44,23 +47,47 @@ fn run_board_elf(elf: &Path, log_name: &str) -> Result<String, String> {
     fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))
 }
 
+/// The three outputs' BSRR pages and "set" bits (PD12 K1, PE12 K2, PB12 escalation): a write that
+/// sets one of them energises it ("go" or no category 0).
+const OUTPUT_SETS: [(&str, u32, &str); 3] = [("GPIOD:", 1 << 12, "PD12 K1"), ("GPIOE:", 1 << 12, "PE12 K2"), ("GPIOB:", 1 << 12, "PB12 escalation")];
+
 /// Check the board's register trace (`-d unimp`): the boot sequence against
-/// `firmware/qemu/board-boot.txt`, then that "go" is never written and the tick keeps running.
+/// `firmware/qemu/board-boot.txt`; no output is ever energised; the tick keeps running (it reads the
+/// switch, GPIOA IDR, every tick); and the EDM latch (the relays read "not released" in QEMU) is
+/// stored in the backup SRAM after the settle time, after which the IWDG is never fed again.
 pub fn check_board_log(log: &str) -> Result<String, String> {
-    // GPIOD BSRR (offset 0x18): bits 12/13 set PD12 (stop) / PD13 (escalation) high = "go".
-    let writes: Vec<&str> = log.lines().filter(|l| l.contains("unimplemented device write")).collect();
+    let lines: Vec<&str> = log.lines().collect();
     let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
-    let go = writes.iter().filter(|l| l.starts_with("GPIOD:") && l.contains("offset 0x018")).filter(|l| value(l).is_some_and(|v| v & 0x3000 != 0)).count();
-    if go != 0 {
-        return Err(format!("the board wrote 'go' (BSRR set PD12/PD13) {go} times with the reset never pressed"));
+    let is_write = |l: &str| l.contains("unimplemented device write");
+    for (page, bit, name) in OUTPUT_SETS {
+        let go = lines.iter().filter(|l| is_write(l)).filter(|l| l.starts_with(page) && l.contains("offset 0x018")).filter(|l| value(l).is_some_and(|v| v & bit != 0)).count();
+        if go != 0 {
+            return Err(format!("the board energised {name} {go} times with the reset never pressed"));
+        }
     }
-    // The IWDG (QEMU names its page I2S2ext) is fed with 0xAAAA once per tick.
-    let ticks = writes.iter().filter(|l| value(l) == Some(0xAAAA)).count();
+    let ticks = lines.iter().filter(|l| l.starts_with("GPIOA:") && l.contains("read") && l.contains("offset 0x010")).count();
     if ticks < 100 {
-        return Err(format!("only {ticks} ticks (IWDG feeds) in {} s: the board is not running", BOARD_RUN.as_secs()));
+        return Err(format!("only {ticks} ticks (switch reads) in {} s: the board is not running", BOARD_RUN.as_secs()));
     }
-    // The boot: every access up to the first tick's first read of the switch (GPIOA IDR).
-    let boot: Vec<&str> = log.lines().take_while(|l| !(l.starts_with("GPIOA:") && l.contains("offset 0x010"))).collect();
+    // The IWDG (QEMU names its page I2S2ext) is fed with 0xAAAA by a tick that finds the firmware
+    // healthy. The first latched fault (the backup SRAM's latch word, offset 4, a cause other than
+    // 8 = the start latch) ends the feeds for good. In QEMU the production build's clocks are not
+    // QEMU's (SysTick runs from the 168 MHz core, the board assumes 16 MHz), so its tick supervision
+    // latches at once; on the part the EDM would (the relays read "not released" in QEMU).
+    let feed = |l: &&&str| l.starts_with("I2S2ext:") && is_write(l) && value(l) == Some(0xAAAA);
+    let latch = lines
+        .iter()
+        .position(|l| l.starts_with("BKPSRAM:") && is_write(l) && l.contains("offset 0x004") && value(l).is_some_and(|c| c != 8))
+        .ok_or("no fault latched in the backup SRAM in 3 s: the relays never read released in QEMU, so at least EDM must latch")?;
+    let cause = value(lines[latch]).unwrap_or(0);
+    let fed_before = lines[..latch].iter().filter(feed).count();
+    let fed_after = lines[latch..].iter().filter(feed).count();
+    if fed_before == 0 || fed_after != 0 {
+        return Err(format!("IWDG feeds: {fed_before} before the first latched fault (cause {cause}) (want > 0), {fed_after} after it (want 0: a latched fault starves the watchdog)"));
+    }
+    // The boot: every access up to the first tick's first read of an input register (the output
+    // read-back or the switch).
+    let boot: Vec<&str> = log.lines().take_while(|l| !(l.starts_with("GPIO") && l.contains("read") && l.contains("offset 0x010"))).collect();
     let expected_path = repo_root().join("firmware/qemu/board-boot.txt");
     let expected = fs::read_to_string(&expected_path).map_err(|e| format!("reading {}: {e}", expected_path.display()))?;
     let want: Vec<&str> = expected.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()).collect();
@@ -71,7 +98,10 @@ pub fn check_board_log(log: &str) -> Result<String, String> {
             want.join("\n")
         ));
     }
-    Ok(format!("board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, 'go' never written", boot.len()))
+    Ok(format!(
+        "board ELF on netduinoplus2: boot trace as expected ({} accesses), {ticks} ticks, no output ever energised, a fault (cause {cause}) latched after {fed_before} fed ticks and the IWDG never fed again",
+        boot.len()
+    ))
 }
 
 /// The board ELF's stack bound, bytes: asserted on the `qemu-io` build's painted stack (main, the
@@ -175,19 +205,37 @@ pub fn check_board_vectors(path: &Path) -> Result<String, String> {
 /// Run the `qemu-io` board ELF on netduinoplus2 until its bench exits (semihosting), deterministic
 /// time (`-icount shift=3`); returns the bench's output and the `-d unimp` register trace.
 pub fn run_board_edge() -> Result<(String, String), String> {
-    let log = target_dir().join("board-edge.log");
+    run_board_bench("edges")
+}
+
+/// The `qemu-io` bench in `mode` (its semihosting command line, `board_bench.rs`): "edges", or a
+/// fault that ends the run: "panic" (in thread mode), "overflow" (the stack into the MPU guard).
+fn run_board_bench(mode: &str) -> Result<(String, String), String> {
+    let log = target_dir().join(format!("board-{mode}.log"));
     let _ = fs::remove_file(&log);
     let elf = qemu_io_dir().join(TARGET).join("release").join("board");
     let mut cmd = Command::new("qemu-system-arm");
-    cmd.args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-serial", "none"])
-        .args(["-semihosting-config", "enable=on,target=native", "-icount", "shift=3"])
+    cmd.args(["-M", "netduinoplus2", "-nographic", "-monitor", "none"])
+        .args(["-semihosting-config", &format!("enable=on,target=native,arg=board,arg={mode}"), "-icount", "shift=3"])
         .args(["-d", "unimp,guest_errors", "-D"])
-        .arg(&log)
-        .arg("-kernel")
-        .arg(&elf);
-    let (out, status) = run_captured(cmd, "qemu-system-arm -M netduinoplus2 (board edge bench)", QEMU_TIMEOUT)?;
+        .arg(&log);
+    // The edge run carries USART1 traffic (weights frames as fast as the model takes them), so that
+    // the worst case measured in it includes the USART interrupt and the avoidance step's masked
+    // sections; the fault runs need none.
+    let traffic = if mode == "edges" { Some(crate::board_serial::Traffic::start("board-edges.sock")?) } else { None };
+    match &traffic {
+        Some(t) => cmd.args(["-chardev", &format!("socket,id=s0,path={}", t.path().display()), "-serial", "chardev:s0"]),
+        None => cmd.args(["-serial", "none"]),
+    };
+    cmd.arg("-kernel").arg(&elf);
+    let run = run_captured(cmd, "qemu-system-arm -M netduinoplus2 (board bench)", QEMU_TIMEOUT);
+    let sent = traffic.map(|t| t.stop()).unwrap_or(0);
+    let (out, status) = run?;
     if !status.success() {
-        return Err(format!("the board edge bench failed ({status}):\n{out}"));
+        return Err(format!("the board bench ({mode}) failed ({status}):\n{out}"));
+    }
+    if mode == "edges" && sent == 0 {
+        return Err("the edge run's USART traffic: no byte was taken by QEMU".into());
     }
     let trace = fs::read_to_string(&log).map_err(|e| format!("reading {}: {e}", log.display()))?;
     Ok((out, trace))
@@ -205,29 +253,45 @@ fn bench_marker(v: u32) -> &'static str {
         7 => "edge on channel A pended (EXTI0)",
         8 => "end",
         9 => "the LSI stops (the clock check's reference)",
+        10 => "a panic in thread mode",
+        11 => "a stack overflow in thread mode",
+        12 => "the fault handler held 20 ms",
+        13 => "a configuration bit flipped",
+        14 => "both channels trip, no edge interrupt (the tick polls it)",
         _ => "unknown marker",
     }
 }
 
 /// The board edge run's trace reduced to what a person checks: the bench's markers and every change
-/// of the three outputs (PD12 stop, PD13 escalation, PD14 sensor supply; 1 = energised). Repeated
-/// de-energise writes of the stopped ticks change nothing and do not appear.
+/// of the four outputs (PD12 stop K1, PE12 stop K2, PB12 escalation, PD14 sensor supply; 1 =
+/// energised). Repeated de-energise writes of the stopped ticks change nothing and do not appear.
 fn board_edge_timeline(trace: &[&str]) -> Vec<String> {
     let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
-    let mut odr = 0u32;
+    let ports: [(&str, &[(u32, &str)]); 3] = [
+        ("GPIOD:", &[(12, "PD12 stop K1"), (14, "PD14 sensor supply")]),
+        ("GPIOE:", &[(12, "PE12 stop K2")]),
+        ("GPIOB:", &[(12, "PB12 escalation")]),
+    ];
+    let mut odr = [0u32; 3];
     let mut out = Vec::new();
     for l in trace {
         let Some(v) = value(l) else { continue };
-        if l.starts_with("GPIOI:") && l.contains("offset 0x018") {
+        if !l.contains("offset 0x018") {
+            continue;
+        }
+        if l.starts_with("GPIOI:") {
             out.push(format!("bench {v}: {}", bench_marker(v)));
-        } else if l.starts_with("GPIOD:") && l.contains("offset 0x018") {
-            let new = (odr & !(v >> 16)) | (v & 0xFFFF);
-            for (bit, name) in [(12, "PD12 stop"), (13, "PD13 escalation"), (14, "PD14 sensor supply")] {
-                if (new ^ odr) & (1 << bit) != 0 {
-                    out.push(format!("{name} -> {}", (new >> bit) & 1));
+        }
+        for (k, (page, pins)) in ports.iter().enumerate() {
+            if l.starts_with(page) {
+                let new = (odr[k] & !(v >> 16)) | (v & 0xFFFF);
+                for (bit, name) in pins.iter() {
+                    if (new ^ odr[k]) & (1 << bit) != 0 {
+                        out.push(format!("{name} -> {}", (new >> bit) & 1));
+                    }
                 }
+                odr[k] = new;
             }
-            odr = new;
         }
     }
     out
@@ -235,8 +299,9 @@ fn board_edge_timeline(trace: &[&str]) -> Vec<String> {
 
 /// Check the board edge run: the bench passed; the boot is the production board's
 /// (`firmware/qemu/board-boot.txt`); the markers and output changes equal
-/// `firmware/qemu/board-edge.txt`; and after each edge pended while armed the very next device
-/// access is the stop write (GPIOD BSRR 0x10000000): nothing, not even a tick, comes between.
+/// `firmware/qemu/board-edge.txt`; and after each edge pended while armed the very next two device
+/// accesses are the stop writes (GPIOD BSRR 0x10000000, K1; GPIOE BSRR 0x10000000, K2): nothing,
+/// not even a tick, comes between.
 pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
     if !out.contains("bench: PASS") {
         return Err(format!("the board edge bench did not pass:\n{out}"));
@@ -274,20 +339,23 @@ pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
             want.join("\n")
         ));
     }
-    let stop_write = "GPIOD: unimplemented device write (size 4, offset 0x018, value 0x10000000)";
+    let stop_writes = [
+        "GPIOD: unimplemented device write (size 4, offset 0x018, value 0x10000000)",
+        "GPIOE: unimplemented device write (size 4, offset 0x018, value 0x10000000)",
+    ];
     let mut direct = 0;
     for marker in ["value 0x00000003)", "value 0x00000006)"] {
         let i = rest
             .iter()
             .position(|l| l.starts_with("GPIOI:") && l.ends_with(marker))
             .ok_or_else(|| format!("no bench marker {marker} in the trace"))?;
-        match rest.get(i + 1) {
-            Some(next) if *next == stop_write => direct += 1,
+        match rest.get(i + 1..i + 3) {
+            Some(next) if next == stop_writes => direct += 1,
             next => {
                 return Err(format!(
-                    "after the edge pend ({}) the next device access is {:?}, not the stop write",
+                    "after the edge pend ({}) the next device accesses are {:?}, not the two stop writes (K1, K2)",
                     rest[i],
-                    next.copied().unwrap_or("nothing")
+                    next.unwrap_or(&[])
                 ))
             }
         }
@@ -295,7 +363,65 @@ pub fn check_board_edge(out: &str, trace: &str) -> Result<String, String> {
     let ticks = rest.iter().filter(|l| l.starts_with("I2S2ext:") && (l.ends_with("value 0xaaaa)") || l.ends_with("value 0x0000aaaa)"))).count();
     let stack = check_board_stack(out)?;
     Ok(format!(
-        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, stop written as the next access after {direct} edges (EXTI0, EXTI4), {ticks} ticks; board stack {stack} B <= {BOARD_STACK_LIMIT} B (painted)",
+        "board ELF (qemu-io GPIO) on netduinoplus2: boot as board-boot.txt, {} events as board-edge.txt, both stop channels written as the next two accesses after {direct} edges (EXTI0, EXTI4), {ticks} ticks; board stack {stack} B <= {BOARD_STACK_LIMIT} B (painted)",
         got.len()
     ))
+}
+
+/// The faults that end a run (`board_bench.rs`, mode "panic" and "overflow") on the `qemu-io` board
+/// ELF: armed and fed, then a panic in thread mode, or a stack overflow into the MPU guard. After
+/// the bench's marker the trace must show the three outputs written low (K1, K2, escalation), the
+/// `FaultHandler` latch (cause 9) stored in the backup SRAM, the fault handler's 20 ms hold (marker
+/// 12) and not one IWDG feed from the marker on (on main a panic in thread mode left SysTick feeding
+/// the watchdog, and an overflow locked the core up before any handler ran).
+pub fn check_board_faults() -> Result<String, String> {
+    let mut done = Vec::new();
+    for (mode, marker, what) in [("panic", 10, "a panic in thread mode"), ("overflow", 11, "a stack overflow")] {
+        let (out, trace) = run_board_bench(mode)?;
+        if !out.contains("bench: PASS") {
+            return Err(format!("{what}: the bench did not end in the fault handler:\n{out}"));
+        }
+        let lines: Vec<&str> = trace.lines().collect();
+        let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+        let is = |l: &str, page: &str, off: &str, v: u32| l.starts_with(page) && l.contains("write") && l.contains(off) && value(l) == Some(v);
+        let at = lines
+            .iter()
+            .position(|l| is(l, "GPIOI:", "offset 0x018", marker))
+            .ok_or_else(|| format!("{what}: no bench marker {marker} in the trace"))?;
+        let after = &lines[at..];
+        let feed = |l: &&&str| l.starts_with("I2S2ext:") && value(l) == Some(0xAAAA);
+        let (before, since) = (lines[..at].iter().filter(feed).count(), after.iter().filter(feed).count());
+        let dropped = ["GPIOD:", "GPIOE:", "GPIOB:"].iter().all(|p| after.iter().any(|l| is(l, p, "offset 0x018", 1 << 28)));
+        let latched = after.iter().any(|l| is(l, "BKPSRAM:", "offset 0x004", 9));
+        let held = after.iter().any(|l| is(l, "GPIOI:", "offset 0x018", 12));
+        if before == 0 || since != 0 || !dropped || !latched || !held {
+            return Err(format!(
+                "{what}: IWDG feeds {before} before (want > 0) and {since} after (want 0), outputs dropped {dropped}, FaultHandler latched {latched}, handler held 20 ms {held}"
+            ));
+        }
+        // The overflow must have hit the MPU guard: MMFSR.DACCVIOL (CFSR bit 1), the handler's report.
+        let cfsr = out
+            .lines()
+            .find_map(|l| l.split("CFSR 0x").nth(1))
+            .and_then(|v| u32::from_str_radix(v.trim(), 16).ok())
+            .ok_or_else(|| format!("{what}: no CFSR in the bench's report:\n{out}"))?;
+        if mode == "overflow" && cfsr & 0x02 == 0 {
+            return Err(format!("{what}: CFSR {cfsr:#010x} has no MemManage data access violation: the MPU guard did not catch it"));
+        }
+        done.push(format!("{what}: outputs low, FaultHandler latched, 0 IWDG feeds after it ({before} before), CFSR {cfsr:#x}"));
+    }
+    // A configuration bit flipped while armed (EXTI0's NVIC priority): the periodic read-back
+    // (`board_diag.rs`, every 16 ticks) latches Diagnostic (cause 15) and every output drops.
+    let (out, trace) = run_board_bench("config")?;
+    let stopped = out.lines().find(|l| l.starts_with("bench: a flipped configuration bit: stopped after")).ok_or_else(|| format!("a flipped configuration bit: the bench did not stop:\n{out}"))?;
+    let lines: Vec<&str> = trace.lines().collect();
+    let value = |l: &str| l.rsplit("value 0x").next().and_then(|v| u32::from_str_radix(v.trim_end_matches(')'), 16).ok());
+    let at = lines.iter().position(|l| l.starts_with("GPIOI:") && value(l) == Some(13)).ok_or("no marker 13 in the trace")?;
+    let latched = lines[at..].iter().any(|l| l.starts_with("BKPSRAM:") && l.contains("write") && l.contains("offset 0x004") && value(l) == Some(15));
+    let esc_low = lines[at..].iter().any(|l| l.starts_with("GPIOB:") && l.contains("offset 0x018") && value(l) == Some(1 << 28));
+    if !latched || !esc_low {
+        return Err(format!("a flipped configuration bit: Diagnostic latched {latched}, escalation dropped {esc_low}"));
+    }
+    done.push(format!("a flipped configuration bit: Diagnostic latched, every output low ({})", stopped.trim_start_matches("bench: a flipped configuration bit: ")));
+    Ok(done.join("; "))
 }

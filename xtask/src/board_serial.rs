@@ -146,3 +146,83 @@ pub fn board_serial() -> Result<String, String> {
     }
     Ok(format!("board ELF (qemu-clock) on netduinoplus2: weights frames over USART1, {} velocity frames as in firmware/qemu/board-serial.txt", got.len()))
 }
+
+/// USART1 traffic for a QEMU run: a Unix socket QEMU connects to as its serial chardev, and a thread
+/// that writes bytes into it as fast as it takes them (and reads the velocity frames out, so QEMU
+/// never blocks on a full socket) until `stop`. The bytes 0..=199 over and over, never a frame (each
+/// costs the receive interrupt its full path), 64 every 20 ms of wall time, 4,000 in all: an
+/// unpaced flood (QEMU models no baud rate) starves the thread-mode bench through the avoidance
+/// step (reported to the avoidance's owner, firmware-report.md).
+pub struct Traffic {
+    path: std::path::PathBuf,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    thread: std::thread::JoinHandle<usize>,
+}
+
+impl Traffic {
+    /// Bind the socket `name` in the target directory and start the writer.
+    pub fn start(name: &str) -> Result<Traffic, String> {
+        use std::io::{Read, Write};
+        use std::os::unix::net::UnixListener;
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let path = target_dir().join(name);
+        let _ = fs::remove_file(&path);
+        let listener = UnixListener::bind(&path).map_err(|e| format!("binding {}: {e}", path.display()))?;
+        listener.set_nonblocking(true).map_err(|e| e.to_string())?;
+        let stop = std::sync::Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::spawn(move || {
+            let start = Instant::now();
+            let mut stream = loop {
+                if flag.load(Ordering::Relaxed) || start.elapsed() > SERIAL_TIMEOUT {
+                    return 0;
+                }
+                match listener.accept() {
+                    Ok((s, _)) => break s,
+                    Err(_) => sleep(Duration::from_millis(5)),
+                }
+            };
+            let _ = stream.set_nonblocking(true);
+            let mut sent = 0usize;
+            let mut sink = [0u8; 1024];
+            let frame: Vec<u8> = (0..200u8).collect();
+            // Bounded and spread: 64 bytes every 20 ms of wall time, 4,000 bytes in all (QEMU models
+            // no baud rate; an unpaced flood starves the thread-mode bench, see above).
+            while !flag.load(Ordering::Relaxed) && sent < 4_000 {
+                sleep(Duration::from_millis(20));
+                let frame = &frame[(sent % 200)..][..64.min(200 - sent % 200)];
+                let mut off = 0;
+                while off < frame.len() && !flag.load(Ordering::Relaxed) {
+                    match stream.write(&frame[off..]) {
+                        Ok(n) => {
+                            off += n;
+                            sent += n;
+                        }
+                        Err(_) => sleep(Duration::from_millis(1)),
+                    }
+                    let _ = stream.read(&mut sink);
+                }
+            }
+            // Keep reading the velocity frames out until the run ends.
+            while !flag.load(Ordering::Relaxed) {
+                let _ = stream.read(&mut sink);
+                sleep(Duration::from_millis(5));
+            }
+            sent
+        });
+        Ok(Traffic { path, stop, thread })
+    }
+
+    /// The socket's path, for QEMU's `-chardev socket,path=`.
+    pub fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+
+    /// Stop the writer; the bytes written into the socket.
+    pub fn stop(self) -> usize {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let sent = self.thread.join().unwrap_or(0);
+        let _ = fs::remove_file(&self.path);
+        sent
+    }
+}

@@ -14,6 +14,13 @@
 //!      a 15 x 15 grid for every number type (issue 4); and the step plus its share of frame handling
 //!      (receiver fed one 10 ms step's bytes) at most 5,000 for the shipped grids and frame rates (issue 11).
 //!
+//!   Board ELF stages (netduinoplus2): "board ELF in QEMU" (boot trace, vectors, a corrupted image,
+//!   the first latched fault ending the IWDG feeds), "board ELF edge in QEMU" (the qemu-io bench's
+//!   edges, with USART traffic), "board worst case" (the board ELF's own edge-to-stop and
+//!   tick-to-output from that run, `worst.rs`), "flash image" (the bytes cargo's runner hands
+//!   probe-rs pass the firmware's flash check and boot), "board faults in QEMU" (a panic, a stack
+//!   overflow, a flipped configuration bit), "board serial in QEMU".
+//!
 //!   8. loader fuzz: tests/fuzz.rs for `FLINCH_FUZZ_SECS` seconds (default 60), the cases run
 //!      printed (issue 18).
 //!   7. no fontconfig: the `flinch` binary built with `PKG_CONFIG_PATH` pointing nowhere and
@@ -26,13 +33,19 @@
 //!   there a missing target, QEMU or tool is a failure, never a quiet pass.
 //! * `cargo xtask qemu`: build and run the QEMU self-test, print its output.
 //! * `cargo xtask size`: build the board binary and print its flash and RAM use.
+//! * `cargo xtask flash [ELF] [probe-rs args]`: patch the start-up flash CRC into the board ELF (built
+//!   first without one), check it with the firmware's own routine, then `probe-rs run` it. cargo's
+//!   runner (`firmware/scripts/flash-runner`) calls it, so `cargo run --release --bin board` in
+//!   firmware/ flashes an image that arms.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
 //! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-clock` board ELF
 //!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
 //!   against `firmware/qemu/board-serial.txt`.
 //! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stages
-//!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop; and
-//!   "board ELF edge in QEMU": the `qemu-io` build's edges against `firmware/qemu/board-edge.txt`).
+//!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop, the
+//!   first latched fault ending the IWDG feeds; "board ELF edge in QEMU": the `qemu-io` build's edges
+//!   against `firmware/qemu/board-edge.txt`; "board faults in QEMU": a panic in thread mode and a
+//!   stack overflow into the MPU guard, each ending with the outputs low, the latch and no feed).
 //!
 //! Every build of the firmware patches the board ELF's flash CRC (`flash::patch_flash_crc`).
 //!
@@ -51,9 +64,10 @@ mod python;
 mod qemu;
 mod size;
 mod structure;
+mod worst;
 
 use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_avoid_cost};
-use board::{check_board_corrupt, check_board_edge, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
+use board::{check_board_corrupt, check_board_edge, check_board_faults, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
 use board_serial::board_serial;
 use common::{elf_path, which, Outcome, TARGET};
 use firmware::{build_board_qemu_clock, build_board_qemu_io, build_firmware, firmware_clippy, target_installed};
@@ -88,6 +102,8 @@ fn main() -> ExitCode {
             let (out, log) = run_board_edge()?;
             print!("{out}");
             println!("{}", check_board_edge(&out, &log)?);
+            println!("{}", worst::check_board_worst(&out)?);
+            println!("{}", check_board_faults()?);
             Ok(())
         }),
         Some("python") => single(|| match python_stage() {
@@ -108,6 +124,11 @@ fn main() -> ExitCode {
             }
             if failed.is_empty() { Ok(()) } else { Err(failed.join("\n")) }
         }),
+        Some("flash") => single(|| flash::flash(&args[1..])),
+        Some("flash-image") => single(|| {
+            build_firmware()?;
+            flash::check_flash_image().map(|m| println!("{m}"))
+        }),
         Some("size") => single(|| {
             build_firmware()?;
             let s = elf_size(&elf_path("board"))?;
@@ -115,7 +136,7 @@ fn main() -> ExitCode {
             check_size(&s)
         }),
         _ => {
-            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|python|structure>");
+            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|board-serial|flash [ELF]|python|structure>");
             ExitCode::from(2)
         }
     }
@@ -240,15 +261,53 @@ fn test() -> ExitCode {
                 }
             },
         ));
+        let edge_run = if which("qemu-system-arm").is_none() {
+            Err("qemu-system-arm not found".to_string())
+        } else {
+            build_board_qemu_io().and_then(|()| run_board_edge())
+        };
         results.push((
             "board ELF edge in QEMU",
+            match &edge_run {
+                Ok((out, log)) => {
+                    print!("{out}");
+                    match check_board_edge(out, log) {
+                        Ok(m) => Outcome::Pass(m),
+                        Err(e) => Outcome::Fail(e),
+                    }
+                }
+                Err(e) if e.contains("not found") => Outcome::Skip(e.clone()),
+                Err(e) => Outcome::Fail(e.clone()),
+            },
+        ));
+        results.push((
+            "board worst case",
+            match &edge_run {
+                Ok((out, _)) => match worst::check_board_worst(out) {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                },
+                Err(e) if e.contains("not found") => Outcome::Skip(e.clone()),
+                Err(_) => Outcome::Fail("no board edge run".into()),
+            },
+        ));
+        results.push((
+            "flash image",
             if which("qemu-system-arm").is_none() {
                 Outcome::Skip("qemu-system-arm not found".into())
             } else {
-                match build_board_qemu_io().and_then(|()| run_board_edge()).and_then(|(out, log)| {
-                    print!("{out}");
-                    check_board_edge(&out, &log)
-                }) {
+                match flash::check_flash_image() {
+                    Ok(m) => Outcome::Pass(m),
+                    Err(e) => Outcome::Fail(e),
+                }
+            },
+        ));
+        results.push((
+            "board faults in QEMU",
+            if which("qemu-system-arm").is_none() {
+                Outcome::Skip("qemu-system-arm not found".into())
+            } else {
+                match check_board_faults() {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }

@@ -69,7 +69,9 @@ pub const ICOUNT_BEST_LIMIT: u32 = 40;
 pub const ICOUNT_WORST_LIMIT: u32 = 60;
 /// Worst tick to output write (trip tick + a trip's edge and bookkeeping + the other edge + the
 /// board's log drain's masked section), instructions: hal-sim/src/latency.rs gives `flinch hil` this figure.
-const ICOUNT_TICK_OUTPUT_LIMIT: u32 = 1_500;
+/// Raised from 1,500 for the output read-back of issue 25 (three pins and the monitor every tick:
+/// the trip tick went from 698 to 747 instructions).
+const ICOUNT_TICK_OUTPUT_LIMIT: u32 = 1_600;
 
 /// Both edge-to-stop figures of the `icount:` line, each within its limit: `(best, worst)`.
 pub fn check_icount(stdout: &str) -> Result<(u32, u32), String> {

@@ -8,30 +8,38 @@
 //! | travel switch B   | PA4  | EXTI4 on both edges; the antivalent channel (a powered sensor driving low at rest, high when tripped); pull-up, so a cut wire or an unpowered sensor reads high = trip, and the start-up test sees both channels trip with the supply off |
 //! | reset input       | PA1  | pull-down, active high; acts on release (`flinch_firmware::reset`) |
 //! | EDM K1, K2        | PA2, PA3 | the stop relays' force-guided NC mirror contacts, high = released; pull-down (`flinch_firmware::edm`) |
-//! | stop out          | PD12 | high = energised = go; low = controlled stop (fit an external pull-down: a reset or dead MCU floats the pin) |
-//! | escalation out    | PD13 | high = energised; low = category-0 stop                           |
+//! | stop K1 out       | PD12 | GPIOD (AHB1ENR bit 3); drives relay K1; high = energised = go, low = controlled stop; external pull-down: a reset or dead MCU leaves it an input, the relay released |
+//! | stop K2 out       | PE12 | GPIOE (AHB1ENR bit 4); drives relay K2 (contacts in series with K1's); the same rules |
+//! | escalation out    | PB12 | GPIOB (AHB1ENR bit 1); high = energised; low = category-0 stop (drive power off); external pull-down |
 //! | sensor supply out | PD14 | high = powered; switched off by the start-up stuck-input test     |
+//!
+//! Each output is read back at its pin (IDR) every tick, and each relay at its mirror contact (EDM,
+//! PA2/PA3): `flinch_firmware::output_monitor`. firmware/README.md, "Output architecture", has the
+//! wiring and the diagnostic coverage claimed per channel.
 //!
 //! Time: TIM2, a 32-bit counter at 1 MHz, is the firmware's `Clock`. SysTick interrupts every
 //! `TICK_US` and calls `Firmware::tick`.
 //!
 //! Priorities (a bounded edge-to-stop): EXTI0, the switch edge, has the highest priority (0) and
-//! preempts everything else. It does not touch the `Firmware` object: it reads the switch (IDR) and
-//! whether the stop is energised (ODR: it is only while armed), writes the stop low through BSRR,
-//! clears its pending bit, and pends the bookkeeping interrupt (UART5's line, unused otherwise),
+//! preempts every other interrupt. It does not touch the `Firmware` object: it reads the switch
+//! (IDR), writes both stop channels low through their ports' BSRR (K1, then K2), clears its pending
+//! bit, and pends the bookkeeping interrupt (UART5's line, unused otherwise),
 //! which runs `Firmware::edge_stopped` (timestamp, budget, latch, log) or `Firmware::on_edge` at
 //! SysTick's priority (0x80). SysTick and the bookkeeping share that priority, so `IsrCell`'s rule
 //! (no two `&mut` at once, `support/isr_cell.rs`) holds between them; the edge shares only atomics.
 //! The core runs on the 16 MHz HSI, the reset default: no PLL code to get wrong, and the detection
 //! path is short enough at that speed (the QEMU build measures it in instructions).
 //!
-//! Failure handling: the independent watchdog (IWDG, LSI) is fed from the tick; a firmware that stops
-//! ticking resets the MCU within about 8 ms, and the reset state de-energises the outputs. The panic,
-//! HardFault and default (NMI, any unexpected interrupt) handlers write the stop and escalation pins
-//! low before anything else and record `Cause::FaultHandler` in the retained latch.
+//! Failure handling: the independent watchdog (IWDG, LSI) is fed from the tick, and only while the
+//! firmware is healthy and armed or healthy and stopped (`Firmware::feeds_watchdog`): every latched
+//! fault starves it, and so does a firmware that stops ticking, a missed avoidance step or a fault
+//! handler; the reset follows within about 8 ms, the reset state releases every pin (the relays
+//! de-energise through the external pull-downs) and the next start finds the latch. The panic,
+//! HardFault and default (NMI, any unexpected interrupt) handlers mask every interrupt, write the
+//! outputs low before anything else and record `Cause::FaultHandler` in the retained latch.
 //!
-//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, the stop, escalation and
-//! sensor-supply pins driven low by register writes (no RAM used), then a March C- RAM test over
+//! Start-up integrity (`flinch_firmware::integrity`): first in `main`, the two stop channels, the
+//! escalation and the sensor-supply pins driven low by register writes (no RAM used), then a March C- RAM test over
 //! .data/.bss and the stack region, a CRC-32 of the flash image against `FLINCH_FLASH_CRC` (patched
 //! into the ELF by `cargo xtask`, with the `qemu-io` build's own seed), and the brown-out level (BOR
 //! level 3, `flinch_firmware::option_bytes`: programmed once, verified from the option bytes at the
@@ -70,72 +78,55 @@ mod bench;
 mod board_avoid;
 
 #[cfg(target_os = "none")]
+#[path = "support/board_hw.rs"]
+mod hw;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_startup.rs"]
+mod startup;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_backup.rs"]
+mod backup;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_log.rs"]
+mod log_drain;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_faults.rs"]
+mod faults;
+
+#[cfg(target_os = "none")]
+#[path = "support/board_diag.rs"]
+mod diag;
+
+#[cfg(target_os = "none")]
 mod board {
     use super::isr_cell::IsrCell;
-    use core::convert::Infallible;
-    use core::ptr::{read_volatile, write_volatile};
-    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
+    use crate::backup::{backup_on, retained_store, Bkp, SAVED_SEQ};
+    use crate::hw::{
+        bsrr, emergency_stop, exti, gpio, idr, iwdg, lsi_capture, rcc, syscfg, tim2, tim5, In, Out, Tim2, CORE_HZ, ESC_PIN,
+        ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, LSI_HZ, PA, SUPPLY_PIN, SUPPLY_PORT, TICK_US, TIM2_HZ,
+    };
+    #[cfg(feature = "qemu-clock")]
+    use crate::startup::{not_qemu, SELF_NOT_QEMU};
+    use crate::startup::{early_outputs_low, flash_crc_ok, integrity_failed, ram_test, OptionRegs, BOR_BUSY_SPINS, SELF_BOR, SELF_FLASH, SELF_RAM};
+    use crate::log_drain::LogDrain;
+    use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering::Relaxed};
     use cortex_m::peripheral::scb::SystemHandler;
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m::peripheral::NVIC;
-    use cortex_m_rt::{entry, exception, ExceptionFrame};
+    use crate::faults::{stack_guard_on, STARVE};
+    use cortex_m_rt::{entry, exception};
     use defmt_rtt as _;
-    use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
-    use flinch_firmware::option_bytes::{self, BorOutcome, OptionBytes};
-    use flinch_firmware::{backup, integrity};
+    use flinch_firmware::option_bytes::{self, BorOutcome};
+    use flinch_firmware::backup;
     use flinch_firmware::{
-        BackupRam, Boot, EventLog, BudgetConfig, Cause, Clock, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, ResetCause, Retained,
-        SwitchKind,
+        Boot, EventLog, BudgetConfig, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, Outputs, ResetCause,
+        State, SwitchKind,
     };
 
-    // ---- Registers: the `stm32f4` PAC (feature stm32f407, generated from ST's SVD; RM0090 Rev 19) ---
-    use stm32f4::stm32f407 as pac;
-    /// GPIOA's and GPIOD's base addresses (RM0090 sec. 2.3), as the pins' const-generic port; the
-    /// registers behind them are the PAC's (`gpio`).
-    const GPIOA: u32 = 0x4002_0000;
-    const GPIOD: u32 = 0x4002_0C00;
-
-    /// The PAC's register blocks. SAFETY (all of them): fixed peripheral addresses of this part,
-    /// valid for the whole program; every access through them is a volatile register access.
-    #[inline(always)]
-    fn rcc() -> &'static pac::rcc::RegisterBlock {
-        unsafe { &*pac::RCC::ptr() }
-    }
-    #[inline(always)]
-    fn tim2() -> &'static pac::tim2::RegisterBlock {
-        unsafe { &*pac::TIM2::ptr() }
-    }
-    #[inline(always)]
-    fn iwdg() -> &'static pac::iwdg::RegisterBlock {
-        unsafe { &*pac::IWDG::ptr() }
-    }
-    #[inline(always)]
-    fn tim5() -> &'static pac::tim5::RegisterBlock {
-        unsafe { &*pac::TIM5::ptr() }
-    }
-    #[inline(always)]
-    fn exti() -> &'static pac::exti::RegisterBlock {
-        unsafe { &*pac::EXTI::ptr() }
-    }
-    #[inline(always)]
-    fn syscfg() -> &'static pac::syscfg::RegisterBlock {
-        unsafe { &*pac::SYSCFG::ptr() }
-    }
-    #[inline(always)]
-    fn flash() -> &'static pac::flash::RegisterBlock {
-        unsafe { &*pac::FLASH::ptr() }
-    }
-    #[inline(always)]
-    fn pwr() -> &'static pac::pwr::RegisterBlock {
-        unsafe { &*pac::PWR::ptr() }
-    }
-    /// A GPIO port's registers (GPIOA..GPIOI share one layout, RM0090 sec. 8.4; `PORT` is GPIOA or
-    /// GPIOD above). Only MODER/PUPDR (modify), IDR/ODR (read) and BSRR (write from 0) are used, so
-    /// GPIOA's reset values in the PAC's type never leak into another port.
-    #[inline(always)]
-    fn gpio(port: u32) -> &'static pac::gpioa::RegisterBlock {
-        unsafe { &*(port as *const pac::gpioa::RegisterBlock) }
-    }
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
     const EXTI4_IRQ: u16 = 10;
     /// The bookkeeping interrupt: UART5's line (RM0090 Table 61), pended by software only.
@@ -143,125 +134,18 @@ mod board {
     /// TIM5's line (RM0090 Table 61): its channel 4 captures the LSI (the clock check's reference).
     const TIM5_IRQ: u16 = 50;
     /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
-    const PRIO_EDGE: u8 = 0x00;
-    const PRIO_TICK: u8 = 0x80;
+    /// The edge at 0x10, not 0: the configurable faults (MemManage, BusFault, UsageFault) are at 0,
+    /// above every interrupt, so a stack overflow in any handler is taken, not escalated
+    /// (`support/board_faults.rs`).
+    pub(crate) const PRIO_EDGE: u8 = 0x10;
+    pub(crate) const PRIO_TICK: u8 = 0x80;
 
-    /// The core clock (SysTick) and TIM2's input clock: the 16 MHz HSI on the board. QEMU 7.2's
-    /// netduinoplus2 clocks the core at 168 MHz and its timers at 1 GHz whatever RCC says, so the
-    /// `qemu-io` build scales both to keep a 1 MHz `Clock` and a `TICK_US` tick there.
-    #[cfg(not(feature = "qemu-clock"))]
-    const CORE_HZ: u32 = 16_000_000;
-    #[cfg(not(feature = "qemu-clock"))]
-    const TIM2_HZ: u32 = 16_000_000;
-    #[cfg(feature = "qemu-clock")]
-    const CORE_HZ: u32 = 168_000_000;
-    #[cfg(feature = "qemu-clock")]
-    const TIM2_HZ: u32 = 1_000_000_000;
-    const TICK_US: u32 = 1_000;
-
-    // ---- The three pin accesses: GPIO in the production build, the QEMU bench's RAM with
-    // `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_bench.rs`) -------------------
-    /// A port's input register.
-    #[inline(always)]
-    fn idr(port: u32) -> u32 {
-        #[cfg(not(feature = "qemu-io"))]
-        return gpio(port).idr().read().bits();
-        #[cfg(feature = "qemu-io")]
-        return if port == GPIOA { super::bench::PINS.load(Relaxed) } else { gpio(port).idr().read().bits() };
-    }
-    /// A port's output register (the stop's read-back).
-    #[inline(always)]
-    fn odr(port: u32) -> u32 {
-        #[cfg(not(feature = "qemu-io"))]
-        return gpio(port).odr().read().bits();
-        #[cfg(feature = "qemu-io")]
-        return if port == GPIOD { super::bench::ODR_D.load(Relaxed) } else { gpio(port).odr().read().bits() };
-    }
-    /// A write to a port's bit set/reset register.
-    #[inline(always)]
-    fn bsrr(port: u32, v: u32) {
-        // SAFETY: BSRR takes any bit pattern (a set or reset request per pin).
-        gpio(port).bsrr().write(|w| unsafe { w.bits(v) });
-        #[cfg(feature = "qemu-io")]
-        if port == GPIOD {
-            super::bench::bsrr(v);
-        }
-    }
-
-    // ---- Pins: zero-sized, the port and pin are constants, so a write is a single `str` ------------
-    /// A push-pull output on `PORT`, pin `N`, written through BSRR (atomic, no read-modify-write).
-    pub struct Out<const PORT: u32, const N: u32>;
-    impl<const PORT: u32, const N: u32> ErrorType for Out<PORT, N> {
-        type Error = Infallible;
-    }
-    impl<const PORT: u32, const N: u32> OutputPin for Out<PORT, N> {
-        #[inline(always)]
-        fn set_low(&mut self) -> Result<(), Infallible> {
-            bsrr(PORT, 1 << (N + 16));
-            Ok(())
-        }
-        #[inline(always)]
-        fn set_high(&mut self) -> Result<(), Infallible> {
-            bsrr(PORT, 1 << N);
-            Ok(())
-        }
-    }
-    /// An input on `PORT`, pin `N`, read from IDR.
-    pub struct In<const PORT: u32, const N: u32>;
-    impl<const PORT: u32, const N: u32> ErrorType for In<PORT, N> {
-        type Error = Infallible;
-    }
-    impl<const PORT: u32, const N: u32> InputPin for In<PORT, N> {
-        #[inline(always)]
-        fn is_high(&mut self) -> Result<bool, Infallible> {
-            Ok(idr(PORT) & (1 << N) != 0)
-        }
-        #[inline(always)]
-        fn is_low(&mut self) -> Result<bool, Infallible> {
-            Ok(idr(PORT) & (1 << N) == 0)
-        }
-    }
-
-    /// TIM2 as a 1 MHz, 32-bit free-running counter.
-    pub struct Tim2;
-    impl Clock for Tim2 {
-        #[inline(always)]
-        fn now(&mut self) -> Micros {
-            Micros(tim2().cnt().read().bits())
-        }
-        /// LSI periods counted by TIM5's channel 4 (`lsi_capture`): the independent reference.
-        fn reference_ticks(&mut self) -> Option<u32> {
-            Some(LSI_PERIODS.load(Relaxed))
-        }
-    }
-
-    /// The clock check's reference: the LSI (the IWDG's own RC oscillator, independent of the HSI
-    /// behind TIM2 and SysTick). The F4 can only route it to TIM5's channel 4 capture input
-    /// (`TIM5_OR.TI4_RMP = 01`, RM0090 sec. 18.4.21), which timestamps edges and does not count
-    /// them; the counting adapter is the capture interrupt: every 8th LSI rising edge
-    /// (`IC4PSC = /8`) captures, and `lsi_capture` adds 8 (16 if the capture before was overwritten).
-    /// 4 kHz of a short interrupt at the tick's priority, below the edge.
-    static LSI_PERIODS: AtomicU32 = AtomicU32::new(0);
-    /// Nominal LSI, hertz; DS8626 specifies 17 to 47 kHz, hence the wide tolerance in `config`.
-    const LSI_HZ: u32 = 32_000;
-
-    fn lsi_capture() {
-        let t = tim5();
-        let _ = t.ccr4().read(); // reading CCR4 clears CC4IF
-        let sr = t.sr().read().bits();
-        let mut n = 8;
-        if sr & (1 << 12) != 0 {
-            // CC4OF: a capture was overwritten before this one was read: 8 more periods.
-            n += 8;
-            // SAFETY: rc_w0 flags: write 0 to CC4OF only, 1 elsewhere leaves the others.
-            t.sr().write(|w| unsafe { w.bits(!(1 << 12)) });
-        }
-        LSI_PERIODS.fetch_add(n, Relaxed);
-    }
-
-    type Switch = DualSwitch<In<GPIOA, 0>, In<GPIOA, 4>, Out<GPIOD, 14>>;
-    type Fw = Firmware<Tim2, Switch, Out<GPIOD, 12>, Out<GPIOD, 13>, In<GPIOA, 1>, 16, Edm<In<GPIOA, 2>, In<GPIOA, 3>>>;
-    static FW: IsrCell<Fw> = IsrCell::new();
+    pub(crate) type Switch = DualSwitch<In<PA, 0>, In<PA, 4>, Out<SUPPLY_PORT, SUPPLY_PIN>>;
+    type K1 = Out<K1_PORT, K1_PIN>;
+    type K2 = Out<K2_PORT, K2_PIN>;
+    type Esc = Out<ESC_PORT, ESC_PIN>;
+    pub(crate) type Fw = Firmware<Tim2, Switch, K1, K2, Esc, In<PA, 1>, 16, Edm<In<PA, 2>, In<PA, 3>>>;
+    pub(crate) static FW: IsrCell<Fw> = IsrCell::new();
 
     /// The installation's configuration. The numbers are those of the thesis's Ch. 3 set-up and
     /// must be replaced by the real cell's: V_c = 0.05 m/s and DT = 16 ms (Tables 5-7, Viper scan
@@ -297,253 +181,8 @@ mod board {
 
     defmt::timestamp!("{=u32:us}", tim2().cnt().read().bits());
 
-    /// Drop both outputs with raw register writes (usable from any context, even before init).
-    #[inline(always)]
-    fn emergency_stop() {
-        bsrr(GPIOD, (1 << (12 + 16)) | (1 << (13 + 16)));
-    }
 
-    // ---- Start-up integrity checks (`flinch_firmware::integrity`) ---------------------------------
-    /// The CRC-32 of the flash image with this word counted as zeros; written into the ELF after the
-    /// link by `cargo xtask` (`patch_flash_crc`). An image that was not patched (0) or was changed
-    /// after patching fails the check and never arms.
-    #[no_mangle]
-    #[used]
-    static FLINCH_FLASH_CRC: u32 = 0;
-    /// The production build checks its image with the production seed; every `qemu-clock` build
-    /// (the `qemu-io` bench and the serial test: their tick is scaled for QEMU), which must never run
-    /// the machine, is patched (xtask) and checked with its own, so its stored CRC fails the
-    /// production check (`integrity::Seed`; host test `a_bench_image_fails_the_production_check`).
-    #[cfg(not(feature = "qemu-clock"))]
-    const FLASH_SEED: integrity::Seed = integrity::Seed::Production;
-    #[cfg(feature = "qemu-clock")]
-    const FLASH_SEED: integrity::Seed = integrity::Seed::QemuBench;
 
-    extern "C" {
-        // cortex-m-rt's linker script (link.x): .data's run and load addresses, the end of .bss.
-        static mut __sdata: u32;
-        static mut __edata: u32;
-        static mut __ebss: u32;
-        static __sidata: u32;
-    }
-    const FLASH_START: u32 = 0x0800_0000;
-    const RAM_START: u32 = 0x2000_0000;
-    /// Stack kept out of the RAM test: main's and the test's own frames live there.
-    const STACK_KEEP: u32 = 1024;
-
-    /// The flash image: the vector table, .text and .rodata (contiguous from the start of flash, as
-    /// cortex-m-rt's link.x lays them out and xtask checks), then .data's load image.
-    fn flash_crc_ok() -> bool {
-        let end = core::ptr::addr_of!(__sidata) as u32 + (core::ptr::addr_of!(__edata) as u32 - core::ptr::addr_of!(__sdata) as u32);
-        let crc_at = core::ptr::addr_of!(FLINCH_FLASH_CRC) as u32;
-        // SAFETY: flash from its start to the end of .data's load image: mapped, read-only,
-        // never written while running.
-        let image = unsafe { core::slice::from_raw_parts(FLASH_START as *const u8, (end - FLASH_START) as usize) };
-        // SAFETY: a static in flash; volatile so that the compiler does not fold in the 0 it was
-        // linked with (xtask patched the ELF afterwards).
-        let stored = unsafe { read_volatile(core::ptr::addr_of!(FLINCH_FLASH_CRC)) };
-        integrity::image_crc_seeded(image, (crc_at - FLASH_START) as usize, FLASH_SEED) == stored
-    }
-
-    /// March C- with four data backgrounds over the RAM the firmware will use: .data and .bss, and
-    /// the stack region below the frames in use now (flip-link puts the stack at the bottom of RAM);
-    /// not the top `STACK_KEEP` bytes of the stack (the latch and the log are in backup SRAM, not RAM).
-    /// Restores .data from its load image afterwards (the test leaves zeros, which is .bss's value).
-    ///
-    /// # Safety
-    /// Only as the first thing in `main`: no reference to a static may be live.
-    unsafe fn ram_test() -> bool {
-        let sdata = core::ptr::addr_of_mut!(__sdata);
-        let data_words = (core::ptr::addr_of!(__edata) as usize - sdata as usize) / 4;
-        let ram_words = (core::ptr::addr_of!(__ebss) as usize - sdata as usize) / 4;
-        let sp = cortex_m::register::msp::read();
-        let stack_words = (sp.saturating_sub(STACK_KEEP).saturating_sub(RAM_START) / 4) as usize;
-        let statics_ok = integrity::march_c_minus(&mut integrity::RawRam::new(sdata, ram_words), &integrity::BACKGROUNDS).is_ok();
-        let stack_ok = integrity::march_c_minus(&mut integrity::RawRam::new(RAM_START as *mut u32, stack_words), &integrity::BACKGROUNDS).is_ok();
-        let sidata = core::ptr::addr_of!(__sidata);
-        for i in 0..data_words {
-            write_volatile(sdata.wrapping_add(i), read_volatile(sidata.wrapping_add(i)));
-        }
-        statics_ok && stack_ok
-    }
-
-    /// What failed at start-up: the [`Cause::SelfCheck`] event's flags.
-    const SELF_RAM: u8 = 1;
-    const SELF_FLASH: u8 = 2;
-    const SELF_BOR: u8 = 3;
-    /// A `qemu-clock` image (bench or serial test) found real GPIO (it runs on silicon, not in QEMU).
-    #[cfg(feature = "qemu-clock")]
-    const SELF_NOT_QEMU: u8 = 4;
-
-    /// The backup SRAM word the qemu-clock guard writes and reads back: past every record (the
-    /// latch, the log, the BOR-pending mark at word 96), inside the 1 KB QEMU maps.
-    #[cfg(feature = "qemu-clock")]
-    const NOT_QEMU_PROBE_AT: usize = BKPSRAM_WORDS - 1;
-    #[cfg(feature = "qemu-clock")]
-    const NOT_QEMU_PROBE: u32 = 0x5153_4D55; // "QEMU"
-
-    /// The qemu-clock guard: `None` only when two independent checks both say "QEMU". (1) GPIOD's
-    /// MODER, written by `early_outputs_low` after the clock enable and a DSB, reads back the
-    /// outputs on silicon and 0 in QEMU 7.2 (GPIO not modelled). (2) A test word written to the
-    /// backup SRAM (clocked and opened by `backup_on`, with DSBs) reads back on silicon and 0 in QEMU
-    /// (unimplemented device: writes ignored). Any non-zero read of either stops: on silicon a lost
-    /// write leaves the other check, and a backup SRAM whose write was lost reads its old (power-on:
-    /// arbitrary) content. The flags' detail: bit 0 = MODER, bit 1 = backup SRAM.
-    #[cfg(feature = "qemu-clock")]
-    fn not_qemu() -> Option<i32> {
-        let moder = gpio(GPIOD).moder().read().bits() & (0b11_11_11 << 24) != 0;
-        let mut b = Bkp;
-        b.write(NOT_QEMU_PROBE_AT, NOT_QEMU_PROBE);
-        cortex_m::asm::dsb();
-        let bkp = b.read(NOT_QEMU_PROBE_AT) != 0;
-        let which = i32::from(moder) | (i32::from(bkp) << 1);
-        if which != 0 {
-            Some(which)
-        } else {
-            None
-        }
-    }
-
-    /// The option bytes through the flash interface's registers (`flinch_firmware::option_bytes`:
-    /// BOR level 3 programmed once, error flags checked, verified at the next boot).
-    struct OptionRegs;
-    impl OptionBytes for OptionRegs {
-        fn bor_level(&mut self) -> u8 {
-            flash().optcr().read().bor_lev().bits()
-        }
-        fn status(&mut self) -> u32 {
-            flash().sr().read().bits()
-        }
-        fn clear_status(&mut self, flags: u32) {
-            // SAFETY: FLASH_SR's flags are write-1-to-clear; only error flags are passed.
-            flash().sr().write(|w| unsafe { w.bits(flags & option_bytes::SR_ERRORS) });
-        }
-        fn unlock(&mut self) {
-            // SAFETY (both): the option-byte unlock keys of RM0090 sec. 3.6.2.
-            flash().optkeyr().write(|w| unsafe { w.optkeyr().bits(0x0819_2A3B) });
-            flash().optkeyr().write(|w| unsafe { w.optkeyr().bits(0x4C5D_6E7F) });
-        }
-        fn program_bor(&mut self, level: u8) {
-            // SAFETY: a 2-bit BOR_LEV value; read-modify-write keeps RDP, WRP and the user bits.
-            flash().optcr().modify(|_, w| unsafe { w.bor_lev().bits(level) });
-            flash().optcr().modify(|_, w| w.optstrt().set_bit());
-        }
-        fn lock(&mut self) {
-            flash().optcr().modify(|_, w| w.optlock().set_bit());
-        }
-    }
-    /// The bound on the wait for FLASH_SR.BSY after OPTSTRT: status reads, about 10 cycles each at
-    /// 16 MHz, so about 10 s (an option-byte write takes milliseconds).
-    const BOR_BUSY_SPINS: u32 = 16_000_000;
-
-    // ---- Backup SRAM: the latch and the event log across resets (`flinch_firmware::backup`) -----
-    /// The backup SRAM (RM0090 sec. 2.3 and 5.1.2): 4 KB at 0x4002_4000 in the backup domain, which
-    /// no system reset clears (watchdog, software, pin, a brown-out with VDD back). Only its first
-    /// 1 KB is used (the records need 72 words): QEMU 7.2's netduinoplus2 maps 1 KB there, as an
-    /// unimplemented device (reads 0, writes ignored).
-    const BKPSRAM: u32 = 0x4002_4000;
-    const BKPSRAM_WORDS: usize = 256;
-
-    /// The backup SRAM as the library's `BackupRam`.
-    struct Bkp;
-    impl BackupRam for Bkp {
-        fn len(&self) -> usize {
-            BKPSRAM_WORDS
-        }
-        fn read(&mut self, i: usize) -> u32 {
-            if i >= BKPSRAM_WORDS {
-                return 0;
-            }
-            // SAFETY: a word in the backup SRAM's first KB, clocked by `backup_on`.
-            unsafe { read_volatile((BKPSRAM as *const u32).wrapping_add(i)) }
-        }
-        fn write(&mut self, i: usize, v: u32) {
-            if i < BKPSRAM_WORDS {
-                // SAFETY: as for `read`; DBP set by `backup_on`.
-                unsafe { write_volatile((BKPSRAM as *mut u32).wrapping_add(i), v) }
-            }
-        }
-    }
-
-    /// Clock the backup SRAM and open the backup domain to writes: PWREN, BKPSRAMEN, PWR_CR.DBP
-    /// (RM0090 sec. 5.1.2). Register writes only, no RAM: usable before the RAM test has passed and
-    /// from the fault handlers. The backup regulator (BRE) is left off: without a VBAT cell the
-    /// content does not survive a power cycle, and what a power-on leaves fails the records' CRCs,
-    /// i.e. reads as a clean power-on (`backup.rs`).
-    fn backup_on() {
-        rcc().apb1enr().modify(|_, w| w.pwren().set_bit());
-        rcc().ahb1enr().modify(|_, w| w.bkpsramen().set_bit());
-        // STM32F40x errata (ES0182, "Delay after an RCC peripheral clock enabling"): an access right
-        // after the enable can be lost; the DSB completes the enable first.
-        cortex_m::asm::dsb();
-        pwr().cr().modify(|_, w| w.dbp().set_bit());
-        cortex_m::asm::dsb();
-    }
-
-    /// The log's `next_seq` as `main` stored it (before any interrupt runs), for the drain.
-    static SAVED_SEQ: AtomicU32 = AtomicU32::new(u32::MAX);
-
-    /// The last latch written to the backup SRAM (cause, boot count): a store only when it changes,
-    /// so the tick writes 4 words of backup SRAM only on a change of the latch.
-    static STORED_CAUSE: AtomicU32 = AtomicU32::new(u32::MAX);
-    static STORED_BOOTS: AtomicU32 = AtomicU32::new(u32::MAX);
-
-    fn retained_store(r: Retained) {
-        // Called from SysTick and the bookkeeping, which share one priority (EXTI0 never calls it).
-        if STORED_CAUSE.load(Relaxed) == r.words[1] && STORED_BOOTS.load(Relaxed) == r.words[2] {
-            return;
-        }
-        backup::store_latch(&mut Bkp, r);
-        STORED_CAUSE.store(r.words[1], Relaxed);
-        STORED_BOOTS.store(r.words[2], Relaxed);
-    }
-
-    /// The boot count of the record in the backup SRAM (0 if there is none).
-    fn stored_boots() -> u32 {
-        backup::load_latch(&mut Bkp).decode().map_or(0, |(_, n)| n)
-    }
-
-    /// A fault handler ran: outputs low first, then latch `FaultHandler` for the next start.
-    #[inline(always)]
-    fn fault_handler_stop() {
-        emergency_stop();
-        backup_on();
-        backup::store_latch(&mut Bkp, Retained::new(Some(Cause::FaultHandler), stored_boots()));
-    }
-
-    /// A start-up integrity check failed: outputs low, the `SelfCheck` latch and an event (`what`,
-    /// `detail`) in the backup SRAM, then stopped for good. Nothing can re-arm: the IWDG is started
-    /// only after these checks (so no watchdog reset re-runs them), no interrupt is enabled, and no
-    /// `Firmware` exists; only a power cycle or the NRST pin starts the part again, and that start
-    /// is latched by the record until a reset press. Uses no static: after a failed RAM test
-    /// .data and .bss hold test patterns.
-    fn integrity_failed(what: u8, detail: i32) -> ! {
-        emergency_stop();
-        backup_on();
-        let mut b = Bkp;
-        backup::store_latch(&mut b, Retained::new(Some(Cause::SelfCheck), stored_boots()));
-        let mut log: EventLog<16> = backup::load_log(&mut b).unwrap_or_default();
-        log.push(Cause::SelfCheck, what, Micros(0), Micros(0), detail);
-        backup::store_log(&mut b, &log);
-        loop {
-            emergency_stop();
-            cortex_m::asm::wfi(); // no interrupt is enabled: sleeps for good
-        }
-    }
-
-    /// Before anything else, by register writes that need no RAM: GPIOD clocked, the stop,
-    /// escalation and sensor-supply pins written low (BSRR) and made outputs. A RAM test that fails
-    /// or hangs from here on leaves the outputs driven low, not floating.
-    #[inline(always)]
-    fn early_outputs_low() {
-        rcc().ahb1enr().modify(|_, w| w.gpioden().set_bit());
-        // The errata's delay after an RCC clock enable (see `backup_on`): without it the MODER write
-        // below can be lost on silicon, which would also blind the qemu-clock guard's MODER check.
-        cortex_m::asm::dsb();
-        // SAFETY: BSRR takes any pattern (reset PD12..14); MODER: two-bit fields, 0b01 = output.
-        gpio(GPIOD).bsrr().write(|w| unsafe { w.bits(0b111 << (12 + 16)) });
-        gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) });
-    }
 
     #[entry]
     fn main() -> ! {
@@ -576,17 +215,20 @@ mod board {
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| loop {
             emergency_stop();
         });
-        // Clocks for GPIOA, GPIOD, TIM2, SYSCFG.
-        rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioden().set_bit());
+        // The stack guard and the fault priorities, before any interrupt can run (the RAM test,
+        // which writes the guard region, is done).
+        stack_guard_on(&mut cp);
+        // Clocks for GPIOA (inputs), GPIOB, GPIOD, GPIOE (the three output ports), TIM2, TIM5, SYSCFG.
+        rcc().ahb1enr().modify(|_, w| w.gpioaen().set_bit().gpioben().set_bit().gpioden().set_bit().gpioeen().set_bit());
         rcc().apb1enr().modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
         rcc().apb2enr().modify(|_, w| w.syscfgen().set_bit());
         cortex_m::asm::dsb(); // the errata's delay after an RCC clock enable (see `backup_on`)
         // Outputs low before they become outputs, so they never glitch high.
         emergency_stop();
-        // SAFETY (the three): two-bit mode fields, 0b01 = output, 0b00 = input; pull 0b10 = down, 0b01 = up.
-        gpio(GPIOD).moder().modify(|r, w| unsafe { w.bits((r.bits() & !(0b11_11_11 << 24)) | (0b01_01_01 << 24)) }); // PD12..14 output
-        gpio(GPIOA).moder().modify(|r, w| unsafe { w.bits(r.bits() & !0x3FF) }); // PA0..PA4 input
-        gpio(GPIOA).pupdr().modify(|r, w| unsafe { w.bits((r.bits() & !0x3FF) | 0b01_10_10_10_10) }); // PA0..PA3 pull-down, PA4 pull-up
+        crate::startup::outputs_mode();
+        // SAFETY (both): two-bit fields, mode 0b00 = input; pull 0b10 = down, 0b01 = up.
+        gpio(PA).moder().modify(|r, w| unsafe { w.bits(r.bits() & !0x3FF) }); // PA0..PA4 input
+        gpio(PA).pupdr().modify(|r, w| unsafe { w.bits((r.bits() & !0x3FF) | 0b01_10_10_10_10) }); // PA0..PA3 pull-down, PA4 pull-up
         // TIM2: 16 MHz / 16 = 1 MHz, full 32-bit range.
         // SAFETY: PSC is 16 bits (15 here, 999 in the qemu-io build); ARR takes any 32-bit value.
         tim2().psc().write(|w| unsafe { w.psc().bits((TIM2_HZ / 1_000_000 - 1) as u16) });
@@ -615,12 +257,13 @@ mod board {
         rcc().csr().modify(|_, w| w.rmvf().set_bit());
         let boot = Boot { cause, retained: backup::load_latch(&mut Bkp) };
 
-        let sensor = DualSwitch::new(In::<GPIOA, 0>, SWITCH_KIND, In::<GPIOA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
-            .with_supply(Out::<GPIOD, 14>);
-        match Firmware::after_reset(config(), boot, Tim2, sensor, Out, Out, In) {
+        let sensor = DualSwitch::new(In::<PA, 0>, SWITCH_KIND, In::<PA, 4>, SWITCH_KIND_B, SWITCH_TRAVEL_UM, DISCREPANCY_US)
+            .with_supply(Out::<SUPPLY_PORT, SUPPLY_PIN>);
+        let outputs = Outputs { k1: K1 {}, k2: K2 {}, escalation: Esc {} };
+        match Firmware::after_reset(config(), boot, Tim2, sensor, outputs, In) {
             Ok(fw) => {
                 // The log saved before the reset first, then this start's reset-cause event.
-                let fw = fw.with_feedback(Edm::new(In::<GPIOA, 2>, In::<GPIOA, 3>)).with_saved_log(backup::load_log(&mut Bkp));
+                let fw = fw.with_feedback(Edm::new(In::<PA, 2>, In::<PA, 3>)).with_saved_log(backup::load_log(&mut Bkp));
                 retained_store(fw.retained());
                 backup::store_log(&mut Bkp, fw.log());
                 SAVED_SEQ.store(u32::from(fw.log().next_seq()), Relaxed);
@@ -668,84 +311,19 @@ mod board {
         cp.SYST.enable_counter();
         defmt::info!("flinch board up, tick {=u32} us", TICK_US);
         let mut drain = LogDrain { copy: EventLog::new(), state: None, saved_seq: u16::try_from(SAVED_SEQ.load(Relaxed)).ok() };
-        // The bench plays the world in thread mode and runs the drain on every pass.
+        // The periodic self-tests, one step a tick, after the drain (`support/board_diag.rs`).
+        let mut diag = crate::diag::Diag::new();
+        // The bench plays the world in thread mode and runs the drain and the self-tests on every pass.
         #[cfg(feature = "qemu-io")]
-        super::bench::run_scenario(|| tim2().cnt().read().bits(), || drain.run());
+        super::bench::run_scenario(|| tim2().cnt().read().bits(), || {
+            drain.run();
+            diag.run();
+        });
         #[cfg(not(feature = "qemu-io"))]
         loop {
             drain.run();
+            diag.run();
             cortex_m::asm::wfi();
-        }
-    }
-
-    /// Logging from thread mode only. The library's own messages are compiled out on the board
-    /// (`DEFMT_LOG` in firmware/.cargo/config.toml: `flinch_firmware=off`), because they would run in
-    /// the tick and the bookkeeping interrupts; instead the tick and the bookkeeping fill the
-    /// firmware's event log (a fixed 16-entry ring, `EventLog`) and this drain, in thread mode between
-    /// ticks, copies the new entries and the state out under a priority ceiling (BASEPRI = the tick's
-    /// priority: the tick and the bookkeeping cannot run meanwhile, the edge interrupt still can) and
-    /// logs them afterwards, with every interrupt enabled. defmt-rtt runs with `drop-on-contention`
-    /// (no critical section: logging never masks the edge) and starts non-blocking (a full buffer
-    /// truncates the message; only an attached probe-rs switches it to blocking).
-    struct LogDrain {
-        /// The drain's own copy of the firmware's log, brought up to date from a snapshot of the new
-        /// events only (`EventLog::snapshot`/`follow`; its cursor is `None` until the first one, so
-        /// the whole restored log is new then; sequence numbers compare wrap-safely and continue
-        /// across resets). The backup SRAM store is made from this copy, with interrupts enabled.
-        copy: EventLog<16>,
-        state: Option<flinch_firmware::State>,
-        /// The log's `next_seq` when it was last written to the backup SRAM.
-        saved_seq: Option<u16>,
-    }
-
-    impl LogDrain {
-        fn run(&mut self) {
-            // SAFETY: BASEPRI = PRIO_TICK masks SysTick and the bookkeeping, FW's only other users
-            // (the edge, at priority 0, never touches FW), so this is the one reference meanwhile.
-            // Masked: at most DRAIN_BATCH new events (usually none), two counters and the state; this
-            // section is measured as `drain_masked` (`src/bin/qemu.rs`, README). A burst of events is
-            // taken over a few runs (one per interrupt), so it reaches the backup SRAM a few ticks
-            // later (the latch is stored at once by the tick and the bookkeeping).
-            let (snap, state) = unsafe {
-                cortex_m::register::basepri::write(PRIO_TICK);
-                let fw = FW.get();
-                let snap = fw.log().snapshot(self.copy.cursor(), flinch_firmware::event_log::DRAIN_BATCH);
-                let state = fw.state();
-                cortex_m::register::basepri::write(0);
-                (snap, state)
-            };
-            self.copy.follow(&snap);
-            // The log into the backup SRAM, with every interrupt enabled (the latch is stored by the
-            // tick and the bookkeeping themselves, 4 words, at once). The drain runs after every
-            // interrupt (`wfi`), so an event reaches the backup SRAM within a few ticks; a reset in the
-            // middle of the store loses the log (its CRC), never the latch (`backup.rs`).
-            // Only a copy that has caught up is stored: a partial one (a burst taken one event a
-            // run) would replace a whole record with a prefix of it.
-            if snap.complete && self.saved_seq != Some(self.copy.next_seq()) {
-                backup::store_log(&mut Bkp, &self.copy);
-                self.saved_seq = Some(self.copy.next_seq());
-            }
-            let batch = &snap.new;
-            for e in batch {
-                defmt::warn!(
-                    "event {=u16}: {=str} flags {=u8:#x} at {=u32} us (first seen {=u32} us), travel {=i32} um",
-                    e.seq,
-                    e.cause.name(),
-                    e.flags,
-                    e.at.0,
-                    e.first_seen.0,
-                    e.travel_um
-                );
-            }
-            if self.state != Some(state) {
-                self.state = Some(state);
-                match state {
-                    flinch_firmware::State::SelfTest(_) => defmt::info!("state: self-test"),
-                    flinch_firmware::State::Armed => defmt::info!("state: armed"),
-                    flinch_firmware::State::Tripped => defmt::warn!("state: tripped (stopped)"),
-                    flinch_firmware::State::Fault(c) => defmt::warn!("state: fault {=str} (stopped)", c.name()),
-                }
-            }
         }
     }
 
@@ -785,30 +363,36 @@ mod board {
         }
     }
 
-    /// A switch edge (EXTI0: channel A, EXTI4: channel B; `line` is its EXTI_PR bit), highest
-    /// priority: the detect-to-stop path. Armed (the stop reads back energised), unfiltered and either
-    /// channel at its trip level (1oo2): the stop write first, then this line's pending bit, then the
-    /// hand-over. Everything else is the bookkeeping's, at the tick's priority.
+    /// A switch edge (EXTI0: channel A, EXTI4: channel B; `line` is its EXTI_PR bit), the highest
+    /// interrupt priority: the detect-to-stop path. Unfiltered and either channel at its trip level
+    /// (1oo2): both stop channels written low first (K1, then K2, each on its own port, whatever the
+    /// state: a stop write is harmless when stopped, and needs no read of the outputs, which a frozen
+    /// port would falsify), then this line's pending bit, then the hand-over. Everything else is the
+    /// bookkeeping's, at the tick's priority (`Firmware::edge_stopped` commits a trip only if armed).
     #[inline(always)]
     fn edge(line: u32) {
-        let idr = idr(GPIOA);
-        if EDGE_FAST.load(Relaxed)
-            && odr(GPIOD) & (1 << 12) != 0
-            && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B)
-        {
-            bsrr(GPIOD, 1 << (12 + 16)); // the stop
+        let idr = idr(PA);
+        if EDGE_FAST.load(Relaxed) && (idr & 1 == TRIP_A || idr & (1 << 4) == TRIP_B) {
+            bsrr(K1_PORT, 1 << (K1_PIN + 16)); // the stop, channel 1
+            bsrr(K2_PORT, 1 << (K2_PIN + 16)); // channel 2
+            #[cfg(feature = "qemu-io")]
+            crate::bench::edge_stop_written();
             // SAFETY (both PR writes): one pending bit, write 1 to clear.
-            exti().pr().write(|w| unsafe { w.bits(line) }); // right after the stop write: a new edge from here on pends again
+            exti().pr().write(|w| unsafe { w.bits(line) }); // right after the stop writes: a new edge from here on pends again
             EDGE_AT.store(tim2().cnt().read().bits(), Relaxed);
             EDGE_STOPPED.store(true, Relaxed);
         } else {
             exti().pr().write(|w| unsafe { w.bits(line) });
         }
         NVIC::pend(Book);
+        #[cfg(feature = "qemu-io")]
+        crate::bench::edge_end();
     }
 
     /// The bookkeeping of an edge, at SysTick's priority.
     fn book() {
+        #[cfg(feature = "qemu-io")]
+        let t0 = crate::bench::start();
         // SAFETY: same priority as SysTick (the only other user), initialised before unmasking.
         let fw = unsafe { FW.get() };
         if EDGE_STOPPED.swap(false, Relaxed) {
@@ -817,45 +401,60 @@ mod board {
             fw.on_edge();
         }
         retained_store(fw.retained());
+        publish_state(fw.state());
+        #[cfg(feature = "qemu-io")]
+        crate::bench::note(&crate::bench::W_BOOK, t0, true);
     }
+
+    /// The firmware's state for the rest of the board (the avoidance's velocity frames): 0 armed,
+    /// 1 self-test, 2 tripped (the collision latch), 3 a fault or the start latch after a reset.
+    /// Written by the tick and the bookkeeping, read anywhere.
+    static STATE: AtomicU8 = AtomicU8::new(3);
+
+    fn publish_state(s: State) {
+        let code = match s {
+            State::Armed => 0,
+            State::SelfTest(_) => 1,
+            State::Tripped => 2,
+            State::Fault(_) => 3,
+        };
+        STATE.store(code, Relaxed);
+    }
+
+    /// The stop is latched: tripped (the collision latch), a fault, or the start latch after a
+    /// reset; only a person's reset press ends it. For `board_avoid.rs` (the velocity frame's
+    /// "stopped: latched", issue 29): readable from any interrupt, lock-free.
+    #[allow(dead_code)] // read by the avoidance once its frame carries the status
+    pub(crate) fn stop_latched() -> bool {
+        STATE.load(Relaxed) >= 2
+    }
+
 
     #[exception]
     fn SysTick() {
+        #[cfg(feature = "qemu-io")]
+        let t0 = crate::bench::start();
         // SAFETY: same priority as the bookkeeping (the only other user), initialised before SysTick
         // was enabled.
         let fw = unsafe { FW.get() };
         fw.tick();
+        // A periodic self-test (thread mode, `board_diag.rs`) failed: latch it.
+        if let Some((check, detail)) = crate::diag::take_failure() {
+            fw.diagnostic_failed(check, detail);
+        }
+        crate::diag::TICKS.fetch_add(1, Relaxed);
         retained_store(fw.retained());
-        // The tick ran and the avoidance step kept its deadline: feed the watchdog (SAFETY: the reload key).
-        if super::board_avoid::on_tick() {
+        publish_state(fw.state());
+        // Every tick counts for the avoidance step's deadline (and pends the step).
+        let step_on_time = super::board_avoid::on_tick();
+        // Feed the watchdog only if the tick ran, the firmware is healthy and armed or healthy and
+        // stopped (every latched fault starves it: the reset releases the pins), no fault handler
+        // has run, and the avoidance step kept its deadline (SAFETY: the reload key).
+        if fw.feeds_watchdog() && step_on_time && !STARVE.load(Relaxed) {
             iwdg().kr().write(|w| unsafe { w.key().bits(0xAAAA) });
         }
-    }
-
-    #[exception]
-    unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
-        fault_handler_stop();
-        loop {
-            cortex_m::asm::nop(); // the IWDG resets the part
-        }
-    }
-
-    #[panic_handler]
-    fn panic(_info: &core::panic::PanicInfo) -> ! {
-        fault_handler_stop();
-        defmt::error!("panic: outputs de-energised");
-        loop {
-            cortex_m::asm::nop(); // the IWDG resets the part
-        }
-    }
-
-    /// NMI and every interrupt without a handler: de-energise and latch, then let the IWDG reset.
-    #[exception]
-    unsafe fn DefaultHandler(_irqn: i16) {
-        fault_handler_stop();
-        loop {
-            cortex_m::asm::nop();
-        }
+        #[cfg(feature = "qemu-io")]
+        crate::bench::note(&crate::bench::W_TICK, t0, true);
     }
 
     // ---- Vector table: the 82 STM32F407 interrupts, EXTI0 wired, the rest to DefaultHandler --------
@@ -886,7 +485,11 @@ mod board {
         edge(1 << 4)
     }
     unsafe extern "C" fn tim5_entry() {
-        lsi_capture()
+        #[cfg(feature = "qemu-io")]
+        let t0 = crate::bench::start();
+        lsi_capture();
+        #[cfg(feature = "qemu-io")]
+        crate::bench::note(&crate::bench::W_TIM5, t0, true);
     }
     unsafe extern "C" fn book_entry() {
         book()

@@ -3,12 +3,13 @@
 //! QEMU 7.2's `netduinoplus2` (STM32F405) does not model GPIO: every GPIO read returns 0, and its
 //! EXTI ignores writes to `EXTI_SWIER` (it keeps the value, raises nothing). So with the production
 //! build the board never arms in QEMU and its edge handler can never run. This feature changes exactly
-//! three things in `board.rs`, all in the pin accessors:
+//! two things in `board_hw.rs`, both in the pin accessors:
 //!
-//! * a GPIO input read (`IDR`) returns `PINS`, a RAM word this bench sets, instead of GPIOA's IDR;
-//! * the stop-energised read-back (`ODR`) returns `ODR_D`, a RAM image of GPIOD's output register;
-//! * every BSRR write still goes to GPIOD's real BSRR address (QEMU logs it with `-d unimp`: that log
-//!   is what `cargo xtask board-qemu` checks) and is also applied to `ODR_D`.
+//! * an input register read (`IDR`) returns `PINS`, a RAM word this bench sets, for GPIOA, and for
+//!   the output ports (B, D, E) the RAM image of their output register: the pins follow their
+//!   outputs, as healthy pins do (the output read-back, `flinch_firmware::output_monitor`);
+//! * every BSRR write still goes to the port's real BSRR address (QEMU logs it with `-d unimp`: that
+//!   log is what `cargo xtask board-qemu` checks) and is also applied to the port's RAM image.
 //!
 //! Everything else (main, the register set-up, NVIC priorities, the vector table, SysTick, TIM2 as the
 //! clock, the edge and bookkeeping handlers, the library, the retained latch) is the board binary's
@@ -26,40 +27,82 @@
 //! stops, obstacle gone, reset, re-arm, an edge on channel B (EXTI4) stops, end. The bench reports
 //! over semihosting and exits QEMU; xtask compares the trace with `firmware/qemu/board-edge.txt`.
 
+use crate::hw::{gpio, ESC_PIN, ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, PA, PB, PD, PE, PI, SUPPLY_PIN, SUPPLY_PORT};
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
 use cortex_m_semihosting::{debug, hprintln};
 
 /// GPIOA's input register as the bench drives it.
 pub static PINS: AtomicU32 = AtomicU32::new(0);
-/// GPIOD's output register as the BSRR writes leave it.
-pub static ODR_D: AtomicU32 = AtomicU32::new(0);
+/// The output registers of GPIOB, GPIOD and GPIOE as the BSRR writes leave them.
+static ODR_B: AtomicU32 = AtomicU32::new(0);
+static ODR_D: AtomicU32 = AtomicU32::new(0);
+static ODR_E: AtomicU32 = AtomicU32::new(0);
 
-/// Apply a BSRR write to the RAM image (set wins over reset, as on the part).
+/// The RAM image of an output port's register (`None` for a port without outputs).
+fn image(port: u8) -> Option<&'static AtomicU32> {
+    match port {
+        PB => Some(&ODR_B),
+        PD => Some(&ODR_D),
+        PE => Some(&ODR_E),
+        _ => None,
+    }
+}
+
+/// An input register as the board reads it: GPIOA's from the bench, an output port's from its
+/// image (the pins follow their outputs), 0 elsewhere (as QEMU reads every GPIO).
 #[inline(always)]
-pub fn bsrr(v: u32) {
-    ODR_D.fetch_and(!(v >> 16), Relaxed);
-    ODR_D.fetch_or(v & 0xFFFF, Relaxed);
+pub fn idr(port: u8) -> u32 {
+    if port == PA {
+        PINS.load(Relaxed)
+    } else {
+        image(port).map_or(0, |i| i.load(Relaxed))
+    }
+}
+
+/// Apply a BSRR write to the port's RAM image (set wins over reset, as on the part).
+#[inline(always)]
+pub fn bsrr(port: u8, v: u32) {
+    if let Some(i) = image(port) {
+        i.fetch_and(!(v >> 16), Relaxed);
+        i.fetch_or(v & 0xFFFF, Relaxed);
+    }
+}
+
+/// Stop channel K1's output is high.
+fn k1_high() -> bool {
+    idr(K1_PORT) & (1 << K1_PIN) != 0
+}
+/// Either stop channel's output is high (the stop circuit is closed only if both are).
+fn stop_energised() -> bool {
+    k1_high() && idr(K2_PORT) & (1 << K2_PIN) != 0
+}
+/// Both stop channels' outputs are low.
+fn both_stopped() -> bool {
+    idr(K1_PORT) & (1 << K1_PIN) == 0 && idr(K2_PORT) & (1 << K2_PIN) == 0
+}
+#[allow(dead_code)]
+fn escalation_high() -> bool {
+    idr(ESC_PORT) & (1 << ESC_PIN) != 0
 }
 
 const A: u32 = 1 << 0; // PA0: channel A, high at rest
 const RESET: u32 = 1 << 1; // PA1
-const EDM: u32 = (1 << 2) | (1 << 3); // PA2, PA3: high = released
+const EDM_K1: u32 = 1 << 2; // PA2: high = K1 released
+const EDM_K2: u32 = 1 << 3; // PA3: high = K2 released
 const B: u32 = 1 << 4; // PA4: channel B, high when tripped
-const STOP: u32 = 1 << 12;
-const SUPPLY: u32 = 1 << 14;
 
-/// GPIOI BSRR: the marker port.
-const MARK: u32 = 0x4002_2000 + 0x18;
-/// NVIC_ISPR0: set-pending for IRQs 0..31 (EXTI0 = 6, EXTI4 = 10).
-const NVIC_ISPR0: u32 = 0xE000_E200;
-
-fn write(addr: u32, v: u32) {
-    // SAFETY: GPIOI BSRR (unused by the board) and NVIC_ISPR0, valid aligned registers.
-    unsafe { core::ptr::write_volatile(addr as *mut u32, v) }
+/// A bench marker: a write to GPIOI's BSRR (GPIOI is unused on the board; QEMU logs the write).
+fn mark(v: u32) {
+    // SAFETY: BSRR takes any pattern; GPIOI's pins are not used.
+    gpio(PI).bsrr().write(|w| unsafe { w.bits(v) });
 }
 
-/// NVIC_ISPR1: set-pending for IRQs 32..63 (TIM5 = 50).
-const NVIC_ISPR1: u32 = 0xE000_E204;
+/// Pend interrupt `irq` (the GPIO edge detector's or the capture unit's request, which QEMU does
+/// not model) through the NVIC's set-pending register.
+fn pend(irq: u32) {
+    // SAFETY: one set-pending bit of a line the board owns; the NVIC's register block from cortex-m.
+    unsafe { (*cortex_m::peripheral::NVIC::PTR).ispr[(irq / 32) as usize].write(1 << (irq % 32)) };
+}
 /// One TIM5 capture per 8 LSI periods at a nominal 32 kHz: every 250 us.
 const LSI_CAPTURE_US: u32 = 250;
 
@@ -80,8 +123,7 @@ struct World<F: FnMut()> {
 impl<F: FnMut()> World<F> {
     /// The input register the MCU sees now.
     fn pins(&self) -> u32 {
-        let odr = ODR_D.load(Relaxed);
-        let powered = odr & SUPPLY != 0;
+        let powered = idr(SUPPLY_PORT) & (1 << SUPPLY_PIN) != 0;
         let mut p = 0;
         if powered && !self.a_tripped {
             p |= A;
@@ -92,8 +134,12 @@ impl<F: FnMut()> World<F> {
         if self.reset {
             p |= RESET;
         }
-        if odr & STOP == 0 {
-            p |= EDM;
+        // Each relay follows its own stop channel (released while its coil's pin is low).
+        if idr(K1_PORT) & (1 << K1_PIN) == 0 {
+            p |= EDM_K1;
+        }
+        if idr(K2_PORT) & (1 << K2_PIN) == 0 {
+            p |= EDM_K2;
         }
         p
     }
@@ -107,7 +153,7 @@ impl<F: FnMut()> World<F> {
         }
         let next = *self.lsi_next.get_or_insert(now);
         if now.wrapping_sub(next) < 0x8000_0000 {
-            write(NVIC_ISPR1, 1 << (50 - 32));
+            pend(50);
             self.lsi_next = Some(next.wrapping_add(LSI_CAPTURE_US));
         }
     }
@@ -127,7 +173,7 @@ fn until_stop<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, want: bool, 
     let start = now();
     while now().wrapping_sub(start) < us {
         w.step(now());
-        if (ODR_D.load(Relaxed) & STOP != 0) == want {
+        if stop_energised() == want && (want || both_stopped()) {
             return true;
         }
     }
@@ -144,10 +190,10 @@ fn fail(what: &str) -> ! {
 
 /// Press and release the reset input for `press_us`.
 fn reset_press<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, press_us: u32) {
-    write(MARK, 1); // marker 1: reset pressed
+    mark(1); // marker 1: reset pressed
     w.reset = true;
     run(w, now, press_us);
-    write(MARK, 2); // marker 2: reset released
+    mark(2); // marker 2: reset released
     w.reset = false;
     run(w, now, 1_000);
 }
@@ -178,11 +224,11 @@ impl Channel {
         }
     }
 
-    /// Its EXTI line's bit in NVIC_ISPR0.
-    fn pend_bit(self) -> u32 {
+    /// Its EXTI line's interrupt (EXTI0 = 6, EXTI4 = 10).
+    fn irq(self) -> u32 {
         match self {
-            Channel::A => 1 << 6,
-            Channel::B => 1 << 10,
+            Channel::A => 6,
+            Channel::B => 10,
         }
     }
 }
@@ -190,13 +236,14 @@ impl Channel {
 /// The obstacle moves channel `ch`'s contact: marker `mark`, the channel reads "tripped" and its
 /// edge is pended.
 fn trip<F: FnMut()>(w: &mut World<F>, ch: Channel, mark: u32) {
-    write(MARK, mark);
+    self::mark(mark);
     match ch {
         Channel::A => w.a_tripped = true,
         Channel::B => w.b_tripped = true,
     }
     PINS.store(w.pins(), Relaxed);
-    write(NVIC_ISPR0, ch.pend_bit());
+    PEND_AT.store(cvr(), Relaxed);
+    pend(ch.irq());
 }
 
 /// The obstacle: channel `first`'s contact, then the other's 1 ms later, as a real actuator moves
@@ -205,7 +252,7 @@ fn trip<F: FnMut()>(w: &mut World<F>, ch: Channel, mark: u32) {
 fn obstacle<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, first: Channel, marks: [u32; 2]) {
     trip(w, first, marks[0]);
     // The edge has priority 0 and thread mode none: it ran before this line.
-    let stopped = ODR_D.load(Relaxed) & STOP == 0;
+    let stopped = both_stopped();
     run(w, now, 1_000);
     trip(w, first.other(), marks[1]);
     run(w, now, 100_000);
@@ -219,17 +266,103 @@ fn obstacle<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, first: Channel
 
 /// The obstacle goes: both channels back at rest (marker 5), 100 ms.
 fn obstacle_gone<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32) {
-    write(MARK, 5); // marker 5: obstacle gone
+    mark(5); // marker 5: obstacle gone
     w.a_tripped = false;
     w.b_tripped = false;
     run(w, now, 100_000);
 }
 
+/// What this run does, from the semihosting command line (`-semihosting-config arg=...`): the edge
+/// scenario, or one of the faults that end the run (a panic in thread mode, a stack overflow).
+#[derive(Copy, Clone, PartialEq, Eq)]
+enum Mode {
+    Edges,
+    Panic,
+    Overflow,
+    Config,
+}
+
+fn mode() -> Mode {
+    let mut buf = [0u8; 64];
+    let mut block = [buf.as_mut_ptr() as usize, buf.len()];
+    // SAFETY: SYS_GET_CMDLINE writes at most `buf.len()` bytes into `buf` and the length into
+    // `block[1]`; both outlive the call.
+    let failed = unsafe { cortex_m_semihosting::syscall(cortex_m_semihosting::nr::GET_CMDLINE, &mut block) } != 0;
+    let line = buf.get(..block[1].min(buf.len())).unwrap_or(&[]);
+    let has = |w: &[u8]| !failed && line.windows(w.len()).any(|x| x == w);
+    if has(b"panic") {
+        Mode::Panic
+    } else if has(b"overflow") {
+        Mode::Overflow
+    } else if has(b"config") {
+        Mode::Config
+    } else {
+        Mode::Edges
+    }
+}
+
+/// Recurse with a 256-byte frame that the compiler cannot drop, until the stack runs into the MPU
+/// guard (the fault handler never returns here).
+#[inline(never)]
+fn overflow(depth: u32) -> u32 {
+    let mut frame = [0u32; 64];
+    // SAFETY: a volatile write into this frame's own array, so the frame is really used.
+    unsafe { core::ptr::write_volatile(frame.as_mut_ptr().wrapping_add((depth % 64) as usize), depth) };
+    let below = if depth < u32::MAX { overflow(depth.wrapping_add(1)) } else { 0 };
+    // SAFETY: as above (a read after the call keeps the frame alive across it).
+    below.wrapping_add(unsafe { core::ptr::read_volatile(frame.as_ptr()) })
+}
+
+/// From the fault paths (`board_faults.rs`, qemu-io only): the outputs are low and the latch
+/// written; hold 20 ms of TIM2 time with every interrupt masked (no tick, so no feed: xtask checks
+/// the trace), then report and end the run.
+pub fn fault_report(what: &str) -> ! {
+    let t = || crate::hw::tim2().cnt().read().bits();
+    let t0 = t();
+    while t().wrapping_sub(t0) < 20_000 {}
+    mark(12); // marker 12: the fault handler held 20 ms
+    // SAFETY: a read of the SCB's configurable fault status register (cortex-m's register block).
+    let cfsr = unsafe { (*cortex_m::peripheral::SCB::PTR).cfsr.read() };
+    hprintln!("bench: {} ran: outputs low, FaultHandler latched, 20 ms held with no tick; CFSR {:#010x}", what, cfsr);
+    hprintln!("bench: PASS");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
 /// The scenario; `now` reads TIM2 (microseconds of firmware time).
 pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     let mut w = World { idle, a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
+    let mode = mode();
     run(&mut w, &now, 200_000); // latched after the reset: nothing happens untouched
-    if ODR_D.load(Relaxed) & STOP != 0 {
+    if mode != Mode::Edges {
+        arm(&mut w, &now, "not armed within 2 s of the reset press");
+        run(&mut w, &now, 50_000); // armed, the tick feeding the watchdog
+        if mode == Mode::Panic {
+            mark(10); // marker 10: a panic in thread mode
+            panic!("bench: a panic in thread mode");
+        }
+        if mode == Mode::Config {
+            // A configuration bit flips while armed (a stray write, an upset): EXTI0's NVIC priority
+            // from 0x10 to 0x90, below the tick. The periodic read-back must latch and stop.
+            mark(13); // marker 13: a configuration bit flipped
+            // SAFETY: one priority byte of the NVIC (cortex-m's register block).
+            unsafe { (*cortex_m::peripheral::NVIC::PTR).ipr[6].write(0x90) };
+            let t0 = now();
+            if !until_stop(&mut w, &now, false, 100_000) {
+                fail("still 'go' 100 ms after a configuration bit flipped");
+            }
+            hprintln!("bench: a flipped configuration bit: stopped after {} us (read-back every 16 ticks)", now().wrapping_sub(t0));
+            run(&mut w, &now, 10_000);
+            hprintln!("bench: PASS");
+            debug::exit(debug::EXIT_SUCCESS);
+        }
+        mark(11); // marker 11: a stack overflow in thread mode
+        let n = overflow(0);
+        fail(if n == 0 { "the stack overflow returned" } else { "the stack overflow returned a value" });
+    }
+    if k1_high() {
         fail("'go' before any reset press");
     }
     arm(&mut w, &now, "not armed within 2 s of the reset press");
@@ -240,7 +373,7 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
 
     // Obstacle gone, then a reset: re-arm. This time channel B moves first (markers 6 and 7).
     obstacle_gone(&mut w, &now);
-    if ODR_D.load(Relaxed) & STOP != 0 {
+    if k1_high() {
         fail("re-armed without a reset press");
     }
     arm(&mut w, &now, "not re-armed within 2 s of the second reset press");
@@ -248,12 +381,26 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     run(&mut w, &now, 50_000);
     obstacle(&mut w, &now, Channel::B, [6, 7]);
 
-    // The clock check: obstacle gone, reset, re-arm; then the LSI stops (the reference dies) while
-    // armed. The firmware must drop both outputs (ClockDrift) within a window (100 ms) and a tick.
+    // A trip that the edge interrupt misses (both channels move, no EXTI pend): the tick polls it
+    // and runs the trip itself (budget, latch, log): the longest tick, for the worst case.
     obstacle_gone(&mut w, &now);
     arm(&mut w, &now, "not re-armed within 2 s of the third reset press");
     run(&mut w, &now, 50_000);
-    write(MARK, 9); // marker 9: the LSI stops
+    mark(14); // marker 14: both channels trip, no edge interrupt
+    w.a_tripped = true;
+    w.b_tripped = true;
+    PINS.store(w.pins(), Relaxed);
+    if !until_stop(&mut w, &now, false, 5_000) {
+        fail("a trip without an edge interrupt was not stopped by the tick within 5 ms");
+    }
+    hprintln!("bench: a trip without an edge interrupt: stopped by the tick");
+
+    // The clock check: obstacle gone, reset, re-arm; then the LSI stops (the reference dies) while
+    // armed. The firmware must drop both outputs (ClockDrift) within a window (100 ms) and a tick.
+    obstacle_gone(&mut w, &now);
+    arm(&mut w, &now, "not re-armed within 2 s of the fourth reset press");
+    run(&mut w, &now, 50_000);
+    mark(9); // marker 9: the LSI stops
     w.lsi_on = false;
     let t0 = now();
     if !until_stop(&mut w, &now, false, 250_000) {
@@ -262,7 +409,8 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     let took_ms = now().wrapping_sub(t0) / 1_000;
     hprintln!("bench: LSI stopped while armed: stopped (clock check) after {} ms", took_ms);
     run(&mut w, &now, 10_000);
-    write(MARK, 8); // marker 8: end
+    mark(8); // marker 8: end
+    report_worst();
     let (used, painted) = stack_used();
     hprintln!("bench: stack used={} B of the board ELF (painted {} B; main, the drain, the bench and every interrupt)", used, painted);
     hprintln!("bench: PASS");
@@ -297,14 +445,137 @@ pub fn paint_stack() {
     }
 }
 
-/// (bytes used below the stack's top, bytes painted).
+/// (bytes used below the stack's top, bytes painted). The MPU guard at the bottom is not read (no
+/// access there).
 fn stack_used() -> (u32, u32) {
     // The linker's symbol; only its address is used.
     let top = core::ptr::addr_of!(_stack_start) as u32;
-    let mut a = RAM_START;
+    let mut a = RAM_START + crate::faults::GUARD_BYTES;
     // SAFETY: reads of the stack region, word-aligned.
     while a < top && unsafe { core::ptr::read_volatile(a as *const u32) } == PAINT {
         a += 4;
     }
     (top - a, top - RAM_START)
+}
+
+// ---- The board's own worst case (xtask stage "board worst case"): the longest run of every piece
+// of work that can delay a stop write, measured on this ELF in this run -------------------------------
+/// SysTick's current value (modelled by QEMU: it counts the 168 MHz core clock, so under
+/// `-icount shift=3`, 8 ns an instruction, 1.344 counts an instruction).
+#[inline(always)]
+pub fn cvr() -> u32 {
+    // SAFETY: a read of SysTick's current-value register (cortex-m's register block).
+    unsafe { (*cortex_m::peripheral::SYST::PTR).cvr.read() }
+}
+/// SysTick's period in counts (the qemu-clock build's 1 ms reload + 1).
+const SYST_PERIOD: u32 = crate::hw::CORE_HZ / 1_000_000 * crate::hw::TICK_US;
+
+fn elapsed(t0: u32, t1: u32) -> u32 {
+    // SysTick counts down and reloads every period.
+    if t0 >= t1 {
+        t0 - t1
+    } else {
+        t0 + SYST_PERIOD - t1
+    }
+}
+
+/// The longest of each, SysTick counts. Each includes whatever preempted it (an over-estimate).
+pub static W_TICK: AtomicU32 = AtomicU32::new(0);
+pub static W_BOOK: AtomicU32 = AtomicU32::new(0);
+pub static W_TIM5: AtomicU32 = AtomicU32::new(0);
+pub static W_USART: AtomicU32 = AtomicU32::new(0);
+/// The longest USART entry that took one byte (the part's case at 115,200 baud: a byte every 87 us;
+/// QEMU hands the next byte over at once, so its entries often take many).
+pub static W_USART_1: AtomicU32 = AtomicU32::new(0);
+pub static W_EDGE_END: AtomicU32 = AtomicU32::new(0);
+pub static W_EDGE_STOP: AtomicU32 = AtomicU32::new(0);
+pub static W_MASK_STEP: AtomicU32 = AtomicU32::new(0);
+pub static W_MASK_DRAIN: AtomicU32 = AtomicU32::new(0);
+pub static W_MASK_DIAG: AtomicU32 = AtomicU32::new(0);
+/// USART1 interrupts taken (the traffic xtask sends during the run).
+pub static N_USART: AtomicU32 = AtomicU32::new(0);
+/// SysTick when the bench pended an edge (`u32::MAX`: none pending).
+static PEND_AT: AtomicU32 = AtomicU32::new(u32::MAX);
+
+/// Counts spent in measured handlers, net of what preempted them: a section subtracts what was added
+/// while it ran, so each figure is its own work, not the interrupts that came in between (those are
+/// added separately in the worst case).
+static STOLEN: AtomicU32 = AtomicU32::new(0);
+
+/// SysTick and the preemption total read together: re-read if a handler came in between (its time
+/// would count in one and not the other).
+#[inline(always)]
+fn snap() -> (u32, u32) {
+    let mut s = STOLEN.load(Relaxed);
+    let mut c = cvr();
+    for _ in 0..4 {
+        let again = STOLEN.load(Relaxed);
+        if again == s {
+            break;
+        }
+        s = again;
+        c = cvr();
+    }
+    (c, s)
+}
+
+/// The start of a measured section: SysTick now and the preemption total.
+#[inline(always)]
+pub fn start() -> (u32, u32) {
+    snap()
+}
+
+/// Record a section begun at `t0` (`start`) that ends now, net of the handlers that preempted it;
+/// `handler`: it is an interrupt handler, whose net time then counts as preemption for whatever it
+/// interrupted.
+#[inline(always)]
+pub fn note(w: &AtomicU32, t0: (u32, u32), handler: bool) {
+    let t1 = snap();
+    let net = elapsed(t0.0, t1.0).saturating_sub(t1.1.wrapping_sub(t0.1));
+    w.fetch_max(net, Relaxed);
+    if handler {
+        STOLEN.fetch_add(net, Relaxed);
+    }
+}
+
+/// From the edge handler, right after its second stop write: pend to stop, if the bench pended it
+/// (nothing can preempt the edge but a fault). Includes the qemu-io build's RAM image update of the
+/// K1 write (an atomic read-modify-write the production build does not have).
+#[inline(always)]
+pub fn edge_stop_written() {
+    let p = PEND_AT.load(Relaxed);
+    if p != u32::MAX {
+        W_EDGE_STOP.fetch_max(elapsed(p, cvr()), Relaxed);
+    }
+}
+
+/// From the edge handler's end: pend to end, if the bench pended it; the edge's time counts as
+/// preemption for whatever it interrupted.
+#[inline(always)]
+pub fn edge_end() {
+    let p = PEND_AT.swap(u32::MAX, Relaxed);
+    if p != u32::MAX {
+        let (c, _) = snap();
+        let d = elapsed(p, c);
+        W_EDGE_END.fetch_max(d, Relaxed);
+        STOLEN.fetch_add(d, Relaxed);
+    }
+}
+
+fn report_worst() {
+    let l = |w: &AtomicU32| w.load(Relaxed);
+    hprintln!(
+        "bench: worst counts tick={} book={} tim5={} usart={} usart_1={} edge_end={} edge_stop={} mask_step={} mask_drain={} mask_diag={} usart_irqs={} (SysTick counts of the 168 MHz core clock under -icount shift=3: 1.344 counts an instruction)",
+        l(&W_TICK),
+        l(&W_BOOK),
+        l(&W_TIM5),
+        l(&W_USART),
+        l(&W_USART_1),
+        l(&W_EDGE_END),
+        l(&W_EDGE_STOP),
+        l(&W_MASK_STEP),
+        l(&W_MASK_DRAIN),
+        l(&W_MASK_DIAG),
+        l(&N_USART)
+    );
 }
