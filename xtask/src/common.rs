@@ -90,6 +90,12 @@ pub struct Timed<T> {
     last: Instant,
 }
 
+impl<T> Default for Timed<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl<T> Timed<T> {
     pub fn new() -> Self {
         let now = Instant::now();
