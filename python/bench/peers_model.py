@@ -106,6 +106,22 @@ def events(y, p):
     return y[2] - p[SURF], p[BACK] - s, (p[C1] - s) - p[THR], s - p[C1], p[KFE] * (s - p[C1]) + p[CFE] * (y[3] - y[1])
 
 
+@njit(cache=True, inline="always")
+def event(y, p, i):
+    """Event function i of `events`, without building the tuple (a tuple indexed at run time is
+    slow in numba)."""
+    s = y[2] - y[0]
+    if i == 0:
+        return y[2] - p[SURF]
+    if i == 1:
+        return p[BACK] - s
+    if i == 2:
+        return (p[C1] - s) - p[THR]
+    if i == 3:
+        return s - p[C1]
+    return p[KFE] * (s - p[C1]) + p[CFE] * (y[3] - y[1])
+
+
 @njit(cache=True)
 def next_breakpoint(t, p, t_end):
     """The next instant after t where x_c'' jumps: end of the acceleration, start and end of braking."""
@@ -129,16 +145,23 @@ def hermite(t0, y0, f0, t1, y1, f1, t, out):
         out[i] = h00 * y0[i] + h * h10 * f0[i] + h01 * y1[i] + h * h11 * f1[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def force_pair(y, p):
     fd, fc = forces(y[2] - y[0], y[3] - y[1], y[2], y[3], p)
     return fc, abs(fd)
 
 
+@njit(cache=True, inline="always")
+def force_of(y, p, which):
+    """The contact force (which = 0) or the robot force's magnitude (1)."""
+    fd, fc = forces(y[2] - y[0], y[3] - y[1], y[2], y[3], p)
+    return fc if which == 0 else abs(fd)
+
+
 @njit(cache=True)
 def force_at(t0, y0, f0, t1, y1, f1, t, p, which, yi):
     hermite(t0, y0, f0, t1, y1, f1, t, yi)
-    return force_pair(yi, p)[which]
+    return force_of(yi, p, which)
 
 
 @njit(cache=True)
@@ -187,7 +210,7 @@ def locate(t0, y0, f0, t1, y1, f1, p, which, up, yi):
             break
         m = 0.5 * (a + b)
         hermite(t0, y0, f0, t1, y1, f1, t0 + m * (t1 - t0), yi)
-        g = events(yi, p)[which]
+        g = event(yi, p, which)
         if (g > 0.0) == up:
             b = m
         else:
@@ -217,7 +240,7 @@ def react(which, t, y, p, flags, res):
     elif which == 3:
         flags[3] = 1 - flags[3]
         if flags[3] == 1:
-            flags[4] = 1 if events(y, p)[4] > 0.0 else 0
+            flags[4] = 1 if event(y, p, 4) > 0.0 else 0
     elif which == 4:
         flags[4] = 1 - flags[4]
     else:
@@ -232,12 +255,12 @@ def react(which, t, y, p, flags, res):
 
 
 @njit(cache=True)
-def crossing_of(g0, g1, flags, i):
-    """Event i armed and crossed to its new side between g0 and g1."""
+def crossing_of(y0, y1, p, flags, i):
+    """Event i armed and crossed to its new side between the states y0 and y1."""
     if (i == 2 and flags[2] == 1) or (i == 4 and flags[3] == 0):
         return False
     up = is_up(flags, i)
-    return ((g0[i] > 0.0) != up) and ((g1[i] > 0.0) == up)
+    return ((event(y0, p, i) > 0.0) != up) and ((event(y1, p, i) > 0.0) == up)
 
 
 @njit(cache=True)
@@ -253,10 +276,13 @@ def note_peaks(t0, y0, f0, t1, y1, f1, p, res, yi):
     so far; there successive parabolic interpolation refines it."""
     h = t1 - t0
     hermite(t0, y0, f0, t1, y1, f1, t0 + 0.5 * h, yi)
+    a0, a1 = force_pair(y0, p)
+    b0, b1 = force_pair(y1, p)
+    m0, m1 = force_pair(yi, p)
     for which in range(2):
-        a = force_pair(y0, p)[which]
-        b = force_pair(y1, p)[which]
-        m = force_pair(yi, p)[which]
+        a = a0 if which == 0 else a1
+        b = b0 if which == 0 else b1
+        m = m0 if which == 0 else m1
         peak = res[R_PEAK_C + which]
         top = max(a, m, b)
         if top > peak:
@@ -296,11 +322,9 @@ def rk4_step(t, y, k1, h, p, out, w):
 def earliest(t0, y0, f0, t1, y1, f1, p, flags, yi):
     """The earliest armed event crossing in [t0, t1] located on the Hermite interpolant:
     (event, theta), or (-1, 1.0)."""
-    g0 = events(y0, p)
-    g1 = events(y1, p)
     first, best = -1, 2.0
     for i in range(NE):
-        if crossing_of(g0, g1, flags, i):
+        if crossing_of(y0, y1, p, flags, i):
             up = is_up(flags, i)
             th = locate(t0, y0, f0, t1, y1, f1, p, i, up, yi)
             if th < best:
@@ -399,7 +423,7 @@ def stream_push(t, y, p, res, st_t, st_y, st_v, n, fs, yi):
                 if t1 <= t0:
                     continue
                 hermite(t0, st_y[j], fs[j], t1, st_y[j + 1], fs[j + 1], 0.5 * (t0 + t1), yi)
-                m = force_pair(yi, p)[which]
+                m = force_of(yi, p, which)
                 v = refine(t0, st_y[j], fs[j], t1, st_y[j + 1], fs[j + 1], p, which, st_v[j, which], m, st_v[j + 1, which], yi)
                 if v > res[R_PEAK_C + which]:
                     res[R_PEAK_C + which] = v
@@ -458,11 +482,9 @@ def run_lsoda(funcptr, p0, y0, rtol, atol, dt_out, chunk, t_end):
         for k in range(n):
             ya = usol[k]
             yb = usol[k + 1]
-            g0 = events(ya, p)
-            g1 = events(yb, p)
             found = False
             for i in range(NE):
-                if crossing_of(g0, g1, flags, i):
+                if crossing_of(ya, yb, p, flags, i):
                     found = True
             if not found:
                 n_st = stream_push(grid[k + 1], yb, p, res, st_t, st_y, st_v, n_st, fs, yi)
@@ -475,7 +497,7 @@ def run_lsoda(funcptr, p0, y0, rtol, atol, dt_out, chunk, t_end):
             # bracket is below 1e-10 s (Flinch locates to 1e-12 s on its own interpolant).
             up = is_up(flags, ev)
             ta, tb_ = grid[k], grid[k + 1]
-            ga, gb = g0[ev], events(yb, p)[ev]
+            ga, gb = event(ya, p, ev), event(yb, p, ev)
             yn[:] = yb
             te = ta + th * (tb_ - ta)
             side = 0
@@ -484,7 +506,7 @@ def run_lsoda(funcptr, p0, y0, rtol, atol, dt_out, chunk, t_end):
                     res[R_EVALS] = -1.0
                     return res
                 calls += 1
-                ge = events(ye, p)[ev]
+                ge = event(ye, p, ev)
                 if (ge > 0.0) == up:
                     tb_, gb = te, ge
                     yn[:] = ye
