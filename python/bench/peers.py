@@ -136,6 +136,7 @@ def main():
     ap.add_argument("--lsoda-chunk", type=float, default=0.01, help="s integrated per LSODA call")
     ap.add_argument("--lsoda-dt-out", default="1e-4,5e-4", help="s between LSODA outputs (each is a configuration)")
     ap.add_argument("--json", type=Path, help="also write every figure here")
+    ap.add_argument("--parts", action="store_true", help="only time the parts of the RK4 peer (bare loop, + events, + peaks) and exit")
     a = ap.parse_args()
     tols = [float(x) for x in a.tolerances.split(",")]
     if not Path(a.flinch).is_file():
@@ -143,6 +144,13 @@ def main():
     p, y0, t_end = ref.load(a.scene, a.duration)
     print(f"# {a.scene.name}, {t_end} s simulated; {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start")
 
+    if a.parts:
+        for peaks, evs in ((False, False), (False, True), (True, False), (True, True)):
+            n = m.run_rk4_parts(p, y0, 6e-5, t_end, peaks, evs)
+            t = statistics.median(time_peer(lambda: m.run_rk4_parts(p, y0, 6e-5, t_end, peaks, evs), a.runs) for _ in range(a.repeats))
+            print(f"RK4 h = 6e-5 s, events {'on' if evs else 'off'}, peaks {'on' if peaks else 'off'}: {t * 1e3:.3f} ms a run, {t / n * 1e9:.1f} ns an RHS evaluation ({int(n)})")
+        print(f"load average {os.getloadavg()[0]:.2f}")
+        return
     t0 = time.perf_counter()
     r = ref.reference(p, y0, t_end)
     print(f"reference (SciPy DOP853, rtol 1e-12, every kink located, {r['steps']} steps, {time.perf_counter() - t0:.1f} s): "

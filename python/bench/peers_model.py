@@ -548,3 +548,31 @@ def run_lsoda_bare(funcptr, p0, y0, rtol, atol, t_end):
     grid = np.array([0.0, t_end])
     lsoda(funcptr, y0, grid, p, rtol, atol, 1000000)
     return p[COUNT]
+
+
+@njit(cache=True)
+def run_rk4_parts(p0, y0, h, t_end, peaks, evs):
+    """RK4 at h without breakpoints and reactions, with the peak search and the event check each
+    switched on or off: what each part of `run_rk4` costs (`peers.py --parts`). Returns the RHS
+    evaluations."""
+    p = p0.copy()
+    res = np.zeros(NR)
+    flags = initial_flags(y0, p)
+    buf = np.empty((5, 4))
+    y, f, y1, f1, yi = buf[0], buf[1], buf[2], buf[3], buf[4]
+    w = np.empty((3, 4))
+    t = 0.0
+    y[:] = y0
+    rhs(t, y, f, p)
+    while t < t_end:
+        t1 = t + h
+        rk4_step(t, y, f, h, p, y1, w)
+        rhs(t1, y1, f1, p)
+        if evs:
+            earliest(t, y, f, t1, y1, f1, p, flags, yi)
+        if peaks:
+            note_peaks(t, y, f, t1, y1, f1, p, res, yi)
+        t = t1
+        y[:] = y1
+        f[:] = f1
+    return p[COUNT]
