@@ -35,7 +35,7 @@ R_PEAK_C, R_PEAK_R, R_T_CONTACT, R_T_DETECT, R_CONTACTS, R_EVALS, R_STEPS = rang
 NR = 7
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def commanded(t, p):
     """x_c, x_c', x_c'' at t: the trapezoid, braking from T_BRAKE (MotionLaw::at)."""
     tb = p[T_BRAKE]
@@ -49,7 +49,7 @@ def commanded(t, p):
     return 0.5 * p[V] * p[T1] + p[V] * (tt - p[T1]), p[V], 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def forces(s, sd, xt, vt, p):
     """(F_dec, F_c), N."""
     L = math.sqrt(p[H] * p[H] + s * s)
@@ -68,7 +68,7 @@ def forces(s, sd, xt, vt, p):
     return f, fc
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def rhs(t, y, dy, p):
     p[COUNT] += 1.0
     xc, vc, _ = commanded(t, p)
@@ -106,7 +106,7 @@ def events(y, p):
     return y[2] - p[SURF], p[BACK] - s, (p[C1] - s) - p[THR], s - p[C1], p[KFE] * (s - p[C1]) + p[CFE] * (y[3] - y[1])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def event(y, p, i):
     """Event function i of `events`, without building the tuple (a tuple indexed at run time is
     slow in numba)."""
@@ -145,13 +145,13 @@ def hermite(t0, y0, f0, t1, y1, f1, t, out):
         out[i] = h00 * y0[i] + h * h10 * f0[i] + h01 * y1[i] + h * h11 * f1[i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def force_pair(y, p):
     fd, fc = forces(y[2] - y[0], y[3] - y[1], y[2], y[3], p)
     return fc, abs(fd)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def force_of(y, p, which):
     """The contact force (which = 0) or the robot force's magnitude (1)."""
     fd, fc = forces(y[2] - y[0], y[3] - y[1], y[2], y[3], p)
