@@ -21,7 +21,7 @@ tool puts on the robot), contact and detection instants, number of contacts, RHS
 import math
 
 import numpy as np
-from numba import cfunc, njit, types
+from numba import carray, cfunc, njit, types
 from numbalsoda import lsoda
 
 # Parameter vector P: the scene, then the discrete state the events set, then the RHS counter.
@@ -69,14 +69,47 @@ def forces(s, sd, xt, vt, p):
 
 
 @njit(cache=True)
+def rhs_into(t, x_r, v_r, x_t, v_t, p):
+    """The right-hand side as one function of scalars (what `commanded` and `forces` compute,
+    written out so nothing is called per evaluation): (v_r', v_t')."""
+    tb = p[T_BRAKE]
+    if t > tb:
+        tau = min(t - tb, p[T_REST])
+        xc = p[XB] + p[VB] * tau - 0.5 * p[DEC] * tau * tau
+        vc = max(p[VB] - p[DEC] * tau, 0.0)
+    elif t < p[T1]:
+        tt = max(t, 0.0)
+        xc = 0.5 * p[ACC] * tt * tt
+        vc = p[ACC] * tt
+    else:
+        xc = 0.5 * p[V] * p[T1] + p[V] * (t - p[T1])
+        vc = p[V]
+    s = x_t - x_r
+    sd = v_t - v_r
+    L = math.sqrt(p[H] * p[H] + s * s)
+    f = p[NK] * (p[L0] - L) * s / L
+    if s > p[C1]:
+        f += min(-p[KFE] * (s - p[C1]) - p[CFE] * sd, 0.0)
+    d = p[BACK] - s
+    if d > 0.0:
+        dn = d * math.sqrt(d)
+        f += max(p[KBE] * dn - p[CHI_B] * dn * sd, 0.0)
+    fc = 0.0
+    dc = x_t - p[SURF]
+    if dc > 0.0:
+        dn = dc * math.sqrt(dc)
+        fc = max(p[KC] * dn + p[CHI_C] * dn * v_t, 0.0)
+    return (p[CR] * (vc - v_r) + p[KR] * (xc - x_r) - f) / p[MR], (f - fc + p[MT] * p[G]) / p[MT]
+
+
+@njit(cache=True)
 def rhs(t, y, dy, p):
     p[COUNT] += 1.0
-    xc, vc, _ = commanded(t, p)
-    fd, fc = forces(y[2] - y[0], y[3] - y[1], y[2], y[3], p)
+    a_r, a_t = rhs_into(t, y[0], y[1], y[2], y[3], p)
     dy[0] = y[1]
-    dy[1] = (p[CR] * (vc - y[1]) + p[KR] * (xc - y[0]) - fd) / p[MR]
+    dy[1] = a_r
     dy[2] = y[3]
-    dy[3] = (fd - fc + p[MT] * p[G]) / p[MT]
+    dy[3] = a_t
 
 
 lsoda_sig = types.void(types.double, types.CPointer(types.double), types.CPointer(types.double), types.CPointer(types.double))
@@ -86,12 +119,12 @@ lsoda_sig = types.void(types.double, types.CPointer(types.double), types.CPointe
 def rhs_c(t, u, du, p):
     """The same right-hand side for numbalsoda (C pointers; P is the `data` array)."""
     p[COUNT] += 1.0
-    xc, vc, _ = commanded(t, p)
-    fd, fc = forces(u[2] - u[0], u[3] - u[1], u[2], u[3], p)
+    pa = carray(p, NP)
+    a_r, a_t = rhs_into(t, u[0], u[1], u[2], u[3], pa)
     du[0] = u[1]
-    du[1] = (p[CR] * (vc - u[1]) + p[KR] * (xc - u[0]) - fd) / p[MR]
+    du[1] = a_r
     du[2] = u[3]
-    du[3] = (fd - fc + p[MT] * p[G]) / p[MT]
+    du[3] = a_t
 
 
 NE = 5  # events: contact, back stop, switch, front stop, front stop pushing
