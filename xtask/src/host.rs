@@ -1,6 +1,6 @@
 //! The stages that run on the host: the workspace tests, the loader fuzz, the plots without fontconfig.
 
-use crate::common::{cargo, repo_root, run_captured, target_dir};
+use crate::common::{cargo, host_flinch, repo_root, run_captured};
 use crate::Outcome;
 use std::env;
 use std::fs;
@@ -42,16 +42,14 @@ pub fn loader_fuzz() -> Outcome {
 /// The plots need no system font and the binary no font library: build `flinch` with pkg-config
 /// pointing nowhere (a `-sys` crate that needs libfontconfig1-dev fails to build), draw a PNG and
 /// an SVG with fontconfig disabled (`FONTCONFIG_FILE` empty), and check that `ldd` lists only the
-/// C runtime. Uses the dev-profile binary the host tests already built, so it adds seconds.
+/// C runtime. The build is the host tests' own (`cargo test --workspace --no-run`, a no-op after
+/// them unless a build script reads the pkg-config variables, which is what this must catch), so
+/// it adds seconds, not a second build of the harness in the dev profile (issue 28).
 pub fn no_fontconfig() -> Result<String, String> {
     let start = Instant::now();
     let nowhere = repo_root().join("target").join("no-pkg-config");
     let env = [("PKG_CONFIG_PATH", nowhere.as_os_str()), ("PKG_CONFIG_LIBDIR", nowhere.as_os_str()), ("FONTCONFIG_FILE", "".as_ref()), ("FONTCONFIG_PATH", nowhere.as_os_str())];
-    let status = cargo().args(["build", "--quiet", "-p", "flinch-harness", "--bin", "flinch"]).envs(env).current_dir(repo_root()).status().map_err(|e| format!("could not run cargo: {e}"))?;
-    if !status.success() {
-        return Err(format!("cargo build -p flinch-harness --bin flinch without pkg-config exited with {status}"));
-    }
-    let bin = target_dir().join("debug").join("flinch");
+    let bin = host_flinch(&env).map_err(|e| format!("without pkg-config: {e}"))?;
     let out = env::temp_dir().join(format!("flinch-no-fontconfig-{}", std::process::id()));
     fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     for ext in ["png", "svg"] {

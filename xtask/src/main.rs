@@ -1,6 +1,10 @@
 //! `cargo xtask`: the project's test driver (std, and `object` to read the firmware ELF).
 //!
 //! * `cargo xtask test`: every stage below, then one closing line `N passed, N failed, N skipped`.
+//!   Each stage prints its wall time as it ends (`xtask: stage NAME took 42.1 s`), the summary
+//!   repeats them and gives the total (issue 28). flip-link, the firmware's linker, is installed
+//!   with `cargo install flip-link --locked` when it is missing (here and for the commands that
+//!   build the firmware), and xtask says so.
 //!   1. host tests: `cargo test --workspace` at the repo root (its output is shown as is);
 //!   2. firmware build: `cargo build --release --target thumbv7em-none-eabihf` inside `firmware/`
 //!      (skipped if that target is not installed), then `cargo clippy -p flinch-firmware --target
@@ -69,7 +73,7 @@ mod worst;
 use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_avoid_cost};
 use board::{check_board_corrupt, check_board_edge, check_board_faults, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
 use board_serial::board_serial;
-use common::{elf_path, which, Outcome, TARGET};
+use common::{elf_path, ensure_flip_link, seconds, which, Outcome, Timed, TARGET};
 use firmware::{build_board_qemu_clock, build_board_qemu_io, build_firmware, firmware_clippy, target_installed};
 use host::{host_tests, loader_fuzz, no_fontconfig};
 use python::python_stage;
@@ -80,6 +84,9 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args: Vec<String> = env::args().skip(1).collect();
+    if matches!(args.first().map(String::as_str), Some("test" | "qemu" | "size" | "board-qemu" | "board-serial")) {
+        ensure_flip_link();
+    }
     match args.first().map(String::as_str) {
         Some("test") => test(),
         Some("qemu") => single(|| {
@@ -171,7 +178,7 @@ fn firmware_structure_stage() -> Outcome {
 }
 
 fn test() -> ExitCode {
-    let mut results: Vec<(&str, Outcome)> = Vec::new();
+    let mut results = Timed::new();
 
     // Cheap, and a circle or an upward dependency is better named before the long stages run.
     results.push(("structure", structure_stage()));
@@ -361,7 +368,7 @@ fn test() -> ExitCode {
 
     // In CI nothing is skipped quietly: a missing target or tool fails the run.
     if env::var_os("CI").is_some_and(|v| !v.is_empty() && v != "false" && v != "0") {
-        for (_, outcome) in results.iter_mut() {
+        for (_, outcome, _) in results.list.iter_mut() {
             if let Outcome::Skip(m) = outcome {
                 *outcome = Outcome::Fail(format!("skipped in CI: {m}"));
             }
@@ -370,22 +377,24 @@ fn test() -> ExitCode {
 
     println!();
     let (mut passed, mut failed, mut skipped) = (0, 0, 0);
-    for (stage, outcome) in &results {
+    for (stage, outcome, took) in &results.list {
+        let took = seconds(*took);
         match outcome {
             Outcome::Pass(m) => {
                 passed += 1;
-                println!("xtask: PASS {stage}: {m}");
+                println!("xtask: PASS {stage} ({took}): {m}");
             }
             Outcome::Fail(m) => {
                 failed += 1;
-                println!("xtask: FAIL {stage}: {m}");
+                println!("xtask: FAIL {stage} ({took}): {m}");
             }
             Outcome::Skip(m) => {
                 skipped += 1;
-                println!("xtask: SKIP {stage}: {m}");
+                println!("xtask: SKIP {stage} ({took}): {m}");
             }
         }
     }
+    println!("xtask: total {}", seconds(results.total()));
     println!("{passed} passed, {failed} failed, {skipped} skipped");
     if failed == 0 {
         ExitCode::SUCCESS

@@ -1,6 +1,6 @@
 //! The Python package's stage: a fresh venv, `pip install ./python`, pytest.
 
-use crate::common::{cargo, repo_root, run_captured, target_dir, which};
+use crate::common::{host_flinch, repo_root, run_captured, target_dir, which};
 use crate::Outcome;
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -8,8 +8,9 @@ use std::time::{Duration, Instant};
 
 /// The Python package (issue 14): a fresh venv in the target folder, `pip install ./python` with
 /// the test dependencies (maturin builds the extension, in `target/python`), then pytest on
-/// python/tests with FLINCH_BIN set to the dev `flinch` binary (the tests compare with it). Skipped
-/// without python3 (a failure in CI); any other problem fails.
+/// python/tests with FLINCH_BIN set to the host tests' `flinch` binary (the tests compare with it;
+/// [`host_flinch`]: no second build). Skipped without python3 (a failure in CI); any other problem
+/// fails.
 pub fn python_stage() -> Outcome {
     let Some(python) = which("python3") else {
         return Outcome::Skip("python3 not found (the Python package needs CPython >= 3.9 with venv and pip)".into());
@@ -41,10 +42,7 @@ fn python_tests(python: &Path) -> Result<String, String> {
         .env("CARGO_TARGET_DIR", target_dir().join("python"));
     run(pip, "pip install ./python pytest dask distributed pandas numpy")?;
     let installed = start.elapsed().as_secs_f64();
-    let mut build = cargo();
-    build.args(["build", "--quiet", "-p", "flinch-harness", "--bin", "flinch"]);
-    run(build, "cargo build -p flinch-harness --bin flinch")?;
-    let bin = target_dir().join("debug").join("flinch");
+    let bin = host_flinch(&[])?;
     let mut pytest = Command::new(&py);
     pytest.args(["-m", "pytest", "python/tests", "-p", "no:cacheprovider", "-p", "no:logging", "-q"]).env("FLINCH_BIN", &bin).current_dir(&root);
     let (out, status) = run_captured(pytest, "pytest", Duration::from_secs(1200))?;
