@@ -116,9 +116,27 @@ fn rel(repo: &Path, p: &Path) -> String {
     p.strip_prefix(repo).unwrap_or(p).display().to_string()
 }
 
-/// The crates the firmware helpers own (issue 25): checked in their own stage, which stays red
-/// until their circles are gone, so that the host's stage says only what the host's crates do.
+/// The crates of the firmware (issue 25): checked in a stage of their own, so that the host's
+/// stage says only what the host's crates do.
 pub const FIRMWARE_CRATES: [&str; 2] = ["flinch-firmware", "flinch-hal-sim"];
+
+/// Import circles that existed when the check was introduced, outside the host harness (the
+/// firmware's board support and avoidance modules, hal-sim, xtask), each a set of files sorted by
+/// path. They are reported on every run, a new circle fails, and an entry whose circle is gone
+/// fails until it is removed here: the list only shrinks, to empty (issue 24).
+pub const KNOWN_CIRCLES: &[&[&str]] = &[
+    &["firmware/src/avoidance.rs", "firmware/src/avoidance/link.rs"],
+    &["firmware/src/avoidance/field.rs", "firmware/src/avoidance/gauss.rs"],
+    &["firmware/src/bin/board.rs", "firmware/src/bin/support/board_diag.rs", "firmware/src/bin/support/board_log.rs"],
+    &[
+        "firmware/src/bin/support/board_backup.rs",
+        "firmware/src/bin/support/board_bench.rs",
+        "firmware/src/bin/support/board_faults.rs",
+        "firmware/src/bin/support/board_hw.rs",
+    ],
+    &["hal-sim/src/lib.rs", "hal-sim/src/output_faults.rs", "hal-sim/src/rig.rs"],
+    &["xtask/src/board.rs", "xtask/src/board_serial.rs", "xtask/src/firmware.rs", "xtask/src/flash.rs"],
+];
 
 /// No import circle in any crate of the repository whose package name passes `which`: Ok with
 /// what was checked, Err naming every circle with its edges (one line per pair of files: the
@@ -126,15 +144,24 @@ pub const FIRMWARE_CRATES: [&str; 2] = ["flinch-firmware", "flinch-hal-sim"];
 pub fn import_cycles(repo: &Path, which: impl Fn(&str) -> bool) -> Result<String, String> {
     let mut problems = Vec::new();
     let (mut crates, mut files) = (0, 0);
+    let mut scanned = std::collections::BTreeSet::new();
+    let mut known_seen = Vec::new();
     for (name, manifest) in packages(repo).into_iter().filter(|(n, _)| which(n)) {
         for root in roots(&manifest) {
             let cs = scan::read_crate(&root);
             crates += 1;
             files += cs.modules.values().map(|m| &m.file).collect::<std::collections::BTreeSet<_>>().len();
+            scanned.extend(cs.modules.values().map(|m| rel(repo, &m.file)));
             for e in &cs.errors {
                 problems.push(format!("{name} ({}): {e}", rel(repo, &root)));
             }
             for cycle in graph::cycles(&cs) {
+                let mut set: Vec<String> = cycle.files.iter().map(|f| rel(repo, f)).collect();
+                set.sort();
+                if let Some(k) = KNOWN_CIRCLES.iter().position(|k| k.iter().copied().eq(set.iter().map(String::as_str))) {
+                    known_seen.push(k);
+                    continue;
+                }
                 let mut msg = format!("{name} ({}): import circle of {} files:", rel(repo, &root), cycle.files.len());
                 for f in &cycle.files {
                     msg.push_str(&format!("\n    {}", rel(repo, f)));
@@ -152,8 +179,30 @@ pub fn import_cycles(repo: &Path, which: impl Fn(&str) -> bool) -> Result<String
             }
         }
     }
+    let mut known = Vec::new();
+    for (k, circle) in KNOWN_CIRCLES.iter().enumerate() {
+        if !circle.first().is_some_and(|f| scanned.contains(*f)) {
+            continue; // a crate this call does not check
+        }
+        if known_seen.contains(&k) {
+            known.push(circle.join(" <-> "));
+        } else {
+            problems.push(format!(
+                "the known circle {} is gone: remove it from KNOWN_CIRCLES in xtask/src/structure/mod.rs",
+                circle.join(" <-> ")
+            ));
+        }
+    }
     if problems.is_empty() {
-        Ok(format!("no import circle in {crates} crate roots ({files} files)"))
+        let mut m = format!("no import circle in {crates} crate roots ({files} files)");
+        if !known.is_empty() {
+            m = format!(
+                "no new import circle in {crates} crate roots ({files} files); {} KNOWN circle(s) still to remove (KNOWN_CIRCLES): {}",
+                known.len(),
+                known.join("; ")
+            );
+        }
+        Ok(m)
     } else {
         Err(problems.join("\n"))
     }
