@@ -63,6 +63,7 @@ mod board_serial;
 mod common;
 mod firmware;
 mod flash;
+mod flash_run;
 mod host;
 mod python;
 mod qemu;
@@ -131,10 +132,10 @@ fn main() -> ExitCode {
             }
             if failed.is_empty() { Ok(()) } else { Err(failed.join("\n")) }
         }),
-        Some("flash") => single(|| flash::flash(&args[1..])),
+        Some("flash") => single(|| flash_run::flash(&args[1..])),
         Some("flash-image") => single(|| {
             build_firmware()?;
-            flash::check_flash_image().map(|m| println!("{m}"))
+            flash_run::check_flash_image().map(|m| println!("{m}"))
         }),
         Some("size") => single(|| {
             build_firmware()?;
@@ -303,7 +304,7 @@ fn test() -> ExitCode {
             if which("qemu-system-arm").is_none() {
                 Outcome::Skip("qemu-system-arm not found".into())
             } else {
-                match flash::check_flash_image() {
+                match flash_run::check_flash_image() {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }

@@ -82,6 +82,20 @@ mod board_avoid;
 mod hw;
 
 #[cfg(target_os = "none")]
+#[path = "support/board_pins.rs"]
+mod pins;
+
+#[cfg(all(target_os = "none", feature = "qemu-io"))]
+#[path = "support/board_pin_image.rs"]
+mod pin_image;
+
+// The firmware's one instance and its interrupt priorities, which the handlers here and the
+// diagnostics and log drain share.
+#[cfg(target_os = "none")]
+#[path = "support/board_fw.rs"]
+mod fw;
+
+#[cfg(target_os = "none")]
 #[path = "support/board_startup.rs"]
 mod startup;
 
@@ -103,11 +117,11 @@ mod diag;
 
 #[cfg(target_os = "none")]
 mod board {
-    use super::isr_cell::IsrCell;
+    use crate::fw::{Esc, FW, K1, K2, PRIO_EDGE, PRIO_TICK};
     use crate::backup::{backup_on, retained_store, Bkp, SAVED_SEQ};
     use crate::hw::{
-        bsrr, emergency_stop, exti, gpio, idr, iwdg, lsi_capture, rcc, syscfg, tim2, tim5, In, Out, Tim2, CORE_HZ, ESC_PIN,
-        ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, LSI_HZ, PA, SUPPLY_PIN, SUPPLY_PORT, TICK_US, TIM2_HZ,
+        bsrr, emergency_stop, exti, gpio, idr, iwdg, lsi_capture, rcc, syscfg, tim2, tim5, In, Out, Tim2, CORE_HZ,
+        K1_PIN, K1_PORT, K2_PIN, K2_PORT, LSI_HZ, PA, SUPPLY_PIN, SUPPLY_PORT, TICK_US, TIM2_HZ,
     };
     #[cfg(feature = "qemu-clock")]
     use crate::startup::{not_qemu, SELF_NOT_QEMU};
@@ -133,20 +147,6 @@ mod board {
     const BOOK_IRQ: u16 = 53;
     /// TIM5's line (RM0090 Table 61): its channel 4 captures the LSI (the clock check's reference).
     const TIM5_IRQ: u16 = 50;
-    /// NVIC priorities (upper 4 bits on the F407; lower number = more urgent).
-    /// The edge at 0x10, not 0: the configurable faults (MemManage, BusFault, UsageFault) are at 0,
-    /// above every interrupt, so a stack overflow in any handler is taken, not escalated
-    /// (`support/board_faults.rs`).
-    pub(crate) const PRIO_EDGE: u8 = 0x10;
-    pub(crate) const PRIO_TICK: u8 = 0x80;
-
-    pub(crate) type Switch = DualSwitch<In<PA, 0>, In<PA, 4>, Out<SUPPLY_PORT, SUPPLY_PIN>>;
-    type K1 = Out<K1_PORT, K1_PIN>;
-    type K2 = Out<K2_PORT, K2_PIN>;
-    type Esc = Out<ESC_PORT, ESC_PIN>;
-    pub(crate) type Fw = Firmware<Tim2, Switch, K1, K2, Esc, In<PA, 1>, 16, Edm<In<PA, 2>, In<PA, 3>>>;
-    pub(crate) static FW: IsrCell<Fw> = IsrCell::new();
-
     /// The installation's configuration. The numbers are those of the thesis's Ch. 3 set-up and
     /// must be replaced by the real cell's: V_c = 0.05 m/s and DT = 16 ms (Tables 5-7, Viper scan
     /// cycle), d_sw = 5 mm (Ch. 3 simulations); deceleration 1 m/s^2 and a 10 mm stroke are

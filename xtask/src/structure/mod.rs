@@ -127,15 +127,7 @@ pub const FIRMWARE_CRATES: [&str; 2] = ["flinch-firmware", "flinch-hal-sim"];
 pub const KNOWN_CIRCLES: &[&[&str]] = &[
     &["firmware/src/avoidance.rs", "firmware/src/avoidance/link.rs"],
     &["firmware/src/avoidance/field.rs", "firmware/src/avoidance/gauss.rs"],
-    &["firmware/src/bin/board.rs", "firmware/src/bin/support/board_diag.rs", "firmware/src/bin/support/board_log.rs"],
-    &[
-        "firmware/src/bin/support/board_backup.rs",
-        "firmware/src/bin/support/board_bench.rs",
-        "firmware/src/bin/support/board_faults.rs",
-        "firmware/src/bin/support/board_hw.rs",
-    ],
     &["hal-sim/src/lib.rs", "hal-sim/src/output_faults.rs", "hal-sim/src/rig.rs"],
-    &["xtask/src/board.rs", "xtask/src/board_serial.rs", "xtask/src/firmware.rs", "xtask/src/flash.rs"],
 ];
 
 /// No import circle in any crate of the repository whose package name passes `which`: Ok with

@@ -27,46 +27,11 @@
 //! stops, obstacle gone, reset, re-arm, an edge on channel B (EXTI4) stops, end. The bench reports
 //! over semihosting and exits QEMU; xtask compares the trace with `firmware/qemu/board-edge.txt`.
 
-use crate::hw::{gpio, ESC_PIN, ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, PA, PB, PD, PE, PI, SUPPLY_PIN, SUPPLY_PORT};
+use crate::hw::{gpio, ESC_PIN, ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, PI, SUPPLY_PIN, SUPPLY_PORT};
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
 use cortex_m_semihosting::{debug, hprintln};
 
-/// GPIOA's input register as the bench drives it.
-pub static PINS: AtomicU32 = AtomicU32::new(0);
-/// The output registers of GPIOB, GPIOD and GPIOE as the BSRR writes leave them.
-static ODR_B: AtomicU32 = AtomicU32::new(0);
-static ODR_D: AtomicU32 = AtomicU32::new(0);
-static ODR_E: AtomicU32 = AtomicU32::new(0);
-
-/// The RAM image of an output port's register (`None` for a port without outputs).
-fn image(port: u8) -> Option<&'static AtomicU32> {
-    match port {
-        PB => Some(&ODR_B),
-        PD => Some(&ODR_D),
-        PE => Some(&ODR_E),
-        _ => None,
-    }
-}
-
-/// An input register as the board reads it: GPIOA's from the bench, an output port's from its
-/// image (the pins follow their outputs), 0 elsewhere (as QEMU reads every GPIO).
-#[inline(always)]
-pub fn idr(port: u8) -> u32 {
-    if port == PA {
-        PINS.load(Relaxed)
-    } else {
-        image(port).map_or(0, |i| i.load(Relaxed))
-    }
-}
-
-/// Apply a BSRR write to the port's RAM image (set wins over reset, as on the part).
-#[inline(always)]
-pub fn bsrr(port: u8, v: u32) {
-    if let Some(i) = image(port) {
-        i.fetch_and(!(v >> 16), Relaxed);
-        i.fetch_or(v & 0xFFFF, Relaxed);
-    }
-}
+use crate::pin_image::{idr, PINS};
 
 /// Stop channel K1's output is high.
 fn k1_high() -> bool {
@@ -450,7 +415,7 @@ pub fn paint_stack() {
 fn stack_used() -> (u32, u32) {
     // The linker's symbol; only its address is used.
     let top = core::ptr::addr_of!(_stack_start) as u32;
-    let mut a = RAM_START + crate::faults::GUARD_BYTES;
+    let mut a = RAM_START + crate::hw::GUARD_BYTES;
     // SAFETY: reads of the stack region, word-aligned.
     while a < top && unsafe { core::ptr::read_volatile(a as *const u32) } == PAINT {
         a += 4;

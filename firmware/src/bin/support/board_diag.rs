@@ -12,7 +12,7 @@
 //! builds the registers QEMU 7.2 does not model (RCC, GPIO, IWDG: they read 0) are left out of the
 //! read-back; everything else is the production code.
 
-use crate::board::{Fw, FW, PRIO_EDGE, PRIO_TICK};
+use crate::fw::{Fw, FW, PRIO_EDGE, PRIO_TICK};
 use crate::hw::{exti, syscfg, tim2, CORE_HZ, TICK_US};
 #[cfg(not(feature = "qemu-clock"))]
 use crate::hw::{gpio, iwdg, rcc, ESC_PIN, ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, PA, SUPPLY_PIN};
@@ -109,7 +109,7 @@ const COMMON: [Expect; 23] = [
     e(Reg::SystRvr, 0x00FF_FFFF, CORE_HZ / 1_000_000 * TICK_US - 1),
     e(Reg::MpuCtrl, 0b111, 0b101), // ENABLE, PRIVDEFENA, not HFNMIENA
     e(Reg::MpuRbar, 0xFFFF_FFE0, 0x2000_0000),
-    e(Reg::MpuRasr, 0x1707_003F, (1 << 28) | ((crate::faults::GUARD_BYTES.trailing_zeros() - 1) << 1) | 1),
+    e(Reg::MpuRasr, 0x1707_003F, (1 << 28) | ((crate::hw::GUARD_BYTES.trailing_zeros() - 1) << 1) | 1),
     e(Reg::Tim2Cr1, 1, 1), // CEN
     e(Reg::Tim2Psc, 0xFFFF, crate::hw::TIM2_HZ / 1_000_000 - 1),
 ];

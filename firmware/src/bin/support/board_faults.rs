@@ -19,7 +19,7 @@
 //!   then calls `fault_stop`. It needs nothing of the stack it came from.
 
 use crate::backup::{backup_on, stored_boots, Bkp};
-use crate::hw::emergency_stop;
+use crate::hw::{emergency_stop, GUARD_BYTES};
 use core::sync::atomic::{AtomicBool, Ordering::Relaxed};
 use flinch_firmware::{backup, Cause, Retained};
 
@@ -27,9 +27,6 @@ use flinch_firmware::{backup, Cause, Retained};
 /// panic in thread mode leaves the interrupts running until the handler masks them).
 pub(crate) static STARVE: AtomicBool = AtomicBool::new(false);
 
-/// The MPU guard at the bottom of the stack, bytes (a power of two >= 32, RM0090/PM0214 MPU_RASR):
-/// more than one exception frame with the FPU state (108 B), so that no frame push skips it.
-pub(crate) const GUARD_BYTES: u32 = 256;
 const RAM_START: u32 = 0x2000_0000;
 
 /// The fault handlers' own stack.

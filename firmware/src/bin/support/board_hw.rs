@@ -10,30 +10,8 @@ use flinch_firmware::{Clock, Micros};
 
 // ---- Registers: the `stm32f4` PAC (feature stm32f407, generated from ST's SVD; RM0090 Rev 19) ---
 use stm32f4::stm32f407 as pac;
-/// The GPIO ports by letter (A = 0 .. I = 8), the pins' const-generic port; `gpio` gives the PAC's
-/// register block of each.
-pub(crate) const PA: u8 = 0;
-pub(crate) const PB: u8 = 1;
-pub(crate) const PD: u8 = 3;
-pub(crate) const PE: u8 = 4;
-/// GPIOI: unused on the board; the `qemu-io` bench writes its markers to its BSRR.
-pub(crate) const PI: u8 = 8;
-
-// ---- The pin map (firmware/README.md "Output architecture"): inputs on GPIOA; the two stop
-// channels and the category-0 escalation on three other ports, one each, each with its own RCC
-// AHB1ENR clock-enable bit, so a frozen port (clock gated) or a dead port takes one output only ----
-/// Stop channel K1: PD12 (GPIOD, AHB1ENR.GPIODEN; the Discovery's green LED shows it).
-pub(crate) const K1_PORT: u8 = PD;
-pub(crate) const K1_PIN: u32 = 12;
-/// Stop channel K2: PE12 (GPIOE, AHB1ENR.GPIOEEN).
-pub(crate) const K2_PORT: u8 = PE;
-pub(crate) const K2_PIN: u32 = 12;
-/// The category-0 escalation: PB12 (GPIOB, AHB1ENR.GPIOBEN).
-pub(crate) const ESC_PORT: u8 = PB;
-pub(crate) const ESC_PIN: u32 = 12;
-/// The sensor supply: PD14 (with K1 on GPIOD).
-pub(crate) const SUPPLY_PORT: u8 = PD;
-pub(crate) const SUPPLY_PIN: u32 = 14;
+// The pin map (support/board_pins.rs): re-exported, so `crate::hw::K1_PORT` names it as before.
+pub(crate) use crate::pins::*;
 
 /// The PAC's register blocks. SAFETY (all of them): fixed peripheral addresses of this part,
 /// valid for the whole program; every access through them is a volatile register access.
@@ -108,15 +86,19 @@ pub(crate) const CORE_HZ: u32 = 168_000_000;
 pub(crate) const TIM2_HZ: u32 = 1_000_000_000;
 pub(crate) const TICK_US: u32 = 1_000;
 
+/// The memory map: the MPU guard at the bottom of the stack, bytes (a power of two >= 32, RM0090/PM0214 MPU_RASR):
+/// more than one exception frame with the FPU state (108 B), so that no frame push skips it.
+pub(crate) const GUARD_BYTES: u32 = 256;
+
 // ---- The three pin accesses: GPIO in the production build, the QEMU bench's RAM with
-// `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_bench.rs`) -------------------
+// `qemu-io` (QEMU 7.2 does not model the F405's GPIO; `support/board_pin_image.rs`) -------------------
 /// A port's input register.
 #[inline(always)]
 pub(crate) fn idr(port: u8) -> u32 {
     #[cfg(not(feature = "qemu-io"))]
     return gpio(port).idr().read().bits();
     #[cfg(feature = "qemu-io")]
-    return super::bench::idr(port);
+    return crate::pin_image::idr(port);
 }
 /// A write to a port's bit set/reset register.
 #[inline(always)]
@@ -124,7 +106,7 @@ pub(crate) fn bsrr(port: u8, v: u32) {
     // SAFETY: BSRR takes any bit pattern (a set or reset request per pin).
     gpio(port).bsrr().write(|w| unsafe { w.bits(v) });
     #[cfg(feature = "qemu-io")]
-    super::bench::bsrr(port, v);
+    crate::pin_image::bsrr(port, v);
 }
 
 // ---- Pins: zero-sized, the port and pin are constants, so a write is a single `str` ------------

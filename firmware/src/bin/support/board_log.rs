@@ -2,7 +2,7 @@
 //! priority ceiling, stores the log in the backup SRAM and logs over defmt with every interrupt enabled.
 
 use crate::backup::Bkp;
-use crate::board::{FW, PRIO_TICK};
+use crate::fw::{FW, PRIO_TICK};
 use flinch_firmware::{backup, EventLog};
 
 
