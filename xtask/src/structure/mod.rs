@@ -134,7 +134,6 @@ pub const KNOWN_CIRCLES: &[&[&str]] = &[
         "firmware/src/bin/support/board_faults.rs",
         "firmware/src/bin/support/board_hw.rs",
     ],
-    &["hal-sim/src/lib.rs", "hal-sim/src/output_faults.rs", "hal-sim/src/rig.rs"],
     &["xtask/src/board.rs", "xtask/src/board_serial.rs", "xtask/src/firmware.rs", "xtask/src/flash.rs"],
 ];
 
