@@ -17,7 +17,7 @@
 //! released ([`SimRig::mcu_reset`] models that reset).
 
 use crate::rig::{OutputPort, SimRig};
-use crate::PinFault;
+use crate::fakes::PinFault;
 use flinch_firmware::{Config, Sensor};
 
 /// An output fault of the board.

@@ -16,7 +16,7 @@
 //! its own port ([`OutputPort`]). What the robot sees ([`SimRig::stop_requested`]) is the stop
 //! circuit: open as soon as either relay has released, and a welded relay never releases.
 
-use super::{PinFault, SimAdc, SimClock, SimPin};
+use crate::fakes::{PinFault, SimAdc, SimClock, SimPin};
 use flinch_firmware::{
     AnalogConfig, AnalogTravel, Boot, Cause, ResetCause, Config, ConfigError, DigitalSwitch, DualSwitch, Edm, Firmware, Micros, Mm, Outputs, Sensor, State, SwitchKind,
     TripEvent,
@@ -342,10 +342,28 @@ impl<S: Sensor> SimRig<S> {
         m.since(self.epoch) as i32
     }
 
-    /// Run the firmware's ticks that fall at or before sim time `t_s`, then set the clock to `t_s`.
+    /// Run the firmware's ticks that fall at or before sim time `t_s`, then set the clock to `t_s`,
+    /// rounded to the nearest whole microsecond: for instants that are whole microseconds (ticks,
+    /// scheduled times) up to the rounding of the sums that make them. An event between two whole
+    /// microseconds (a switch edge the plant located) goes through [`SimRig::advance_to_event`].
     /// The sensor holds the level last set (zero-order hold between plant steps).
     pub fn advance_to(&mut self, t_s: f64) {
         self.advance_to_us((t_s * 1e6).round() as i64);
+    }
+
+    /// [`SimRig::advance_to`] for an event at `t_s` that falls between whole microseconds (a switch
+    /// edge, a fault): the firmware's clock is set to the first whole microsecond at or after it,
+    /// so a timestamp the firmware takes of the event is never before the event. Rounding to the
+    /// nearest (what [`SimRig::advance_to`] does) put it up to 0.5 us before: `flinch hil` reported
+    /// a negative firmware latency (-35 to -482 ns) on most shipped scenes.
+    /// Ticks due strictly after `t_s` (at that first whole microsecond, when the event fell
+    /// inside it) are left for the next advance: they come after the event, and read what it did.
+    pub fn advance_to_event(&mut self, t_s: f64) {
+        let us = first_us_at_or_after(t_s);
+        let on_the_us = us as f64 / 1e6 == t_s;
+        self.advance_to_us(if on_the_us { us } else { us - 1 });
+        self.now_us = us.max(self.now_us);
+        self.clock.set(self.epoch.plus(self.now_us as u32));
     }
 
     /// [`SimRig::advance_to`] in integer microseconds of sim time.
@@ -467,4 +485,20 @@ impl<S: Sensor> SimRig<S> {
     pub fn now_us(&self) -> i64 {
         self.now_us
     }
+}
+
+/// The first whole microsecond of sim time whose instant, as [`SimRig::seconds_at`] gives it, is
+/// at or after `t_s`: where the firmware's clock can first read an event between two microseconds.
+pub fn first_us_at_or_after(t_s: f64) -> i64 {
+    let secs = |us: i64| us as f64 / 1e6;
+    let mut us = (t_s * 1e6).ceil() as i64;
+    // The product and the quotient round by an ulp at most: a step or two settles it.
+    for _ in 0..4 {
+        if secs(us) < t_s {
+            us = us.saturating_add(1);
+        } else if secs(us.saturating_sub(1)) >= t_s {
+            us = us.saturating_sub(1);
+        }
+    }
+    us
 }

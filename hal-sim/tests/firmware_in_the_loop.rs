@@ -25,6 +25,28 @@ fn outputs_are_de_energised_until_the_self_test_passes() {
     assert_eq!(starts, [(Cause::Reset, ResetCause::Unknown as u8)], "only the start is logged");
 }
 
+/// A switch edge between two whole microseconds is timestamped at the first whole microsecond at
+/// or after it, never before (rounding to the nearest gave the firmware a timestamp up to 0.5 us
+/// before the edge: `flinch hil`'s negative firmware latency, issue 26 item 6); a tick due inside
+/// that microsecond runs after the edge and reads it.
+#[test]
+fn an_edge_between_microseconds_is_timestamped_at_or_after_it() {
+    for frac in [1e-9, 0.035, 0.4999, 0.5, 0.5001, 0.9, 0.999_999] {
+        let mut rig = booted(cfg());
+        let t = (10_250.0 + frac) * 1e-6;
+        rig.advance_to_event(t);
+        rig.set_travel_m(0.005);
+        let at = rig.detected_at_s().unwrap();
+        assert!(at >= t && at - t < 1e-6, "edge at {t} s, timestamp {at} s");
+    }
+    // Exactly on a microsecond: that microsecond.
+    assert_eq!(flinch_hal_sim::first_us_at_or_after(0.010_25), 10_250);
+    for t in [0.3, 0.1 + 0.2, 1.0 / 3.0, 59.999_999_5, 7.25e-6] {
+        let us = flinch_hal_sim::first_us_at_or_after(t);
+        assert!(us as f64 / 1e6 >= t && ((us - 1) as f64 / 1e6) < t, "{t}: {us}");
+    }
+}
+
 #[test]
 fn trip_on_the_edge_writes_stop_at_the_edge_instant() {
     let mut rig = booted(cfg());

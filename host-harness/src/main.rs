@@ -110,11 +110,21 @@ struct HilArgs {
     /// Phase of the controller's first sample, as a fraction of the scan cycle in [0, 1).
     #[arg(long, value_name = "FRACTION")]
     phase: Option<f64>,
+    /// The worst phase instead: the sample before the stop output just missed it, so the stop is
+    /// seen a whole scan cycle later (the worst case of the dead time).
+    #[arg(long, conflicts_with = "phase")]
+    worst_phase: bool,
     /// The firmware's tick period, s (whole microseconds).
     #[arg(long, value_name = "S")]
     tick: Option<f64>,
+    /// The robot's reaction after a scan sample sees the stop (brake engage, drive delay), s;
+    /// default [controller] reaction_time, else motion.dead_time - scan cycle.
+    #[arg(long, value_name = "S")]
+    reaction_time: Option<f64>,
     /// Faults to inject, NAME@SECONDS, comma-separated: stuck-rest, stuck-trip, cut-wire,
-    /// stuck-rest-b, welded-output, edm-wire-cut, clock-stall, reset. Exit 1 if one ends in "go".
+    /// stuck-rest-b, welded-output, edm-wire-cut, clock-stall, reset; output faults stuck-stop-pin,
+    /// frozen-port-k1, frozen-port-k2, frozen-port-escalation, welded-k2, welded-k1-k2. Exit 1 if
+    /// one ends in "go".
     #[arg(long, value_name = "NAME@S,...")]
     fault: Option<String>,
     /// Channels of the travel switch: 1, or 2 (antivalent pair, cross-monitored, 20 ms discrepancy).
@@ -246,7 +256,11 @@ fn controller(args: &HilArgs, sc: &scene::Scene, file: &Path) -> Result<scene::C
     if args.tick.is_some() && !((1e-6..=0.1).contains(&firmware_tick) && hil::whole_us(firmware_tick)) {
         return Err(format!("--tick: must be in [1e-6, 0.1] s in whole microseconds (the firmware's clock counts them), got {firmware_tick}"));
     }
+    if let Some(r) = args.reaction_time.filter(|r| !(0.0..=1.0).contains(r)) {
+        return Err(format!("--reaction-time: must be in [0, 1] s (a robot's reaction to a stop it has read), got {r}"));
+    }
     let mut c = base.unwrap_or(scene::Controller::new(scan_cycle, phase, firmware_tick));
+    c.reaction_time = args.reaction_time.or(c.reaction_time);
     c.scan_cycle = scan_cycle;
     c.phase = phase;
     c.firmware_tick = firmware_tick;
@@ -268,7 +282,7 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
     }
     let filter = hil::parse_filter(&args.filter).map_err(Failure::bad_input)?;
     let reset = hil::parse_reset_policy(&args.reset_policy).map_err(Failure::bad_input)?;
-    let opts = hil::HilOptions { faults, two_channels: args.channels == 2, filter, reset };
+    let opts = hil::HilOptions { faults, two_channels: args.channels == 2, filter, reset, worst_phase: args.worst_phase };
     // Outputs stream (bounded memory whatever the duration); a long run shows its progress on a
     // terminal and stops cleanly on Ctrl-C, the CSV flagged partial.
     let long = sc.duration_s > 5.0 || stream::expected_rows(&sc) > 1_000_000;
@@ -305,19 +319,8 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
     let text = if args.out.json {
         report::to_json(&report::HilJson { schema_version: report::SCHEMA_VERSION, report: &rep })
     } else {
-        let f = &rep.firmware;
-        let ms = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{:.3} ms", v * 1e3));
         let mut t = report::human(&rep.summary);
-        t.push_str(&format!("  firmware in the loop: scan cycle {:.3} ms, phase {:.2}, tick {:.3} ms, filter {}, reset {}\n", f.scan_cycle * 1e3, f.phase, f.firmware_tick * 1e3, f.filter, f.reset_policy));
-        t.push_str(&format!("    switch {}   firmware timestamp {}   latency {}   controller saw the stop {}\n", ms(f.switch_time), ms(f.firmware_detect), ms(f.firmware_latency), ms(f.stop_seen)));
-        t.push_str(&format!("    observed dead time {}   event log: {} entr{}\n", ms(f.observed_dead_time), f.event_log.len(), if f.event_log.len() == 1 { "y" } else { "ies" }));
-        t.push_str(&format!("    board latency given to the plant: edge to stop {:.2} us, tick or bookkeeping to output {:.2} us (measured QEMU worst case at 16 MHz, hal-sim/src/latency.rs)\n", f.edge_to_stop_latency * 1e6, f.tick_to_output_latency * 1e6));
-        if f.category0 {
-            t.push_str(&format!("    CATEGORY 0 requested (stroke budget exceeded): drive power removed {}, brakes acting {} ({})\n", ms(f.power_removed), ms(f.brakes_engaged), f.brake_source));
-        }
-        for o in &f.faults {
-            t.push_str(&format!("    fault {} at {:.3} s: stop {}; {}\n", o.fault, o.at_s, o.stopped_s.map_or("never".to_string(), |s| format!("from {s:.4} s")), o.reason));
-        }
+        t.push_str(&hil::human(&rep.firmware));
         t
     };
     print_result(&args.out, &text)?;

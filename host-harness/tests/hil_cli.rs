@@ -125,6 +125,46 @@ fn a_module_hil_cannot_run_and_bad_flags_are_exit_2_with_the_reason() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["firmware"]["filter"], "consecutive:2");
     assert_eq!(v["firmware"]["reset_policy"], "auto:0.05");
-    assert_eq!(v["firmware"]["edge_to_stop_latency_s"], 7.25e-6);
+    // The board ELF's worst case (hal-sim/src/latency.rs), not a figure written here.
+    assert_eq!(v["firmware"]["edge_to_stop_latency_s"], flinch_harness::hil::latency::edge_to_stop_s());
+    assert_eq!(v["firmware"]["tick_to_output_latency_s"], flinch_harness::hil::latency::tick_to_output_s());
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue 26 item 2 at the command line: `--reaction-time` moves braking by that much after the
+/// sample that saw the stop, the text says how the dead time was formed, and a reaction outside
+/// [0, 1] s is refused as an option (exit 2).
+#[test]
+fn the_reaction_time_moves_braking_and_the_text_says_how_the_dead_time_was_formed() {
+    let run = |extra: &[&str]| {
+        let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--json"]).args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+    };
+    let (a, b) = (run(&[]), run(&["--reaction-time", "0.03"]));
+    let brake = |v: &serde_json::Value| v["t_brake"].as_f64().unwrap();
+    assert!((brake(&b) - brake(&a) - 0.03).abs() < 1e-9, "{} vs {}", brake(&b), brake(&a));
+    assert_eq!(b["firmware"]["dead_time"]["reaction_time_source"], "controller.reaction_time");
+    let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--reaction-time", "0.03"]).output().unwrap();
+    let out = text(&o.stdout);
+    assert!(out.contains("robot reaction 30.000 ms (controller.reaction_time)") && out.contains("scan wait"), "{out}");
+    assert!(out.contains("differs from motion.dead_time"), "DT = 16 ms is the scan alone: {out}");
+    for bad in ["--reaction-time=-0.01", "--reaction-time=1.5"] {
+        let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", bad]).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        assert!(text(&o.stderr).contains("--reaction-time: must be in [0, 1] s"), "{bad}: {}", text(&o.stderr));
+    }
+}
+
+/// `--worst-phase` waits the whole scan, says so, and cannot be combined with `--phase`.
+#[test]
+fn the_worst_phase_flag_waits_the_whole_scan_and_refuses_a_phase_beside_it() {
+    let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--worst-phase", "--json"]).output().unwrap();
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let d = &v["firmware"]["dead_time"];
+    assert_eq!(d["worst_phase"], true);
+    assert!((d["scan_wait_s"].as_f64().unwrap() - 0.016).abs() < 1e-9, "{d}");
+    let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--worst-phase", "--phase", "0.3"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
 }

@@ -21,27 +21,35 @@
 //!
 //! # What the robot sees
 //!
-//! The stop output reaches the controller `hal_sim::latency::edge_to_stop_s()` (7.25 us, the
-//! measured QEMU worst case at the board's clock) after the edge, or `tick_to_output_s()` after a
-//! tick that confirms a filtered trip. The robot controller model samples it once per scan cycle, at
-//! `phase * scan_cycle + k * scan_cycle`, and starts its controlled stop at the first sample that
-//! sees it: the dead time is what comes out, between the firmware latency and one scan cycle more
-//! (Ch. 3.1.2: "in the worst case ... it is necessary to wait a full scan cycle"). The escalation
+//! The stop output reaches the controller `hal_sim::latency::edge_to_stop_s()` (15.0 us, the board
+//! ELF's measured worst case at its clock; QEMU's instruction count is the proxy for cycles) after
+//! the edge, or `tick_to_output_s()` (925 us) after a tick that confirms a filtered trip. The robot
+//! controller model samples it once per scan cycle, at `phase * scan_cycle + k * scan_cycle`, and
+//! the robot starts its controlled stop its reaction time after the first sample that sees it: the
+//! dead time is what comes out, the firmware latency + a wait between 0 and one scan cycle (Ch.
+//! 3.1.2: "in the worst case ... it is necessary to wait a full scan cycle") + the reaction
+//! (`timing.rs`: `[controller] reaction_time`, by default the scene's DT less one scan). The escalation
 //! output (category 0, IEC 60204-1 9.2.2) acts on the drives' power directly, not through the scan
 //! cycle: `tick_to_output_s()` after the firmware's decision, drive power is removed and the robot's
 //! brakes stop it (`plant/brake.rs`: `[controller] brake_delay`, `brake_decel`, or a category-0
 //! `motion.stopping` table).
 //!
 //! Layout: `run.rs` the entry points and passes, `stepping.rs` one pass (plant steps, firmware
-//! ticks, edges, the controller's samples), `options.rs` the faults, filter and reset policy,
-//! `report.rs` what a run reports, `units.rs` SI to the firmware's micro-units.
+//! ticks, edges, the controller's samples), `timing.rs` how the dead time is formed,
+//! `output_budget.rs` the board's output faults against the stroke budget, `options.rs`
+//! the faults, filter and reset policy, `report.rs` what a run reports (and its text),
+//! `units.rs` SI to the firmware's micro-units.
 
 mod options;
+mod output_budget;
 mod report;
 mod run;
 mod stepping;
+pub mod timing;
 pub mod units;
 
+pub use flinch_hal_sim::latency;
 pub use options::*;
+pub use output_budget::{output_fault_budget, OutputFaultBudget};
 pub use report::*;
-pub use run::{refusal, run, run_recording, run_with};
+pub use run::{output_fault_bound_s, refusal, run, run_recording, run_with};

@@ -3,6 +3,7 @@
 //! words, each refusal saying what is allowed.
 
 use flinch_firmware::{Filter, ResetPolicy};
+use flinch_hal_sim::{OutputFault, OutputPort};
 pub use flinch_model::scene::whole_us;
 
 pub(crate) fn um(x: f64) -> u32 {
@@ -29,6 +30,19 @@ pub enum FaultKind {
     ClockStall,
     /// The MCU resets (as the watchdog does); the firmware restarts from its retained latch.
     Reset,
+    /// An output fault of the board (issue 25): a stuck stop pin, a frozen port, welded relays
+    /// (`hal_sim::OutputFault`).
+    Output(OutputFault),
+}
+
+impl FaultKind {
+    /// The output fault, if this is one.
+    pub fn output(self) -> Option<OutputFault> {
+        match self {
+            FaultKind::Output(f) => Some(f),
+            _ => None,
+        }
+    }
 }
 
 /// Every fault name `--fault` accepts, with what it does.
@@ -41,7 +55,18 @@ pub const FAULTS: &[(&str, FaultKind, &str)] = &[
     ("edm-wire-cut", FaultKind::EdmWireCut, "K1's feedback wire reads released while pulled in"),
     ("clock-stall", FaultKind::ClockStall, "the firmware's clock stops"),
     ("reset", FaultKind::Reset, "the MCU resets (watchdog); restart from the retained latch"),
+    ("stuck-stop-pin", FaultKind::Output(OutputFault::StuckStopPin), "stop channel K1's pin stuck high (relay K1 stays pulled in)"),
+    ("frozen-port-k1", FaultKind::Output(OutputFault::FrozenPort(OutputPort::K1)), "K1's GPIO port frozen (clock gated: writes lost, reads 0)"),
+    ("frozen-port-k2", FaultKind::Output(OutputFault::FrozenPort(OutputPort::K2)), "K2's GPIO port frozen"),
+    ("frozen-port-escalation", FaultKind::Output(OutputFault::FrozenPort(OutputPort::Escalation)), "the category-0 escalation's GPIO port frozen"),
+    ("welded-k2", FaultKind::Output(OutputFault::WeldedK2), "stop relay K2 welded"),
+    ("welded-k1-k2", FaultKind::Output(OutputFault::WeldedK1K2), "both stop relays welded: only category 0 (drive power) remains"),
 ];
+
+/// The name `--fault` spells `kind` with.
+pub fn fault_name(kind: FaultKind) -> &'static str {
+    FAULTS.iter().find(|(_, k, _)| *k == kind).map_or("?", |(n, _, _)| *n)
+}
 
 /// One fault to inject at `at_s` seconds of simulation time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,11 +105,15 @@ pub struct HilOptions {
     pub filter: Filter,
     /// How a trip is cleared (`Config::reset`; default a reset input, never pressed in the run).
     pub reset: ResetPolicy,
+    /// The controller's worst phase (`--worst-phase`): the sample before the stop output just
+    /// missed it, so the stop is seen a whole scan cycle after the output (Ch. 3.1.2); the
+    /// controller's `phase` is then unused.
+    pub worst_phase: bool,
 }
 
 impl Default for HilOptions {
     fn default() -> Self {
-        Self { faults: Vec::new(), two_channels: false, filter: Filter::None, reset: ResetPolicy::Input }
+        Self { faults: Vec::new(), two_channels: false, filter: Filter::None, reset: ResetPolicy::Input, worst_phase: false }
     }
 }
 

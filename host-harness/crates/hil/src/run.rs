@@ -6,7 +6,8 @@ use crate::units::{um_down, um_up};
 use flinch_model::scene::{Controller, Decoupler, Scene, Sensor};
 use flinch_sim::Sample;
 use flinch_firmware::{Boot, BudgetConfig, Config, DigitalSwitch, DualSwitch, ResetCause, SwitchKind};
-use flinch_hal_sim::{PinFault, SimPin, SimRig};
+use flinch_hal_sim::output_faults::extra_dead_time_us;
+use flinch_hal_sim::{OutputFault, PinFault, SimPin, SimRig};
 use crate::{report::*, options::*, stepping::*};
 
 /// Total stroke the budget may use, m (front stop to back stop).
@@ -35,6 +36,7 @@ pub(crate) fn apply_common<S: flinch_firmware::Sensor>(rig: &mut SimRig<S>, kind
         FaultKind::WeldedOutput => rig.k1.set_fault(PinFault::StuckLow),
         FaultKind::EdmWireCut => rig.k1.set_fault(PinFault::StuckHigh),
         FaultKind::ClockStall => rig.clock.set_stalled(true),
+        FaultKind::Output(f) => rig.inject_output_fault(f),
         _ => {}
     }
 }
@@ -64,6 +66,20 @@ pub fn refusal(scene: &Scene) -> Option<String> {
     }
 }
 
+/// The firmware's configuration for `scene` under `ctl`: its tick, and its stroke budget (the
+/// speed, the dead time the budget assumes, the deceleration, the stroke).
+pub(crate) fn firmware_config(scene: &Scene, ctl: &Controller) -> Config {
+    let budget = BudgetConfig {
+        robot_speed_um_per_s: um_up(scene.motion.speed),
+        // The board's latency, a whole scan, the robot's reaction, and with the robot's stopping
+        // table its equivalent dead time at V_c after the signal (timing.rs).
+        dead_time_us: um_up(crate::timing::budget_dead_time(scene, ctl)),
+        decel_um_per_s2: um_down(scene.motion.decel).max(1),
+        stroke_um: um_down(stroke(scene)) as i32,
+    };
+    Config::new(um(ctl.firmware_tick).max(1), budget)
+}
+
 /// [`run_with`], with the history going where `record` says.
 pub fn run_recording(scene: &Scene, ctl: &Controller, opts: &HilOptions, record: Record<'_>) -> Result<(HilReport, Vec<Sample>), String> {
     if let Some(why) = refusal(scene) {
@@ -76,14 +92,7 @@ pub fn run_recording(scene: &Scene, ctl: &Controller, opts: &HilOptions, record:
     // Inductive on the bi-stable slide (ON at the front stop), magnetic on the hydraulic piston, wired
     // low-on-trip so that a cut wire reads as a trip (fail-safe) for both.
     let kind = if matches!(scene.decoupler, Decoupler::Hydraulic(_)) { SwitchKind::Magnetic { trip_high: false } } else { SwitchKind::Inductive };
-    let budget = BudgetConfig {
-        robot_speed_um_per_s: um_up(scene.motion.speed),
-        // With the robot's stopping table, its equivalent dead time at V_c follows the signal.
-        dead_time_us: um_up(ctl.scan_cycle + scene.motion.total_dead_time() - scene.motion.dead_time),
-        decel_um_per_s2: um_down(scene.motion.decel).max(1),
-        stroke_um: um_down(stroke(scene)) as i32,
-    };
-    let mut cfg = Config::new(um(ctl.firmware_tick).max(1), budget);
+    let mut cfg = firmware_config(scene, ctl);
     cfg.filter = opts.filter;
     cfg.reset = opts.reset;
     let refused = |e: flinch_firmware::ConfigError| format!("the firmware refused its configuration: {}", e.message());
@@ -101,7 +110,7 @@ pub fn run_recording(scene: &Scene, ctl: &Controller, opts: &HilOptions, record:
                 (_, None) => apply_common(rig, f),
             }
         };
-        run_passes(scene, ctl, &mut record, threshold, opts, make, apply)
+        run_passes(scene, ctl, &mut record, threshold, opts, make, apply).map(|r| with_bounds(r, &cfg))
     } else {
         if opts.faults.iter().any(|f| f.kind == FaultKind::StuckRestB) {
             return Err("--fault stuck-rest-b: needs a two-channel switch (--channels 2); this run has one channel".into());
@@ -112,8 +121,24 @@ pub fn run_recording(scene: &Scene, ctl: &Controller, opts: &HilOptions, record:
             (_, Some(pf)) => rig.inject_switch_fault(pf),
             (_, None) => apply_common(rig, f),
         };
-        run_passes(scene, ctl, &mut record, threshold, opts, make, apply)
+        run_passes(scene, ctl, &mut record, threshold, opts, make, apply).map(|r| with_bounds(r, &cfg))
     }
+}
+
+/// Each output fault's bound on the time it adds after a demand (`hal_sim::output_faults`): the
+/// EDM settle time and two ticks for both relays welded, plus the board's tick-to-output for the
+/// escalation that is then the only way to a safe state.
+pub fn output_fault_bound_s(cfg: &Config, f: OutputFault) -> f64 {
+    let extra = f64::from(extra_dead_time_us(cfg, f)) * 1e-6;
+    if extra > 0.0 { extra + flinch_hal_sim::latency::tick_to_output_s() } else { 0.0 }
+}
+
+fn with_bounds(mut r: (HilReport, Vec<Sample>), cfg: &Config) -> (HilReport, Vec<Sample>) {
+    for o in &mut r.0.firmware.faults {
+        let kind = FAULTS.iter().find(|(n, _, _)| *n == o.fault).map(|(_, k, _)| *k);
+        o.extra_dead_time_bound_s = kind.and_then(FaultKind::output).map(|f| output_fault_bound_s(cfg, f));
+    }
+    r
 }
 
 /// How many passes a run may take to put a category-0 power removal at its instant (see

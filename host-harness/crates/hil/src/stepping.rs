@@ -166,7 +166,10 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
     plant.sim.probe = Some(Box::new(move |pl, t0, t1, dense| pr.borrow_mut().on_step(pl, t0, t1, dense)));
 
     let scan = ctl.scan_cycle;
-    let mut next_sample = ctl.phase * scan;
+    let (reaction, _) = crate::timing::reaction(scene, ctl);
+    // With the worst phase the sample before the stop output just missed it: the next comes a whole
+    // scan after the output, found once the firmware has written it (until then none is due).
+    let mut next_sample = if opts.worst_phase { f64::INFINITY } else { ctl.phase * scan };
     let mut stop_seen: Option<f64> = None;
     let mut category0 = false;
     let mut power_removed: Option<f64> = None;
@@ -188,6 +191,10 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
         let mut target = (t + if h > 0.0 { h } else { max_step }).min(scene.duration_s);
         if stop_seen.is_none() {
             target = target.min(next_sample.max(t));
+            if opts.worst_phase {
+                // Not past the sample a whole scan after an output written in this step.
+                target = target.min(t + scan);
+            }
         }
         if target <= t {
             target = (t + max_step).min(scene.duration_s);
@@ -204,12 +211,13 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
                 let seen_at = (at + latency_of(path)).max(stop_output.last().map_or(0.0, |l| l.0));
                 stop_output.push((seen_at, level));
             }
-            if level {
+            // Safe: the stop circuit open, or drive power removed (category 0: both relays welded).
+            let esc = rig.category0_requested();
+            if level || esc {
                 for o in outcomes.iter_mut().filter(|o| o.stopped_s.is_none() && o.at_s <= at + 1e-12) {
                     o.stopped_s = Some(at);
                 }
             }
-            let esc = rig.category0_requested();
             if esc && !esc_level {
                 category0 = true;
                 if power_removed.is_none() {
@@ -247,7 +255,12 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
             }
             match input {
                 Input::Edge { t, um } => {
-                    rig.advance_to(t);
+                    // The firmware's clock reads the first whole microsecond at or after the edge
+                    // (never before it: a negative latency otherwise); and not before the plant's
+                    // own located crossing, which the summary's t_detect reports (the two locators
+                    // agree to 1e-12 s).
+                    let located = plant.switch_time().filter(|sw| (sw - t).abs() < 1e-9).map_or(t, |sw| sw.max(t));
+                    rig.advance_to_event(located);
                     rig.set_travel_um(um);
                     note(rig, t, Path::Edge, &mut plant, &mut outcomes);
                 }
@@ -267,10 +280,16 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
             return Ok(Pass::Again { off, streamed_until: last_streamed });
         }
         // The controller's samples up to now.
+        if opts.worst_phase && next_sample.is_infinite() {
+            if let Some(&(at, _)) = stop_output.iter().find(|(_, l)| *l) {
+                next_sample = at + scan;
+            }
+        }
         while next_sample <= now {
             if stop_seen.is_none() && level_at(&stop_output, next_sample) {
                 stop_seen = Some(next_sample);
-                plant.command_brake(next_sample);
+                // The robot reacts `reaction` after its sample saw the stop (timing.rs).
+                plant.command_brake(next_sample + reaction);
             }
             next_sample += scan;
         }
@@ -300,8 +319,10 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
             off + brake.delay
         ));
     }
-    summary.warnings.extend(warnings);
     let switch_time = summary.t_detect;
+    let dead_time = crate::timing::DeadTimeModel::new(scene, ctl, opts.worst_phase, switch_time, &stop_output, stop_seen, summary.t_brake);
+    warnings.extend(dead_time.warning());
+    summary.warnings.extend(warnings);
     let firmware_detect = rig.detected_at_s();
     let event_log = rig
         .events()
@@ -315,13 +336,19 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
             travel_m: e.travel_um as f64 * 1e-6,
         })
         .collect();
-    let go = !rig.stop_requested();
-    let reason = match rig.fw.state() {
+    // "Go" only with the stop circuit closed and drive power on.
+    let go = !rig.stop_requested() && !rig.category0_requested();
+    let mut reason = match rig.fw.state() {
         State::Fault(c) => format!("stopped: fault latched ({})", c.name()),
         State::Tripped => "stopped: trip latched".to_string(),
         State::SelfTest(_) => "stopped: in the self-test".to_string(),
         State::Armed => "GO: the firmware is armed with the fault present (not detected)".to_string(),
     };
+    if !rig.stop_requested() && rig.category0_requested() {
+        reason.push_str("; the stop circuit is still closed (welded), drive power removed (category 0)");
+    } else if go && !matches!(rig.fw.state(), State::Armed) {
+        reason = format!("GO: the stop circuit is closed and drive power on although the firmware is {reason}");
+    }
     for o in &mut outcomes {
         o.ended_in_go = go;
         o.reason = reason.clone();
@@ -334,6 +361,7 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
         firmware_detect,
         firmware_latency: firmware_detect.zip(switch_time).map(|(f, s)| f - s),
         stop_seen,
+        dead_time,
         observed_dead_time: summary.t_brake.zip(switch_time).map(|(b, s)| b - s),
         category0,
         power_removed,
@@ -344,6 +372,11 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
         filter: describe_filter(opts.filter),
         reset_policy: describe_reset(opts.reset),
         event_log,
+        demand_to_safe_s: {
+            let first_stop = stop_output.iter().find(|(_, l)| *l).map(|(at, _)| *at);
+            let first_safe = [first_stop, power_removed].into_iter().flatten().min_by(f64::total_cmp);
+            switch_time.zip(first_safe).map(|(s, f)| (f - s).max(0.0))
+        },
         faults: outcomes,
         stop_output,
     };
@@ -359,10 +392,10 @@ pub(crate) fn level_at(output: &[(f64, bool)], t: f64) -> bool {
 pub(crate) type Note<'n, S> = dyn FnMut(&mut SimRig<S>, f64, Path, &mut Vec<FaultOutcome>) + 'n;
 
 pub(crate) fn inject<S: flinch_firmware::Sensor>(rig: &mut SimRig<S>, f: Injection, apply: &mut impl FnMut(&mut SimRig<S>, FaultKind), outcomes: &mut Vec<FaultOutcome>, note: &mut Note<'_, S>) {
-    rig.advance_to(f.at_s);
+    // An injection is an event: the firmware's clock is not set before it.
+    rig.advance_to_event(f.at_s);
     let before = rig.stop_requested();
-    let name = FAULTS.iter().find(|(_, k, _)| *k == f.kind).map_or("?", |(n, _, _)| *n);
-    outcomes.push(FaultOutcome { fault: name.into(), at_s: f.at_s, stopped_s: None, ended_in_go: false, reason: String::new() });
+    outcomes.push(FaultOutcome { fault: fault_name(f.kind).into(), at_s: f.at_s, stopped_s: None, ended_in_go: false, reason: String::new(), extra_dead_time_bound_s: None });
     apply(rig, f.kind);
     // A level change on a switch input reaches the edge interrupt at once.
     let path = if rig.stop_requested() != before { Path::Edge } else { Path::Tick };

@@ -67,6 +67,9 @@ pub struct BudgetCheck {
     pub failures: Vec<String>,
     /// Why the budget and the simulation disagree, for people (crate::verdict::explain).
     pub explanations: Vec<String>,
+    /// The board's output faults against the budget (issue 25; flinch_hil::output_fault_budget):
+    /// shown, not part of `safe`. Only both relays welded (two faults) add dead time.
+    pub output_faults: Vec<flinch_hil::OutputFaultBudget>,
 }
 
 /// Checks a scene with a travel switch on a bi-stable or hydraulic decoupler.
@@ -91,7 +94,8 @@ pub fn check(scene: &Scene) -> Result<BudgetCheck, String> {
         failures.push(format!("stroke budget: the stopping distance after detection {} exceeds the stroke left at detection {} (escalate to a category-0 stop)", verdict::mm(stop), verdict::mm(remaining)));
     }
     failures.extend(simulated.failures.iter().map(|f| format!("simulation: {f}")));
-    Ok(BudgetCheck { stopping_distance: stop, stopping_law: stopping_law(m), stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits, safe: failures.is_empty(), failures, explanations, simulated })
+    let output_faults = flinch_hil::output_fault_budget(scene, stop, remaining);
+    Ok(BudgetCheck { stopping_distance: stop, stopping_law: stopping_law(m), stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits, safe: failures.is_empty(), failures, explanations, simulated, output_faults })
 }
 
 /// The human text of `flinch check`.
@@ -107,10 +111,33 @@ pub fn human(c: &BudgetCheck) -> String {
     for e in &c.explanations {
         t.push_str(&format!("  why: {e}\n"));
     }
+    t.push_str(&output_faults_line(&c.output_faults));
     if c.safe {
         t.push_str("  CHECK: SAFE (the budget fits and the simulated stroke holds)\n");
     } else {
         t.push_str(&format!("  CHECK: NOT SAFE: {}\n", c.failures.join("; ")));
     }
+    t
+}
+
+/// One line for the board's output faults: the ones that stop as healthy outputs do, and each one
+/// that adds dead time with its stop and whether it fits.
+fn output_faults_line(faults: &[flinch_hil::OutputFaultBudget]) -> String {
+    use flinch_sim::verdict::mm;
+    if faults.is_empty() {
+        return String::new();
+    }
+    let same = faults.iter().filter(|f| f.extra_dead_time_s == 0.0).count();
+    let mut t = format!("  output faults of the board: {same} of {} add no dead time (another channel opens the stop circuit)", faults.len());
+    for f in faults.iter().filter(|f| f.extra_dead_time_s > 0.0) {
+        t.push_str(&format!(
+            "; {}: +{:.3} ms, category 0 only, stopping distance {}: {}",
+            f.fault,
+            f.extra_dead_time_s * 1e3,
+            mm(f.stopping_distance_m),
+            if f.fits { "fits" } else { "DOES NOT FIT (shown, not in the verdict: two welded relays are two faults)" }
+        ));
+    }
+    t.push('\n');
     t
 }

@@ -30,8 +30,12 @@ pub const BRAKE_DELAY: Key = Key::number("brake_delay", "s", Incl(0.0), Incl(1.0
 pub const BRAKE_DECEL: Key = Key::number("brake_decel", "m/s^2", Excl(0.0), Incl(500.0), "up to about 50 g, the bound of motion.decel", "category-0 stop: the arm's deceleration once its brakes act (plant/brake.rs); a motion.stopping table with category = 0 is used instead when given")
     .optional("5 m/s^2, from the UR5/CB3 category-0 stop of its slowest joint (plant/brake.rs)");
 
+/// The robot's reaction once its controller has seen the stop (issue 26 item 2).
+pub const REACTION_TIME: Key = Key::number("reaction_time", "s", Incl(0.0), Incl(1.0), "a robot's reaction to a stop it has read (brake engage, drive delay) takes ms to tens of ms; it is part of motion.dead_time, at most 1 s", "from the controller's scan sample that sees the stop to the start of braking (with motion.stopping: to the stop signal the table starts from): brake engagement, drive delay. `flinch hil` forms its dead time as board latency + the wait for the next scan sample (up to scan_cycle) + reaction_time")
+    .optional("motion.dead_time - scan_cycle: the scene's DT read as one scan cycle plus the robot's reaction (0 when DT is shorter than one scan, with a warning)");
+
 /// The keys of `[controller]`.
-pub const KEYS: &[Key] = &[SCAN_CYCLE, PHASE, FIRMWARE_TICK, BRAKE_DELAY, BRAKE_DECEL];
+pub const KEYS: &[Key] = &[SCAN_CYCLE, PHASE, FIRMWARE_TICK, BRAKE_DELAY, BRAKE_DECEL, REACTION_TIME];
 
 /// Reads `[controller]`.
 pub(super) fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
@@ -45,11 +49,13 @@ pub(super) fn controller(cx: &mut Ctx, t: &Tab) -> Option<Controller> {
     }
     let brake_delay = cx.maybe_number(t, &BRAKE_DELAY);
     let brake_decel = cx.maybe_number(t, &BRAKE_DECEL);
+    let reaction_time = cx.maybe_number(t, &REACTION_TIME);
     Some(Controller {
         scan_cycle: scan_cycle?,
         phase: phase?,
         firmware_tick: firmware_tick?,
         brake_delay: brake_delay?.unwrap_or(DEFAULT_BRAKE_DELAY_S),
         brake_decel: brake_decel?.unwrap_or(DEFAULT_BRAKE_DECEL_MPS2),
+        reaction_time: reaction_time?,
     })
 }

@@ -375,6 +375,21 @@ pub struct Controller {
     pub brake_delay: f64,
     /// Category-0 stop: braking deceleration, m/s^2 (default 5).
     pub brake_decel: f64,
+    /// The robot's reaction once a scan sample has seen the stop, s (`[controller] reaction_time`):
+    /// from that sample to braking (with `motion.stopping`, to the table's stop signal). `None`:
+    /// the scene's `motion.dead_time` less one scan cycle ([`Controller::reaction`]).
+    pub reaction_time: Option<f64>,
+}
+
+/// Where a firmware-in-the-loop run's robot reaction came from ([`Controller::reaction`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ReactionSource {
+    /// `[controller] reaction_time` (or `flinch hil --reaction-time`).
+    Given,
+    /// `motion.dead_time - scan_cycle`: the scene's DT split into one scan and the reaction.
+    DeadTimeLessScan,
+    /// 0: `motion.dead_time` is shorter than one scan cycle, so no split of it leaves a reaction.
+    DeadTimeShorterThanScan,
 }
 
 // The category-0 brake's defaults (`[controller] brake_delay`, `brake_decel`; plant/brake.rs models the brake):
@@ -395,6 +410,18 @@ pub const DEFAULT_BRAKE_DECEL_MPS2: f64 = 5.0;
 impl Controller {
     /// A controller with the category-0 brake's defaults (`plant/brake.rs`).
     pub const fn new(scan_cycle: f64, phase: f64, firmware_tick: f64) -> Self {
-        Self { scan_cycle, phase, firmware_tick, brake_delay: DEFAULT_BRAKE_DELAY_S, brake_decel: DEFAULT_BRAKE_DECEL_MPS2 }
+        Self { scan_cycle, phase, firmware_tick, brake_delay: DEFAULT_BRAKE_DELAY_S, brake_decel: DEFAULT_BRAKE_DECEL_MPS2, reaction_time: None }
+    }
+
+    /// The robot's reaction after the scan sample that saw the stop, s, and where it came from:
+    /// `reaction_time` when given, else the part of `dead_time` (the scene's DT) beyond one scan
+    /// cycle, DT = scan_cycle + reaction (the worst case of a scan: the sample came just before the
+    /// stop), and 0 when DT is shorter than one scan.
+    pub fn reaction(&self, dead_time: f64) -> (f64, ReactionSource) {
+        match self.reaction_time {
+            Some(r) => (r, ReactionSource::Given),
+            None if dead_time >= self.scan_cycle => (dead_time - self.scan_cycle, ReactionSource::DeadTimeLessScan),
+            None => (0.0, ReactionSource::DeadTimeShorterThanScan),
+        }
     }
 }

@@ -379,6 +379,37 @@ case!(
     "allowed range [0, 1) of a scan cycle (a phase is a fraction of one cycle), got -0.1"
 );
 case!(
+    controller_reaction_time_negative,
+    BASE,
+    "phase = 0.5\n",
+    "phase = 0.5\nreaction_time = -0.01\n",
+    "controller.reaction_time",
+    "reaction_time",
+    "allowed range [0, 1] s"
+);
+case!(
+    controller_reaction_time_beyond_a_second,
+    BASE,
+    "phase = 0.5\n",
+    "phase = 0.5\nreaction_time = 1.5\n",
+    "controller.reaction_time",
+    "reaction_time",
+    "part of motion.dead_time, at most 1 s"
+);
+
+/// `[controller] reaction_time` is read as given; without it the controller splits the scene's DT.
+#[test]
+fn controller_reaction_time_is_read_and_splits_the_dead_time_by_default() {
+    let s = parse(&mutate(BASE, "phase = 0.5\n", "phase = 0.5\nreaction_time = 0.03\n"), "r.toml").unwrap();
+    let c = s.controller.unwrap();
+    assert_eq!(c.reaction_time, Some(0.03));
+    assert_eq!(c.reaction(0.016), (0.03, ReactionSource::Given));
+    let c = Controller::new(0.016, 0.0, 1e-4);
+    assert_eq!(c.reaction(0.046).1, ReactionSource::DeadTimeLessScan);
+    assert!((c.reaction(0.046).0 - 0.03).abs() < 1e-15);
+    assert_eq!(c.reaction(0.01), (0.0, ReactionSource::DeadTimeShorterThanScan));
+}
+case!(
     controller_tick_missing,
     BASE,
     "firmware_tick = 1e-4\n",
