@@ -37,11 +37,21 @@ impl Headline {
     /// A title for a figure or a page: the name, what was simulated, and `(name says ...)` when
     /// the name is contradicted.
     pub fn title(&self) -> String {
+        format!("{}\nsimulated: {}{}", self.name, self.short(), self.flag())
+    }
+
+    /// The name with its flag: `name (NAME MISMATCH: name says V_c = 0.2 m/s)`, or the name.
+    pub fn flagged_name(&self) -> String {
+        format!("{}{}", self.name, self.flag())
+    }
+
+    /// ` (NAME MISMATCH: name says ...)` when the name is contradicted, else empty.
+    fn flag(&self) -> String {
         if self.mismatches.is_empty() {
-            format!("{}: {}", self.name, self.short())
-        } else {
-            format!("{}: {} (NAME MISMATCH: {})", self.name, self.short(), self.mismatches.join("; "))
+            return String::new();
         }
+        let says: Vec<&str> = self.mismatches.iter().map(|m| m.split(';').next().unwrap_or(m).trim_start_matches("the name says ")).collect();
+        format!(" (NAME MISMATCH: name says {})", says.join(", "))
     }
 
     /// The simulated text up to its first `;` (V_c and DT), for titles.
@@ -72,11 +82,11 @@ fn module(sc: &Scene) -> String {
         Decoupler::Linear(l) if l.stiffness == 0.0 => format!("free tool (linear, k = 0, zeta = {}){switch}", g(l.damping_ratio)),
         Decoupler::Linear(l) => format!("linear spring-damper module (k = {} N/m, zeta = {}){switch}", g(l.stiffness), g(l.damping_ratio)),
         Decoupler::Bistable(b) => format!(
-            "bi-stable module ({} springs x {} N/m, H = {}, C1 + C2 = {} + {}{switch})",
+            "bi-stable module ({} springs x {} N/m, H = {}, C1 + C2 = {:.1} + {}{switch})",
             b.springs,
             g(b.spring_rate),
             mm(b.height),
-            g(b.front_stroke * 1e3),
+            b.front_stroke * 1e3,
             mm(b.back_stroke)
         ),
         Decoupler::Hydraulic(h) => format!("hydraulic module (stroke L = {}, p10 = {} kPa{switch})", mm(h.stroke), g(h.gas_pressure * 1e-3)),
@@ -159,7 +169,16 @@ fn module_word(k: &str) -> &'static str {
 
 /// The claims of the name the scene contradicts.
 fn mismatches(sc: &Scene) -> Vec<String> {
-    let name = sc.name.as_str();
+    let mut out = number_mismatches(sc, &sc.name);
+    out.extend(word_mismatches(sc, &sc.name));
+    out
+}
+
+/// The numeric claims of `text` (V_c, DT, H, m_t, an object's grams) that the scene contradicts:
+/// what a longer text about the scene (the report's description) is checked for, since its words
+/// may speak of other scenes.
+pub fn number_mismatches(sc: &Scene, text: &str) -> Vec<String> {
+    let name = text;
     let mut out = Vec::new();
     if let Some((x, d, _)) = number_after(name, "V_c = ") {
         if !same(x, d, sc.motion.speed) {
@@ -195,6 +214,12 @@ fn mismatches(sc: &Scene) -> Vec<String> {
             }
         }
     }
+    out
+}
+
+/// The module, body region and contact words of `name` that the scene contradicts.
+fn word_mismatches(sc: &Scene, name: &str) -> Vec<String> {
+    let mut out = Vec::new();
     if let Some((claim, _)) = claimed_module(name) {
         let sim = simulated_module(&sc.decoupler);
         // A free tool is a linear decoupler with k = 0: "linear" in the name allows either.
@@ -265,6 +290,9 @@ mod tests {
             let Ok(sc) = crate::scene::parse(text, name) else { continue };
             let h = headline(&sc);
             assert!(h.mismatches.is_empty(), "{name}: {:?}", h.mismatches);
+            // The report reads the first comment block the same way.
+            let d = number_mismatches(&sc, &crate::shipped::description(text));
+            assert!(d.is_empty(), "{name}'s description: {d:?}");
             assert!(h.simulated.starts_with("V_c = "), "{name}: {}", h.simulated);
         }
     }
@@ -275,7 +303,7 @@ mod tests {
         assert!(h.simulated.starts_with("V_c = 0.500 m/s, DT = 16.0 ms"), "{}", h.simulated);
         assert_eq!(h.mismatches, vec!["the name says V_c = 0.2 m/s; simulated V_c = 0.500 m/s".to_string()]);
         assert!(h.lines().contains("  NAME MISMATCH: the name says V_c = 0.2 m/s"));
-        assert!(h.title().contains("(NAME MISMATCH: the name says V_c = 0.2 m/s"));
+        assert!(h.title().ends_with("V_c = 0.2 m/s\nsimulated: V_c = 0.500 m/s, DT = 16.0 ms, d_c = 2 m/s^2 (NAME MISMATCH: name says V_c = 0.2 m/s)"), "{}", h.title());
         // The name's precision: 0.2 matches 0.204, not 0.25.
         assert!(headline(&shipped("body_hand", &["motion.speed=0.204"])).mismatches.is_empty());
         assert_eq!(headline(&shipped("body_hand", &["motion.speed=0.25"])).mismatches.len(), 1);

@@ -203,12 +203,33 @@ pub fn draw(path: &Path, title: &str, x: &XAxis, panels: &[Panel]) -> Result<(),
 }
 
 /// Draws the panels onto `root`.
+/// Draws `title` centred at the top of `root`, one line per `\n` (a scene's name, then what was
+/// simulated), and returns the area below it.
+pub fn titled<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, size: u32) -> Result<DrawingArea<DB, Shift>, DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB::ErrorType: 'static,
+{
+    let lines: Vec<&str> = title.lines().collect();
+    if lines.len() <= 1 {
+        return root.titled(title, ("sans-serif", size));
+    }
+    let (w, _) = root.dim_in_pixel();
+    let step = size as i32 + 6;
+    for (i, l) in lines.iter().enumerate() {
+        // The first line at the title's size, the rest a little smaller.
+        let s = if i == 0 { size } else { size.saturating_sub(3).max(10) };
+        let style = TextStyle::from(("sans-serif", s).into_font()).pos(plotters::style::text_anchor::Pos::new(plotters::style::text_anchor::HPos::Center, plotters::style::text_anchor::VPos::Top));
+        root.draw(&Text::new(l.to_string(), (w as i32 / 2, 4 + step * i as i32), style))?;
+    }
+    Ok(root.split_vertically((step * lines.len() as i32 + 8) as u32).1)
+}
+
 pub fn draw_on<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, x: &XAxis, panels: &[Panel]) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let root = root.titled(title, ("sans-serif", 20))?;
+    let root = titled(root, title, 20)?;
     let xs = panels.iter().flat_map(|p| p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)).chain(p.marks.iter().map(|m| m.x)));
     let (x0, x1) = if x.log { log_range(xs) } else { let (a, b) = finite_range(xs); tight(a, b, panels) };
     let total: f64 = panels.iter().map(|p| if p.weight > 0.0 { p.weight } else { 1.0 }).sum();

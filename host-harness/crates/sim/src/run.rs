@@ -33,6 +33,10 @@ pub struct Run {
     pub(crate) driver: Driver<N, E>,
     pub(crate) method: Method,
     pub(crate) duration: f64,
+    /// What the scene simulates and what its name claims (`flinch_model::headline`).
+    pub(crate) headline: flinch_model::headline::Headline,
+    /// The commanded motion and the gap, for `Summary::as_commanded`.
+    pub(crate) commanded: (flinch_model::scene::Motion, f64),
 }
 
 impl Run {
@@ -50,7 +54,8 @@ impl Run {
         };
         let driver = Driver::new(&sim, 0.0, y0, Settings { max_step: s.max_step, ..Default::default() });
         sim.on_step(0.0, 0.0, &y0, &|_| y0);
-        Self { sim, stepper, driver, method: s.method, duration: scene.duration_s }
+        let headline = flinch_model::headline::headline(scene);
+        Self { sim, stepper, driver, method: s.method, duration: scene.duration_s, headline, commanded: (scene.motion, scene.target.gap) }
     }
 
     /// Integrates to `t` (clamped to the scene's duration).
@@ -165,6 +170,8 @@ impl Run {
         };
         let mut summary = Summary {
             scene: s.name.clone(),
+            simulated: self.headline.simulated.clone(),
+            name_mismatches: self.headline.mismatches.iter().cloned().chain(flinch_model::headline::mode_mismatch(&s.name, mode)).collect(),
             t_contact: s.t_contact,
             t_detect: s.t_detect,
             t_brake,
@@ -182,7 +189,9 @@ impl Run {
             steps: stats.steps,
             rhs_evals: s.rhs_evals.get(),
             t_stop: s.plant.motion.t_stop(),
-            approach_velocity: s.v_in_first,
+            approach_speed_mps: s.v_in_first,
+            as_commanded: true,
+            not_as_commanded: self.not_as_commanded(s.t_contact, s.v_in_first),
             contacts: s.contacts,
             object_peak_velocity: object.then_some(s.peak_object_v),
             max_travel: s.max_travel,
@@ -244,6 +253,7 @@ impl Run {
             }
             summary.body_limits_pass = Some(c.failures.is_empty());
         }
+        summary.as_commanded = summary.not_as_commanded.is_empty();
         summary.failures = crate::verdict::failures(&summary);
         summary.safe = summary.failures.is_empty();
         summary
@@ -251,6 +261,27 @@ impl Run {
 }
 
 impl Run {
+    /// What the run did not simulate as the scene commands it: the flange still accelerating
+    /// when the tool met the target (exact from the motion law: the commanded speed at
+    /// t_contact below `motion.speed`, before any braking).
+    fn not_as_commanded(&self, t_contact: Option<f64>, approach: Option<f64>) -> Vec<String> {
+        let (m, gap) = self.commanded;
+        let Some(tc) = t_contact else { return Vec::new() };
+        let braking = self.sim.plant.motion.t_brake().is_some_and(|tb| tb <= tc);
+        let v = self.sim.plant.motion.at(tc).v;
+        if m.start_at_speed || braking || v >= m.speed * (1.0 - 1e-9) {
+            return Vec::new();
+        }
+        vec![format!(
+            "the flange had reached only {:.3} m/s of motion.speed = {} m/s when the tool met the target (gap {:.1} mm < V_c^2/2a_c = {:.1} mm): the impact is at {}, not V_c; raise target.gap or set motion.start_at_speed",
+            v,
+            m.speed,
+            gap * 1e3,
+            m.speed * m.speed / (2.0 * m.accel) * 1e3,
+            approach.map_or("the speed the flange had".to_string(), |a| format!("{a:.3} m/s")),
+        )]
+    }
+
     /// At the run's end: how far the flange can still advance towards the target (m; see
     /// `Summary::flange_reach_after_end_m`), and the stroke left (m; None without a back
     /// end-stop or for a rigid tool).

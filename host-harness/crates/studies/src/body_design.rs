@@ -373,8 +373,8 @@ pub fn human(r: &BodyDesign) -> String {
 }
 
 /// Runs `flinch design SCENE --body-region WHICH` (`design::run` passes its arguments).
-pub fn run(scene: &std::path::Path, which: &str, dead_time: Option<f64>, rigid_sensor: f64, json: bool) -> Result<bool, String> {
-    let t = Template::load(scene).map_err(|e| e.to_string())?;
+pub fn run(scene: &std::path::Path, sets: &[flinch_model::overrides::Set], which: &str, dead_time: Option<f64>, rigid_sensor: f64, json: bool) -> Result<bool, String> {
+    let t = Template::load_with(scene, sets).map_err(|e| e.to_string())?;
     let r = design(&t, which, dead_time, rigid_sensor).map_err(|e| format!("{}: {e}", scene.display()))?;
     if json {
         println!("{}", serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?);

@@ -52,6 +52,10 @@ pub struct DesignArgs {
     /// With --body-region: the force threshold of the rigid tool's sensor, N.
     #[arg(long = "rigid-sensor", value_name = "N", default_value_t = crate::body_design::RIGID_SENSOR_N)]
     pub rigid_sensor: f64,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = flinch_model::overrides::Set::parse)]
+    pub set: Vec<flinch_model::overrides::Set>,
 }
 
 /// One simulated candidate.
@@ -383,7 +387,9 @@ pub fn human(r: &DesignReport) -> String {
     use flinch_sim::verdict::{mm, mm_signed, mps, ms};
     use std::fmt::Write;
     let mut o = String::new();
-    let _ = writeln!(o, "{} ({} module, m_t = {} kg)", r.scene, r.module, r.tool_mass);
+    // The design point as simulated (after --speed, --stroke, --dead-time and --set).
+    let s = &r.design.summary;
+    o.push_str(&check::headline_lines(&r.scene, &s.simulated, &s.name_mismatches));
     match r.stopping_table_max_speed_mps {
         None => {
             let _ = writeln!(o, "  robot: V_c = {}, DT = {}, d_c = {} m/s^2; switch travel d_sw = {}", mps(r.speed), ms(r.dead_time), r.decel, mm(r.switch_travel));
@@ -492,9 +498,9 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
         if a.stroke.is_some() || a.speed.is_some() || a.plot.is_some() {
             return Err("--body-region: --stroke, --speed and --plot do not apply (the speed is what it searches)".into());
         }
-        return crate::body_design::run(&a.scene, which, a.dead_time, a.rigid_sensor, a.json);
+        return crate::body_design::run(&a.scene, &a.set, which, a.dead_time, a.rigid_sensor, a.json);
     }
-    let t = Template::load(&a.scene).map_err(|e| e.to_string())?;
+    let t = Template::load_with(&a.scene, &a.set).map_err(|e| e.to_string())?;
     let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     if a.json {
         print!("{}", flinch_output::to_json(&flinch_output::Versioned::new(&r)));

@@ -429,7 +429,7 @@ impl Ctx<'_> {
                 self.err(
                     line,
                     tab.key(key),
-                    format!("unknown key{what}{hint}; allowed keys: {list}"),
+                    format!("unknown key{what}; allowed keys: {list}{hint}"),
                 );
             }
         }

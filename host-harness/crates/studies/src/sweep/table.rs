@@ -34,7 +34,9 @@ impl SweepResult {
     /// Writes the CSV (the `csv` crate quotes): the swept keys, every `Summary` field, then
     /// `status` (ok, refused, failed) and `reason` (the validator's or the solver's message).
     pub fn write_csv(&self, out: &mut dyn Write) -> io::Result<()> {
-        let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).collect()).unwrap_or_default();
+        // `simulated` is the same text at every point but the swept keys: the sweep prints it once
+        // (standard error); `name_mismatches` stays, per point.
+        let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).filter(|k| k != "simulated").collect()).unwrap_or_default();
         let mut w = csv::Writer::from_writer(out);
         let mut header: Vec<String> = self.axes.iter().map(|a| a.key.clone()).collect();
         header.extend(names.iter().cloned());
