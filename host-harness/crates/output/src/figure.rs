@@ -29,6 +29,17 @@ pub enum Style {
     Steps,
     /// Thin line (measured data under the simulated).
     Thin,
+    /// An open ring around the point (a NOT SAFE point of a sweep).
+    Ring,
+    /// An open diamond (a point not concluded).
+    Diamond,
+    /// A hollow circle (a point not simulated as commanded).
+    Hollow,
+}
+
+/// A diamond of half-size `r` px around `(x, y)`, open, as a closed path.
+fn diamond((x, y): (i32, i32), r: i32) -> Vec<(i32, i32)> {
+    vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y), (x, y - r)]
 }
 
 /// A named series; points whose x or y is not finite break the line.
@@ -338,6 +349,9 @@ where
                 Style::Dashed => { chart.draw_series(DashedLineSeries::new(run, 7, 5, c.stroke_width(2)))?; }
                 Style::Points => { chart.draw_series(run.iter().map(|&q| Circle::new(q, 4, c.filled())))?; }
                 Style::Crosses => { chart.draw_series(run.iter().map(|&q| Cross::new(q, 6, c.stroke_width(2))))?; }
+                Style::Ring => { chart.draw_series(run.iter().map(|&q| Circle::new(q, 9, c.stroke_width(2))))?; }
+                Style::Hollow => { chart.draw_series(run.iter().map(|&q| Circle::new(q, 6, c.stroke_width(2))))?; }
+                Style::Diamond => { chart.draw_series(run.iter().map(|&q| EmptyElement::at(q) + PathElement::new(diamond((0, 0), 8), c.stroke_width(2))))?; }
                 Style::Steps => {
                     let mut st = Vec::with_capacity(run.len() * 2);
                     for (i, &(a, b)) in run.iter().enumerate() {
@@ -388,6 +402,9 @@ where
             Style::Dashed => area.draw(&PathElement::new(vec![(x0, ym), (x0 + 10, ym)], c.stroke_width(2))).and_then(|_| area.draw(&PathElement::new(vec![(x0 + 17, ym), (x1, ym)], c.stroke_width(2))))?,
             Style::Points => area.draw(&Circle::new(((x0 + x1) / 2, ym), 4, c.filled()))?,
             Style::Crosses => area.draw(&Cross::new(((x0 + x1) / 2, ym), 6, c.stroke_width(2)))?,
+            Style::Ring => area.draw(&Circle::new(((x0 + x1) / 2, ym), 8, c.stroke_width(2)))?,
+            Style::Hollow => area.draw(&Circle::new(((x0 + x1) / 2, ym), 6, c.stroke_width(2)))?,
+            Style::Diamond => area.draw(&PathElement::new(diamond(((x0 + x1) / 2, ym), 7), c.stroke_width(2)))?,
             Style::Thin => area.draw(&PathElement::new(vec![(x0, ym), (x1, ym)], c.stroke_width(1)))?,
             _ => area.draw(&PathElement::new(vec![(x0, ym), (x1, ym)], c.stroke_width(2)))?,
         }

@@ -63,7 +63,7 @@ pub const METRICS: &[&str] = &[
     "object_final_velocity", "mode", "stroke_exhausted", "achieved_restitution", "steps", "rhs_evals", "t_stop",
     "approach_speed_mps", "contacts", "object_peak_velocity", "max_travel", "decoupler_impulse", "peak_gas_pressure",
     "rejected_steps", "events", "peak_robot_force_t_s", "first_impact_peak_robot_force_n", "first_impact_peak_robot_force_t_s",
-    "stroke_left_min_m", "target_deformation_max_m", "closest_approach_m", "concluded", "t_end_s", "flange_reach_after_end_m", "safe",
+    "stroke_left_min_m", "target_deformation_max_m", "closest_approach_m", "concluded", "t_end_s", "flange_reach_after_end_m", "safe", "as_commanded", "body_limits_pass",
 ];
 
 /// Checks a metric name before anything runs.
