@@ -113,3 +113,23 @@ fn design_headline_follows_its_options() {
     let (lines, _, _) = head(&["design", "tables5-7_bistable", "--set", "motion.dead_time=0.046"]);
     assert!(lines[1].contains("DT = 46.0 ms"), "{lines:?}");
 }
+
+/// `run` at a speed the flange never reaches before contact says so (issue 26 item 3: the old
+/// run printed SAFE and "approach 0.1436 m/s" with no note at all).
+#[test]
+fn run_says_when_the_flange_never_reached_its_speed() {
+    let o = flinch().args(["run", "tables5-7_bistable", "--set", "motion.speed=0.3"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    // After the name, what was simulated and the name's mismatch.
+    assert!(out.lines().nth(3).unwrap().starts_with("  NOT AS COMMANDED: the flange had reached only 0.14"), "{out}");
+    let o = flinch().args(["run", "tables5-7_bistable", "--json", "--set", "motion.speed=0.3"]).output().unwrap();
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["as_commanded"], false);
+    assert!(j["approach_speed_mps"].as_f64().unwrap() < 0.15);
+    // Reached: nothing to say.
+    let o = flinch().args(["run", "tables5-7_bistable", "--json", "--set", "motion.speed=0.1"]).output().unwrap();
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["as_commanded"], true);
+    assert_eq!(j["not_as_commanded"].as_array().unwrap().len(), 0);
+}
