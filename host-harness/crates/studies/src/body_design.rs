@@ -279,8 +279,10 @@ pub fn design(t: &Template, which: &str, dead_time: Option<f64>, rigid_sensor_n:
         ),
         format!("rigid tool: decoupler.kind = \"rigid\" (m_t joins the robot) and a {rigid_sensor_n} N force sensor in the tool (--rigid-sensor; 25 N as tables5-7_rigid.toml, Ch. 3.1.2)"),
         format!(
-            "closed form (ISO/TS 15066 Annex A): v = F / sqrt(mu k), {}; m_R = m_t = {m_t} kg with the module (the tool alone meets the body), {} for the rigid tool. Impact energy only: the robot driving on until it detects and brakes, its compliance and the module's stroke are not in it",
-            if own.contact == BodyContact::Transient { "mu = (1/m_H + 1/m_R)^-1, F = 2x Table A.2 (transient)" } else { "mu = m_R (clamped: the body cannot recoil), F = Table A.2 (quasi-static)" },
+            "closed form (ISO/TS 15066 Annex A): v = F / sqrt(mu k), {}, F the smaller of the force limit and the pressure limit x the contact area ({}: {}); m_R = m_t = {m_t} kg with the module (the tool alone meets the body), {} for the rigid tool. Impact energy only: the robot driving on until it detects and brakes, its compliance and the module's stroke are not in it",
+            if own.contact == BodyContact::Transient { "mu = (1/m_H + 1/m_R)^-1, limits 2x Table A.2 (transient)" } else { "mu = m_R (clamped: the body cannot recoil), limits Table A.2 (quasi-static)" },
+            own.region.name,
+            own.closed_form_force().map_or("contact not permitted".to_string(), |(f, why)| format!("{f:.0} N, {why}")),
             match m_r {
                 Some(m) => format!("m_R = m_r + m_t = {} kg", m + m_t),
                 None => "m_R infinite (no [robot]: the flange follows its command)".into(),
