@@ -272,9 +272,10 @@ pub fn page_with(text: &str, file: &str, sets: &[flinch_model::overrides::Set], 
     let overall = s.safe && chk.as_ref().map_or(true, |c| c.safe) && des.as_ref().map_or(true, |d| d.safe);
     let mut h = String::new();
     let w = &mut h;
+    let command = crate::document::command_line();
     // The title says what was simulated, and flags a name (or description) it contradicts.
     let hl = flinch_model::headline::headline(&sc);
-    let _ = write!(w, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Flinch report: {}</title><style>{CSS}</style></head><body>\n", esc(&hl.title().replace('\n', ": ")));
+    let _ = write!(w, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Flinch report: {}</title><style>{CSS}{}</style></head><body>\n", esc(&hl.title().replace('\n', ": ")), crate::document::footer_css(env!("CARGO_PKG_VERSION"), &sha256_hex(text), &command));
     let _ = writeln!(w, "<h1>Flinch report: {}</h1>", esc(&sc.name));
     let _ = writeln!(w, "<p id=\"simulated\"><b>Simulated:</b> {}</p>", esc(&hl.simulated));
     for m in &s.name_mismatches {
@@ -286,7 +287,7 @@ pub fn page_with(text: &str, file: &str, sets: &[flinch_model::overrides::Set], 
     let description = shipped::description(text);
     if !description.is_empty() && description != sc.name {
         let stale = flinch_model::headline::number_mismatches(&sc, &description);
-        let _ = writeln!(w, "<p>{}</p>", esc(&description));
+        let _ = writeln!(w, "<p>{}</p>", crate::document::prose(&description));
         for m in stale {
             let _ = writeln!(w, "<p class=\"name-mismatch\"><span class=\"bad\">DESCRIPTION MISMATCH</span> {}</p>", esc(&m.replace("the name says", "the description says")));
         }
@@ -295,7 +296,7 @@ pub fn page_with(text: &str, file: &str, sets: &[flinch_model::overrides::Set], 
         let list = sets.iter().map(|s| format!("<code>{}</code>", esc(&s.shown()))).collect::<Vec<_>>().join(", ");
         let _ = writeln!(w, "<p id=\"overrides\">Overrides: {list}. The file as read has SHA-256 <span class=\"hash\">{}</span>; the simulated text (below) {}.</p>", sha256_hex(original), sha256_hex(text));
     }
-    let _ = writeln!(w, "<table class=\"meta\"><tr><td>scene</td><td>{}</td></tr><tr><td>SHA-256</td><td class=\"hash\" id=\"sha256\">{}</td></tr><tr><td>tool</td><td>flinch {} (flinch-harness)</td></tr><tr><td>safe means</td><td>docs/verdicts.md: the stroke left while the tool touches the target stays positive, and (check, design) the stopping-distance budget fits</td></tr></table>", esc(file), sha256_hex(text), env!("CARGO_PKG_VERSION"));
+    let _ = writeln!(w, "<table class=\"meta\"><tr><td>scene</td><td>{}</td></tr><tr><td>SHA-256</td><td class=\"hash\" id=\"sha256\">{}</td></tr><tr><td>tool</td><td>flinch {} (flinch-harness)</td></tr><tr><td>written</td><td id=\"written\">{}</td></tr><tr><td>command</td><td id=\"command\"><code>{}</code></td></tr><tr><td>safe means</td><td>docs/verdicts.md: the stroke left while the tool touches the target stays positive, and (check, design) the stopping-distance budget fits</td></tr></table>", esc(file), sha256_hex(text), env!("CARGO_PKG_VERSION"), crate::document::written_at(), esc(&command));
 
     // Verdicts.
     let _ = writeln!(w, "<h2>Verdicts</h2>");
@@ -329,7 +330,7 @@ pub fn page_with(text: &str, file: &str, sets: &[flinch_model::overrides::Set], 
     if let Some(o) = sj.as_object() {
         let _ = writeln!(w, "<h3>Verdict fields of the run summary</h3><table id=\"verdict-fields\"><tr><th>field</th><th>value</th><th>unit</th></tr>");
         // A null reason beside a defined value says nothing.
-        for (k, v) in o.iter().filter(|(k, v)| verdict_like(k) && !(k.ends_with("_null_reason") && v.is_null())) {
+        for (k, v) in o.iter().filter(|(k, v)| verdict_like(k) && crate::document::applies(k, s) && !(k.ends_with("_null_reason") && v.is_null())) {
             let _ = writeln!(w, "<tr><td>{}</td><td class=\"num\">{}</td><td>{}</td></tr>", esc(k), esc(&cell(v)), esc(&unit(k)));
         }
         let _ = writeln!(w, "</table>");
@@ -341,6 +342,10 @@ pub fn page_with(text: &str, file: &str, sets: &[flinch_model::overrides::Set], 
         if !r.notes.is_empty() {
             let _ = writeln!(w, "<h3>Design notes</h3><ul>{}</ul>", r.notes.iter().map(|x| format!("<li>{}</li>", esc(x))).collect::<String>());
         }
+    }
+
+    if let Some(t) = crate::document::iso_ts_15066(&sc, s) {
+        w.push_str(&t);
     }
 
     // Inputs.
@@ -370,7 +375,7 @@ pub fn page_with(text: &str, file: &str, sets: &[flinch_model::overrides::Set], 
     // Everything else.
     let _ = writeln!(w, "<h2>Run summary (every field)</h2><table id=\"summary\"><tr><th>field</th><th>value</th><th>unit</th></tr>");
     if let Some(o) = sj.as_object() {
-        for (k, v) in o {
+        for (k, v) in o.iter().filter(|(k, _)| crate::document::applies(k, s)) {
             let _ = writeln!(w, "<tr><td>{}</td><td class=\"num\">{}</td><td>{}</td></tr>", esc(k), esc(&cell(v)), esc(&unit(k)));
         }
     }
