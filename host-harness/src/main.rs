@@ -424,7 +424,8 @@ fn main() -> ExitCode {
             Err(e) => Err(Failure::runtime(e)),
         }),
         Command::Robot(a) => flinch_harness::kinematics::cli::run(a),
-        Command::Design(a) => classify(overrides::load(&a.scene, &a.set).map(|_| ()), flinch_harness::design::run(a)),
+        // Everything refused before a run is bad input (exit 2); after that, a runtime failure.
+        Command::Design(a) => classify(flinch_harness::design::refusal_of(a).map_or(Ok(()), Err), flinch_harness::design::run(a)),
         Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),
         Command::Report(a) => report::html::run(a),
     };

@@ -133,3 +133,30 @@ fn run_says_when_the_flange_never_reached_its_speed() {
     assert_eq!(j["as_commanded"], true);
     assert_eq!(j["not_as_commanded"].as_array().unwrap().len(), 0);
 }
+
+/// Issue 26 item 7: input refused before anything runs exits 2 (these exited 3), and a scene for
+/// another command gets one line naming it (seven lines of missing keys before).
+#[test]
+fn refusals_exit_2_everywhere() {
+    for args in [
+        &["design", "body_hand", "--body-region", "foot"][..],
+        &["design", "tables5-7_bistable", "--body-region", "hand"],
+        &["design", "tables5-7_bistable", "--stroke", "0.001"],
+        &["design", "tables5-7_bistable", "--speed", "9"],
+        &["design", "tables5-7_bistable", "--dead-time", "5"],
+        &["design", "tables5-7_bistable", "--plot", "x.txt"],
+    ] {
+        let (_, code, err) = head(args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+    }
+    for cmd in ["run", "check", "design", "sweep"] {
+        let mut args = vec![cmd, "avoid_operator_hand"];
+        if cmd == "sweep" {
+            args.extend(["--vary", "motion.speed=0.1:0.2:2"]);
+        }
+        let (_, code, err) = head(&args);
+        assert_eq!(code, Some(2), "{cmd}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{cmd}: {err}");
+        assert!(err.contains("run it with `flinch avoid avoid_operator_hand`"), "{cmd}: {err}");
+    }
+}

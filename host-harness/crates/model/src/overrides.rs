@@ -165,6 +165,9 @@ fn explain(e: &SceneError, original: &str, text: &str, sets: &[Set]) -> String {
 /// Applies `sets` to a scene's text (later sets win) and validates the result. Without sets the
 /// text is validated as it is and the error is the validator's own.
 pub fn apply(file: &str, original: String, sets: &[Set]) -> Result<Loaded, String> {
+    if let Some(e) = other_command(file, &original) {
+        return Err(e);
+    }
     if sets.is_empty() {
         let scene = scene::parse(&original, file).map_err(|e| e.to_string())?;
         return Ok(Loaded { file: file.to_string(), text: original.clone(), original, scene });
@@ -184,6 +187,15 @@ pub fn apply(file: &str, original: String, sets: &[Set]) -> Result<Loaded, Strin
         Ok(scene) => Ok(Loaded { file: file.to_string(), original, text, scene }),
         Err(e) => Err(explain(&e, &original, &text, sets)),
     }
+}
+
+/// One line for an avoidance scene given to an impact command (`flinch run avoid_operator_hand`
+/// listed seven missing keys): it names the command that reads it.
+fn other_command(file: &str, text: &str) -> Option<String> {
+    let doc: DocumentMut = text.parse().ok()?;
+    let is_avoid = doc.contains_key("avoid") && !doc.contains_key("motion") && !doc.contains_key("decoupler");
+    let arg = file.trim_end_matches(" (shipped)");
+    is_avoid.then(|| format!("{file}: an avoidance scene (it has an [avoid] table and no impact tables): run it with `flinch avoid {arg}`"))
 }
 
 /// Reads a scene argument ([`crate::shipped::read`]) and applies `sets` ([`apply`]).
@@ -249,6 +261,15 @@ mod tests {
         assert!(!e.contains("--set motion.speed"), "{e}");
         let m = line_map("a\nb\nc\n", "a\nx\nb\nc\n");
         assert_eq!(m, vec![Some(1), None, Some(2), Some(3)]);
+    }
+
+    /// Issue 26 item 7: `flinch run avoid_operator_hand` gave seven lines of missing keys.
+    #[test]
+    fn a_scene_for_another_command_gets_one_line_naming_it() {
+        let text = crate::shipped::get("avoid_operator_hand").unwrap().to_string();
+        let e = apply("avoid_operator_hand (shipped)", text, &[]).unwrap_err();
+        assert_eq!(e.lines().count(), 1, "{e}");
+        assert!(e.ends_with("run it with `flinch avoid avoid_operator_hand`"), "{e}");
     }
 
     #[test]

@@ -200,6 +200,20 @@ pub fn regions(which: &str) -> Result<Vec<&'static Preset>, String> {
     body::preset(which).map(|p| vec![p]).ok_or_else(|| format!("--body-region: must be one of \"all\" | {}, got {which:?}", body::REGION_NAMES.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(" | ")))
 }
 
+/// The input checks of [`design`], before it simulates (`design::refusal_of`): `None` when good.
+pub fn refusal(t: &Template, which: &str, dead_time: Option<f64>, rigid_sensor_n: f64) -> Option<String> {
+    if let Err(e) = regions(which) {
+        return Some(e);
+    }
+    if !matches!(t.base.target.kind, TargetKind::BodyRegion(_)) {
+        return Some("target.kind: flinch design --body-region needs a [target] with kind = \"body_region\" (its contact, area and gap are used for every region)".into());
+    }
+    if dead_time.is_some_and(|d| !(d >= 0.0 && d.is_finite())) {
+        return Some(format!("--dead-time: must be >= 0 and finite, got {}", dead_time.unwrap_or(f64::NAN)));
+    }
+    (!(rigid_sensor_n.is_finite() && rigid_sensor_n > 0.0)).then(|| format!("--rigid-sensor: must be > 0 and finite, got {rigid_sensor_n}"))
+}
+
 /// Answers `--body-region` for a scene whose target is a body region.
 pub fn design(t: &Template, which: &str, dead_time: Option<f64>, rigid_sensor_n: f64) -> Result<BodyDesign, String> {
     let base = &t.base;
