@@ -3,11 +3,16 @@
 //! "page k of N" through CSS `@page` margin boxes, which Chromium prints), inline code instead of
 //! raw Markdown backticks, and for a body-region scene the ISO/TS 15066 table.
 
-use crate::html::esc;
 use flinch_model::body::BodyTarget;
 use flinch_model::scene::{Decoupler, Scene, TargetKind};
 use flinch_sim::Summary;
 use std::fmt::Write;
+
+/// HTML-escaped text (the page's own `html::esc`; not imported, so the two files import in one
+/// direction only: `cargo xtask structure` refuses circles).
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;").replace('\'', "&#39;")
+}
 
 /// UTC date and time `YYYY-MM-DD HH:MM:SS UTC` of Unix time `secs` (civil from days, H. Hinnant).
 pub fn utc(secs: i64) -> String {
