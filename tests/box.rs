@@ -168,7 +168,7 @@ fn finite(x: Option<f64>) -> bool {
 /// Every summary field within its physical range, or null with the reason.
 fn physical(s: &Summary) -> Result<(), String> {
     let figures = [s.peak_contact_force, s.peak_robot_force, s.max_travel, s.decoupler_impulse];
-    let opts = [s.t_contact, s.t_detect, s.t_brake, s.t_stop, s.object_final_velocity, s.approach_velocity, s.object_peak_velocity, s.peak_gas_pressure];
+    let opts = [s.t_contact, s.t_detect, s.t_brake, s.t_stop, s.object_final_velocity, s.approach_speed_mps, s.object_peak_velocity, s.peak_gas_pressure];
     if !figures.iter().all(|x| x.is_finite()) || !opts.iter().all(|&x| finite(x)) {
         return Err("a NaN or infinity".into());
     }

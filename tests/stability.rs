@@ -148,7 +148,7 @@ fn finite(x: Option<f64>) -> bool {
 /// No NaN or infinity anywhere in the summary.
 fn check_finite(s: &Summary) -> Result<(), String> {
     let all = [s.peak_contact_force, s.peak_robot_force, s.max_travel, s.decoupler_impulse];
-    let opts = [s.t_contact, s.t_detect, s.t_brake, s.object_final_velocity, s.achieved_restitution, s.approach_velocity, s.object_peak_velocity, s.peak_gas_pressure, s.t_stop];
+    let opts = [s.t_contact, s.t_detect, s.t_brake, s.object_final_velocity, s.achieved_restitution, s.approach_speed_mps, s.object_peak_velocity, s.peak_gas_pressure, s.t_stop];
     if all.iter().all(|x| x.is_finite()) && opts.iter().all(|&x| finite(x)) && s.peak_contact_force >= 0.0 {
         Ok(())
     } else {
@@ -402,7 +402,7 @@ fn grazing_contact_keeps_chi_finite_and_the_run_finite() {
         let p = Params { speed: 1e-4, dec, ..base() };
         let s = run_checked(&p.scene()).unwrap().expect("a grazing contact is no reason to fail");
         assert!(s.contacts >= 1 && s.peak_contact_force > 0.0, "{s:?}");
-        let v = s.approach_velocity.unwrap();
+        let v = s.approach_speed_mps.unwrap();
         assert!(v > 0.0 && v < 2e-4, "approach {v}");
     }
 }

@@ -97,7 +97,7 @@ fn order_is_deterministic_and_row_major_on_any_thread_count() {
     // The CSV: header with the swept keys, every summary field, status and reason; one row a point.
     let csv = one.csv();
     let header = csv.lines().next().unwrap();
-    assert!(header.starts_with("motion.speed,motion.dead_time,scene,t_contact,"), "{header}");
+    assert!(header.starts_with("motion.speed,motion.dead_time,scene,name_mismatches,t_contact,"), "{header}");
     assert!(header.ends_with(",status,reason"), "{header}");
     for f in ["peak_contact_force", "peak_robot_force", "mode", "stroke_exhausted", "max_travel", "warnings"] {
         assert!(header.split(',').any(|h| h == f), "{f} missing from {header}");

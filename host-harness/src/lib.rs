@@ -12,7 +12,7 @@
 
 pub use flinch_avoid as avoid;
 pub use flinch_hil as hil;
-pub use flinch_model::{body, damping_law, scene, shipped, stopping};
+pub use flinch_model::{body, damping_law, headline, overrides, scene, shipped, stopping};
 pub use flinch_plant as plant;
 pub use flinch_sim as sim;
 pub use flinch_sim::verdict;

@@ -9,7 +9,8 @@
 use clap::{Parser, Subcommand};
 use flinch_harness::report::output::{self, Failure};
 use flinch_harness::report::{self, measured, stream, trace::HilSignals, trace::Trace};
-use flinch_harness::{check, hil, scene, shipped};
+use flinch_harness::{check, hil, overrides, scene, shipped};
+use overrides::Set;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -93,6 +94,10 @@ struct RunArgs {
     scene: PathBuf,
     #[command(flatten)]
     out: Output,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = Set::parse)]
+    set: Vec<Set>,
     /// Compare with measured traces: a CSV with `t_s` and any of v_t_mps, v_r_mps, v_p_mps, v_c_mps,
     /// f_contact_n, f_robot_n, travel_m, s_m. Reports RMS and peak errors and the time shift, and
     /// draws the measured traces on --plot.
@@ -138,6 +143,10 @@ struct HilArgs {
     /// on the front stop for S seconds).
     #[arg(long, value_name = "POLICY", default_value = "input")]
     reset_policy: String,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = Set::parse)]
+    set: Vec<Set>,
     #[command(flatten)]
     out: Output,
 }
@@ -149,6 +158,10 @@ struct CheckArgs {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = Set::parse)]
+    set: Vec<Set>,
 }
 
 #[derive(clap::Args)]
@@ -170,8 +183,9 @@ struct BenchArgs {
     quick: bool,
 }
 
-fn load(scene: &Path) -> Result<scene::Scene, Failure> {
-    shipped::load(scene).map_err(Failure::bad_input)
+/// Reads a scene argument with its `--set` overrides, validated together.
+fn load(scene: &Path, sets: &[Set]) -> Result<scene::Scene, Failure> {
+    overrides::load(scene, sets).map(|l| l.scene).map_err(Failure::bad_input)
 }
 
 /// Refuses option combinations that would write two things to standard output.
@@ -208,7 +222,7 @@ fn wrote(path: &Path, what: &str) {
 
 fn run(args: &RunArgs) -> Result<bool, Failure> {
     check_outputs(&args.out, args.measured.as_deref())?;
-    let sc = load(&args.scene)?;
+    let sc = load(&args.scene, &args.set)?;
     let meas = match &args.measured {
         Some(p) => Some(measured::Measured::load(p).map_err(Failure::bad_input)?),
         None => None,
@@ -270,7 +284,7 @@ fn controller(args: &HilArgs, sc: &scene::Scene, file: &Path) -> Result<scene::C
 fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
     use flinch_harness::sim::Sample;
     check_outputs(&args.out, None)?;
-    let sc = load(&args.scene)?;
+    let sc = load(&args.scene, &args.set)?;
     let at_file = |e: String| format!("{}: {e}", args.scene.display());
     if let Some(why) = hil::refusal(&sc) {
         return Err(Failure::bad_input(at_file(why)));
@@ -328,7 +342,7 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
 }
 
 fn check_cmd(args: &CheckArgs) -> Result<bool, Failure> {
-    let sc = load(&args.scene)?;
+    let sc = load(&args.scene, &args.set)?;
     let c = check::check(&sc).map_err(|e| {
         let m = format!("{}: {e}", args.scene.display());
         if refuses_the_scene_kind(&e) { Failure::bad_input(m) } else { Failure::runtime(m) }
@@ -413,7 +427,8 @@ fn main() -> ExitCode {
             Err(e) => Err(Failure::runtime(e)),
         }),
         Command::Robot(a) => flinch_harness::kinematics::cli::run(a),
-        Command::Design(a) => classify(shipped::load(&a.scene).map(|_| ()), flinch_harness::design::run(a)),
+        // Everything refused before a run is bad input (exit 2); after that, a runtime failure.
+        Command::Design(a) => classify(flinch_harness::design::refusal_of(a).map_or(Ok(()), Err), flinch_harness::design::run(a)),
         Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),
         Command::Report(a) => report::html::run(a),
     };

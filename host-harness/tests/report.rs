@@ -153,3 +153,53 @@ fn a_real_browser_renders_the_verdicts() {
         }
     }
 }
+
+/// The report as a document to file (issue 26 item 4): the date, the command and a footer with
+/// the version, the scene's SHA-256 and "page k of N" on every printed page; no `body_*` rows on a
+/// scene without a body region; the ISO/TS 15066 table on one with; no raw Markdown. Before issue
+/// 26: no date, no command, no footer, 17 null `body_*` rows, raw backticks, no such table.
+#[test]
+fn the_printed_report_is_a_document() {
+    let d = std::env::temp_dir().join(format!("flinch-report-doc-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let mut pages = Vec::new();
+    for scene in ["tables5-7_bistable_stopping_table", "body_hand"] {
+        let page = d.join(format!("{scene}.html"));
+        let o = Command::new(env!("CARGO_BIN_EXE_flinch")).current_dir(repo()).env("SOURCE_DATE_EPOCH", "1795000000").args(["report", scene, "--out"]).arg(&page).output().unwrap();
+        assert!(matches!(o.status.code(), Some(0 | 1)), "{}", String::from_utf8_lossy(&o.stderr));
+        let html = std::fs::read_to_string(&page).unwrap();
+        assert!(html.contains("<td id=\"written\">2026-11-18 11:06:40 UTC</td>"), "the date (SOURCE_DATE_EPOCH)");
+        assert!(html.contains(&format!("<td id=\"command\"><code>flinch report {scene} --out")), "the command");
+        assert!(html.contains("@bottom-right { content: \"page \" counter(page) \" of \" counter(pages)"), "the page numbers");
+        assert!(html.contains("@bottom-left { content: \"flinch ") && html.contains("scene SHA-256 "), "the footer");
+        let before_scene_text = html.split("<pre id=\"scene-text\">").next().unwrap();
+        let body = before_scene_text.split("</style>").nth(1).unwrap();
+        assert!(!body.contains('`'), "raw Markdown backticks on the page");
+        let body_rows = html.matches("<tr><td>body_").count();
+        if scene == "body_hand" {
+            assert!(body_rows > 0);
+            assert!(html.contains("id=\"iso-ts-15066\""), "the ISO/TS 15066 table");
+            assert!(html.contains("closed form, module (m_R = m_t = 0.75 kg)") && html.contains("closed form, rigid tool"));
+        } else {
+            assert_eq!(body_rows, 0, "body_* rows on a scene without a body region");
+            assert!(!html.contains("iso-ts-15066"));
+        }
+        pages.push(page);
+    }
+    let Some(chrome) = chromium() else {
+        if std::env::var_os("CI").is_some() {
+            panic!("CI is set and chromium is missing: .ci/run installs Debian's chromium (apt-get install -y chromium)");
+        }
+        eprintln!("SKIPPED the PDF part of the_printed_report_is_a_document: chromium is not installed");
+        return;
+    };
+    for page in &pages {
+        let pdf = page.with_extension("pdf");
+        headless(&chrome, &page.with_extension("profile"), &["--no-pdf-header-footer".into(), format!("--print-to-pdf={}", pdf.display())], page);
+        let bytes = std::fs::read(&pdf).unwrap_or_default();
+        // Chromium writes one `/Type /Page` object per page (and one `/Type /Pages`).
+        let n = bytes.windows(11).filter(|w| w == b"/Type /Page" ).count() - bytes.windows(12).filter(|w| w == b"/Type /Pages").count();
+        // Measured 2026-11-28: 9 A4 pages each (was 8 and 10); a bound with margin.
+        assert!((1..=12).contains(&n), "{}: {n} pages", pdf.display());
+    }
+}

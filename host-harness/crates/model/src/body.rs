@@ -127,14 +127,24 @@ impl BodyTarget {
         }
     }
 
+    /// The force the closed form may reach, N, and which limit sets it: the force limit, or the
+    /// pressure limit over the contact area when that is smaller (back and shoulders over 1 cm^2:
+    /// 160 N/cm^2 x 1 cm^2 = 160 N < 210 N). `None` where the contact is not permitted.
+    pub fn closed_form_force(&self) -> Option<(f64, &'static str)> {
+        let (f, p) = self.limits()?;
+        let by_pressure = p * self.area_m2;
+        Some(if by_pressure < f { (by_pressure, "the pressure limit over the contact area") } else { (f, "the force limit") })
+    }
+
     /// The Annex A closed form: the largest relative speed at which an undamped linear
     /// spring k between the moving mass `m_r_kg` (kg, infinite allowed) and the body keeps the peak
-    /// force at the force limit. Transient: mu = (1/m_H + 1/m_R)^-1; quasi-static (clamped, the body
+    /// force at the smaller of the force limit and the pressure limit times the contact area
+    /// ([`Self::closed_form_force`]: the simulated limits hold both, so the formula must too). Transient: mu = (1/m_H + 1/m_R)^-1; quasi-static (clamped, the body
     /// cannot recoil): mu = m_R. The energy of the relative motion 1/2 mu v^2 all goes into the
     /// spring, F^2/(2k): v = F / sqrt(mu k). `None` where the contact is not permitted or mu is
     /// infinite (a body clamped against a rigid, prescribed robot: no speed is safe by this formula).
     pub fn closed_form_speed(&self, m_r_kg: f64) -> Option<f64> {
-        let (f, _) = self.limits()?;
+        let (f, _) = self.closed_form_force()?;
         let mu = reduced_mass(self, m_r_kg);
         (mu.is_finite() && mu > 0.0).then(|| f / (mu * self.stiffness_n_per_m).sqrt())
     }
@@ -188,6 +198,22 @@ pub fn check(b: &BodyTarget, peak_force_n: f64) -> BodyCheck {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 26 item 6: the closed form held only the force limit, up to 31 % too fast where the
+    /// pressure limit over the area is the smaller force (back and shoulders: 160 N over 1 cm^2
+    /// against 210 N).
+    #[test]
+    fn the_closed_form_takes_the_pressure_limit_too() {
+        let back = BodyTarget { region: preset("back").unwrap(), ..hand(BodyContact::QuasiStatic) };
+        let by_force = back.region.force_quasi_static_n / (2.0 * back.stiffness_n_per_m).sqrt();
+        let v = back.closed_form_speed(2.0).unwrap();
+        assert!((v / by_force - 160.0 / 210.0).abs() < 1e-12, "{v} vs {by_force}");
+        assert_eq!(back.closed_form_force().unwrap().1, "the pressure limit over the contact area");
+        // Hand: 190 N/cm^2 over 1 cm^2 = 190 N > 140 N: the force limit decides, unchanged.
+        let h = hand(BodyContact::QuasiStatic);
+        assert_eq!(h.closed_form_force().unwrap(), (140.0, "the force limit"));
+        assert!((h.closed_form_speed(2.0).unwrap() - 140.0 / (2.0 * h.stiffness_n_per_m).sqrt()).abs() < 1e-12);
+    }
 
     fn hand(contact: BodyContact) -> BodyTarget {
         let r = preset("hand").unwrap();

@@ -8,6 +8,8 @@
 //! * `stopping`: a robot's published stopping table (ISO 10218-1 Annex B) and its interpolation;
 //! * `damping_law`: the contact damping laws' closed forms (restitution to alpha, chi), which the
 //!   loader converts and estimates with and the plant's contacts use;
+//! * `headline`: what a scene simulates in one line, and what its name claims that it contradicts;
+//! * `overrides`: `--set KEY=VALUE`, applied to a scene's text and validated with it;
 //! * `shipped`: the scenes built into the binary, and the one way a command reads a scene argument.
 //!
 //! Depends on `flinch-kinematics` (a `[robot]` given by its URDF is reduced while it is read) and
@@ -16,6 +18,8 @@
 pub mod avoid;
 pub mod body;
 pub mod damping_law;
+pub mod headline;
+pub mod overrides;
 pub mod scene;
 pub mod shipped;
 pub mod stopping;

@@ -29,6 +29,17 @@ pub enum Style {
     Steps,
     /// Thin line (measured data under the simulated).
     Thin,
+    /// An open ring around the point (a NOT SAFE point of a sweep).
+    Ring,
+    /// An open diamond (a point not concluded).
+    Diamond,
+    /// A hollow circle (a point not simulated as commanded).
+    Hollow,
+}
+
+/// A diamond of half-size `r` px around `(x, y)`, open, as a closed path.
+fn diamond((x, y): (i32, i32), r: i32) -> Vec<(i32, i32)> {
+    vec![(x, y - r), (x + r, y), (x, y + r), (x - r, y), (x, y - r)]
 }
 
 /// A named series; points whose x or y is not finite break the line.
@@ -203,12 +214,33 @@ pub fn draw(path: &Path, title: &str, x: &XAxis, panels: &[Panel]) -> Result<(),
 }
 
 /// Draws the panels onto `root`.
+/// Draws `title` centred at the top of `root`, one line per `\n` (a scene's name, then what was
+/// simulated), and returns the area below it.
+pub fn titled<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, size: u32) -> Result<DrawingArea<DB, Shift>, DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB::ErrorType: 'static,
+{
+    let lines: Vec<&str> = title.lines().collect();
+    if lines.len() <= 1 {
+        return root.titled(title, ("sans-serif", size));
+    }
+    let (w, _) = root.dim_in_pixel();
+    let step = size as i32 + 6;
+    for (i, l) in lines.iter().enumerate() {
+        // The first line at the title's size, the rest a little smaller.
+        let s = if i == 0 { size } else { size.saturating_sub(3).max(10) };
+        let style = TextStyle::from(("sans-serif", s).into_font()).pos(plotters::style::text_anchor::Pos::new(plotters::style::text_anchor::HPos::Center, plotters::style::text_anchor::VPos::Top));
+        root.draw(&Text::new(l.to_string(), (w as i32 / 2, 4 + step * i as i32), style))?;
+    }
+    Ok(root.split_vertically((step * lines.len() as i32 + 8) as u32).1)
+}
+
 pub fn draw_on<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, x: &XAxis, panels: &[Panel]) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let root = root.titled(title, ("sans-serif", 20))?;
+    let root = titled(root, title, 20)?;
     let xs = panels.iter().flat_map(|p| p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)).chain(p.marks.iter().map(|m| m.x)));
     let (x0, x1) = if x.log { log_range(xs) } else { let (a, b) = finite_range(xs); tight(a, b, panels) };
     let total: f64 = panels.iter().map(|p| if p.weight > 0.0 { p.weight } else { 1.0 }).sum();
@@ -317,6 +349,9 @@ where
                 Style::Dashed => { chart.draw_series(DashedLineSeries::new(run, 7, 5, c.stroke_width(2)))?; }
                 Style::Points => { chart.draw_series(run.iter().map(|&q| Circle::new(q, 4, c.filled())))?; }
                 Style::Crosses => { chart.draw_series(run.iter().map(|&q| Cross::new(q, 6, c.stroke_width(2))))?; }
+                Style::Ring => { chart.draw_series(run.iter().map(|&q| Circle::new(q, 9, c.stroke_width(2))))?; }
+                Style::Hollow => { chart.draw_series(run.iter().map(|&q| Circle::new(q, 6, c.stroke_width(2))))?; }
+                Style::Diamond => { chart.draw_series(run.iter().map(|&q| EmptyElement::at(q) + PathElement::new(diamond((0, 0), 8), c.stroke_width(2))))?; }
                 Style::Steps => {
                     let mut st = Vec::with_capacity(run.len() * 2);
                     for (i, &(a, b)) in run.iter().enumerate() {
@@ -367,6 +402,9 @@ where
             Style::Dashed => area.draw(&PathElement::new(vec![(x0, ym), (x0 + 10, ym)], c.stroke_width(2))).and_then(|_| area.draw(&PathElement::new(vec![(x0 + 17, ym), (x1, ym)], c.stroke_width(2))))?,
             Style::Points => area.draw(&Circle::new(((x0 + x1) / 2, ym), 4, c.filled()))?,
             Style::Crosses => area.draw(&Cross::new(((x0 + x1) / 2, ym), 6, c.stroke_width(2)))?,
+            Style::Ring => area.draw(&Circle::new(((x0 + x1) / 2, ym), 8, c.stroke_width(2)))?,
+            Style::Hollow => area.draw(&Circle::new(((x0 + x1) / 2, ym), 6, c.stroke_width(2)))?,
+            Style::Diamond => area.draw(&PathElement::new(diamond(((x0 + x1) / 2, ym), 7), c.stroke_width(2)))?,
             Style::Thin => area.draw(&PathElement::new(vec![(x0, ym), (x1, ym)], c.stroke_width(1)))?,
             _ => area.draw(&PathElement::new(vec![(x0, ym), (x1, ym)], c.stroke_width(2)))?,
         }

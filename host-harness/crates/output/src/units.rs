@@ -11,7 +11,7 @@ pub const SUFFIXES: &[(&str, &str)] = &[
 pub const NAMED: &[(&str, &str)] = &[
     ("t_contact", "s"), ("t_detect", "s"), ("t_brake", "s"), ("t_stop", "s"), ("detection_delay", "s"), ("reaction_time", "s"),
     ("peak_contact_force", "N"), ("peak_robot_force", "N"), ("object_final_velocity", "m/s"), ("object_peak_velocity", "m/s"),
-    ("approach_velocity", "m/s"), ("max_travel", "m"), ("decoupler_impulse", "N s"), ("peak_gas_pressure", "Pa"),
+    ("approach_speed_mps", "m/s"), ("max_travel", "m"), ("decoupler_impulse", "N s"), ("peak_gas_pressure", "Pa"),
     ("mode", "1"), ("achieved_restitution", "1"), ("steps", "1"), ("rhs_evals", "1"), ("contacts", "1"), ("rejected_steps", "1"),
     ("events", "1"), ("schema_version", "1"), ("points", "1"), ("seq", "1"), ("flags", "1"),
     // avoid: counts.

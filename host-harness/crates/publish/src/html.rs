@@ -37,6 +37,10 @@ pub struct ReportArgs {
     /// The summary field the sweep's heat map shows.
     #[arg(long, default_value = "peak_robot_force")]
     pub metric: String,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = flinch_model::overrides::Set::parse)]
+    pub set: Vec<flinch_model::overrides::Set>,
 }
 
 /// Hex SHA-256 of the scene text, as hashed (the bytes of the file).
@@ -234,6 +238,12 @@ ul { margin: 1mm 0 2mm 5mm; padding-left: 3mm; }
 
 /// The page for a scene's text; `file` names it. Returns the HTML and the overall verdict.
 pub fn page(text: &str, file: &str, sweep_axes: &[String], metric: &str) -> Result<(String, bool), Failure> {
+    page_with(text, file, &[], text, sweep_axes, metric)
+}
+
+/// The page for a scene read as `original` and simulated as `text` after the `--set` overrides
+/// `sets` (listed on the page with both texts' SHA-256).
+pub fn page_with(text: &str, file: &str, sets: &[flinch_model::overrides::Set], original: &str, sweep_axes: &[String], metric: &str) -> Result<(String, bool), Failure> {
     let sc = scene::parse(text, file).map_err(|e| Failure::bad_input(e.to_string()))?;
     let template = Template::from_text(text, file).map_err(|e| Failure::bad_input(e.to_string()))?;
     let axes = if sweep_axes.is_empty() { None } else { Some(sweep::cli::axes(sweep_axes, &[]).map_err(|e| Failure::bad_input(format!("--sweep {e}")))?) };
@@ -262,13 +272,31 @@ pub fn page(text: &str, file: &str, sweep_axes: &[String], metric: &str) -> Resu
     let overall = s.safe && chk.as_ref().map_or(true, |c| c.safe) && des.as_ref().map_or(true, |d| d.safe);
     let mut h = String::new();
     let w = &mut h;
-    let _ = write!(w, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Flinch report: {}</title><style>{CSS}</style></head><body>\n", esc(&sc.name));
+    let command = crate::document::command_line();
+    // The title says what was simulated, and flags a name (or description) it contradicts.
+    let hl = flinch_model::headline::headline(&sc);
+    let _ = write!(w, "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Flinch report: {}</title><style>{CSS}{}</style></head><body>\n", esc(&hl.title().replace('\n', ": ")), crate::document::footer_css(env!("CARGO_PKG_VERSION"), &sha256_hex(text), &command));
     let _ = writeln!(w, "<h1>Flinch report: {}</h1>", esc(&sc.name));
+    let _ = writeln!(w, "<p id=\"simulated\"><b>Simulated:</b> {}</p>", esc(&hl.simulated));
+    for m in &s.name_mismatches {
+        let _ = writeln!(w, "<p class=\"name-mismatch\"><span class=\"bad\">NAME MISMATCH</span> {}</p>", esc(m));
+    }
+    for m in &s.not_as_commanded {
+        let _ = writeln!(w, "<p class=\"not-as-commanded\"><span class=\"bad\">NOT AS COMMANDED</span> {}</p>", esc(m));
+    }
     let description = shipped::description(text);
     if !description.is_empty() && description != sc.name {
-        let _ = writeln!(w, "<p>{}</p>", esc(&description));
+        let stale = flinch_model::headline::number_mismatches(&sc, &description);
+        let _ = writeln!(w, "<p>{}</p>", crate::document::prose(&description));
+        for m in stale {
+            let _ = writeln!(w, "<p class=\"name-mismatch\"><span class=\"bad\">DESCRIPTION MISMATCH</span> {}</p>", esc(&m.replace("the name says", "the description says")));
+        }
     }
-    let _ = writeln!(w, "<table class=\"meta\"><tr><td>scene</td><td>{}</td></tr><tr><td>SHA-256</td><td class=\"hash\" id=\"sha256\">{}</td></tr><tr><td>tool</td><td>flinch {} (flinch-harness)</td></tr><tr><td>safe means</td><td>docs/verdicts.md: the stroke left while the tool touches the target stays positive, and (check, design) the stopping-distance budget fits</td></tr></table>", esc(file), sha256_hex(text), env!("CARGO_PKG_VERSION"));
+    if !sets.is_empty() {
+        let list = sets.iter().map(|s| format!("<code>{}</code>", esc(&s.shown()))).collect::<Vec<_>>().join(", ");
+        let _ = writeln!(w, "<p id=\"overrides\">Overrides: {list}. The file as read has SHA-256 <span class=\"hash\">{}</span>; the simulated text (below) {}.</p>", sha256_hex(original), sha256_hex(text));
+    }
+    let _ = writeln!(w, "<table class=\"meta\"><tr><td>scene</td><td>{}</td></tr><tr><td>SHA-256</td><td class=\"hash\" id=\"sha256\">{}</td></tr><tr><td>tool</td><td>flinch {} (flinch-harness)</td></tr><tr><td>written</td><td id=\"written\">{}</td></tr><tr><td>command</td><td id=\"command\"><code>{}</code></td></tr><tr><td>safe means</td><td>docs/verdicts.md: the stroke left while the tool touches the target stays positive, and (check, design) the stopping-distance budget fits</td></tr></table>", esc(file), sha256_hex(text), env!("CARGO_PKG_VERSION"), crate::document::written_at(), esc(&command));
 
     // Verdicts.
     let _ = writeln!(w, "<h2>Verdicts</h2>");
@@ -302,7 +330,7 @@ pub fn page(text: &str, file: &str, sweep_axes: &[String], metric: &str) -> Resu
     if let Some(o) = sj.as_object() {
         let _ = writeln!(w, "<h3>Verdict fields of the run summary</h3><table id=\"verdict-fields\"><tr><th>field</th><th>value</th><th>unit</th></tr>");
         // A null reason beside a defined value says nothing.
-        for (k, v) in o.iter().filter(|(k, v)| verdict_like(k) && !(k.ends_with("_null_reason") && v.is_null())) {
+        for (k, v) in o.iter().filter(|(k, v)| verdict_like(k) && crate::document::applies(k, s) && !(k.ends_with("_null_reason") && v.is_null())) {
             let _ = writeln!(w, "<tr><td>{}</td><td class=\"num\">{}</td><td>{}</td></tr>", esc(k), esc(&cell(v)), esc(&unit(k)));
         }
         let _ = writeln!(w, "</table>");
@@ -314,6 +342,10 @@ pub fn page(text: &str, file: &str, sweep_axes: &[String], metric: &str) -> Resu
         if !r.notes.is_empty() {
             let _ = writeln!(w, "<h3>Design notes</h3><ul>{}</ul>", r.notes.iter().map(|x| format!("<li>{}</li>", esc(x))).collect::<String>());
         }
+    }
+
+    if let Some(t) = crate::document::iso_ts_15066(&sc, s) {
+        w.push_str(&t);
     }
 
     // Inputs.
@@ -343,7 +375,7 @@ pub fn page(text: &str, file: &str, sweep_axes: &[String], metric: &str) -> Resu
     // Everything else.
     let _ = writeln!(w, "<h2>Run summary (every field)</h2><table id=\"summary\"><tr><th>field</th><th>value</th><th>unit</th></tr>");
     if let Some(o) = sj.as_object() {
-        for (k, v) in o {
+        for (k, v) in o.iter().filter(|(k, _)| crate::document::applies(k, s)) {
             let _ = writeln!(w, "<tr><td>{}</td><td class=\"num\">{}</td><td>{}</td></tr>", esc(k), esc(&cell(v)), esc(&unit(k)));
         }
     }
@@ -370,8 +402,11 @@ pub fn run(a: &ReportArgs) -> Result<bool, Failure> {
     if !output::is_stdout(&a.out) && a.out.extension().and_then(|e| e.to_str()).is_none_or(|e| !matches!(e.to_ascii_lowercase().as_str(), "html" | "htm")) {
         return Err(Failure::bad_input(format!("--out {}: the report file must end in .html", a.out.display())));
     }
-    let (file, text) = shipped::read(&a.scene).map_err(|e| Failure::bad_input(e.0))?;
-    let (html, safe) = page(&text, &file, &a.sweep, &a.metric)?;
+    let varied: Vec<&str> = a.sweep.iter().map(|v| v.split_once('=').map_or(v.as_str(), |(k, _)| k).trim()).collect();
+    flinch_model::overrides::refuse_overlap(&a.set, &varied, "--sweep").map_err(Failure::bad_input)?;
+    let loaded = flinch_model::overrides::load(&a.scene, &a.set).map_err(Failure::bad_input)?;
+    let (file, text) = (loaded.file.clone(), loaded.text.clone());
+    let (html, safe) = page_with(&text, &file, &a.set, &loaded.original, &a.sweep, &a.metric)?;
     use std::io::Write as _;
     let mut out = output::create(&a.out)?;
     out.write_all(html.as_bytes()).and_then(|_| out.flush()).map_err(|e| output::write_error(&a.out, &e))?;

@@ -126,5 +126,6 @@ pub fn panels(scene: &Scene, s: &Summary, h: &[Sample], trace: &Trace, measured:
 /// Draws a run into `path` (.svg or .png).
 pub fn draw(path: &Path, scene: &Scene, summary: &Summary, history: &[Sample], trace: &Trace, measured: &Overlay) -> Result<(), String> {
     let p = panels(scene, summary, history, trace, measured);
-    figure::draw(path, &summary.scene, &XAxis { label: "t [s]".into(), log: false }, &p)
+    let title = flinch_model::headline::headline(scene).title();
+    figure::draw(path, &title, &XAxis { label: "t [s]".into(), log: false }, &p)
 }

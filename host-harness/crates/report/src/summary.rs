@@ -17,6 +17,13 @@ fn ms(t: Option<f64>) -> String {
 pub fn human(s: &Summary) -> String {
     let mut o = String::new();
     let _ = writeln!(o, "{}", s.scene);
+    let _ = writeln!(o, "  simulated: {}", s.simulated);
+    for m in &s.name_mismatches {
+        let _ = writeln!(o, "  NAME MISMATCH: {m}");
+    }
+    for m in &s.not_as_commanded {
+        let _ = writeln!(o, "  NOT AS COMMANDED: {m}");
+    }
     let _ = writeln!(o, "  contact {}   detect {}   brake {}   flange stops {}", ms(s.t_contact), ms(s.t_detect), ms(s.t_brake), ms(s.t_stop));
     let _ = writeln!(o, "  detection delay {}   reaction time {}", ms(s.detection_delay), ms(s.reaction_time));
     let _ = writeln!(o, "  peak contact force {:.2} N   peak force on robot {:.2} N   contacts {}", s.peak_contact_force, s.peak_robot_force, s.contacts);
@@ -46,7 +53,7 @@ pub fn human(s: &Summary) -> String {
         let _ = writeln!(o, "  {b}");
     }
     if let Some(e) = s.achieved_restitution {
-        let _ = writeln!(o, "  first contact: approach {:.4} m/s, achieved restitution {:.3}", s.approach_velocity.unwrap_or(0.0), e);
+        let _ = writeln!(o, "  first contact: approach {:.4} m/s, achieved restitution {:.3}", s.approach_speed_mps.unwrap_or(0.0), e);
     }
     if let Some(p) = s.peak_gas_pressure {
         let _ = writeln!(o, "  peak gas pressure {:.2} kPa", p * 1e-3);

@@ -33,6 +33,56 @@ pub struct Run {
     pub(crate) driver: Driver<N, E>,
     pub(crate) method: Method,
     pub(crate) duration: f64,
+    /// What the scene simulates and what its name claims (`flinch_model::headline`).
+    pub(crate) headline: flinch_model::headline::Headline,
+    /// The commanded motion and the gap, for `Summary::as_commanded`.
+    pub(crate) commanded: (flinch_model::scene::Motion, f64),
+    /// The decoupler travel beyond which the flange has passed through the tool, m, and why.
+    pub(crate) pass_through: Option<(f64, &'static str)>,
+    /// m_t, kg, for the peak-force sanity bound.
+    pub(crate) tool_mass: f64,
+}
+
+/// The sanity bound on a peak force, in g of the tool (m_t g): a force that would accelerate the
+/// tool faster is not a physical number for a robot tool (a stop that halts 1 m/s within 0.05 mm).
+/// The shipped scenes peak at 187 g (table2_bistable's front stop, 235 N s/m at 1 m/s; the others
+/// at most 104 g), so 1,000 g is over 5 times the largest case the thesis's parameters give.
+pub const PEAK_FORCE_SANITY_G: f64 = 1000.0;
+
+/// Standard gravity, m/s^2.
+const G0: f64 = 9.80665;
+
+/// The warning for a peak force beyond [`PEAK_FORCE_SANITY_G`], naming where it came from and the
+/// key to check. Not a failure: the verdict judges the stroke and the body limits; the warning says
+/// the force figure is not physical.
+pub fn implausible_force(what: &str, force_n: f64, event: &str, tool_mass_kg: f64) -> Option<String> {
+    let g = force_n / (tool_mass_kg * G0);
+    if !(g > PEAK_FORCE_SANITY_G) {
+        return None;
+    }
+    let (source, key) = match event {
+        "front_stop" => ("the front end-stop", "decoupler.front_stop (a linear-law stop jumps to c v on landing: its damping times the landing speed)"),
+        "back_stop" => ("the back end-stop", "decoupler.back_stop"),
+        "first_impact" | "later_contact" | "contact" => ("the tool-target contact", "target.stiffness and its damping"),
+        _ => ("the decoupler", "the decoupler's keys"),
+    };
+    Some(format!(
+        "{what} {force_n:.0} N (from {source}) would accelerate the {tool_mass_kg} kg tool at {g:.0} g, beyond the sanity bound of {PEAK_FORCE_SANITY_G:.0} g (5x the largest shipped case): the figure is not physical; check {key}"
+    ))
+}
+
+/// The travel, m, beyond which the flange has passed through the tool (issue 26 item 6): a linear
+/// module has no stop, so beyond 0.2 m (the largest stroke the validator accepts for any module);
+/// a module with end-stops when the tool went into its back end-stop deeper than the module's
+/// whole stroke C (travel beyond 2 C: the stop did not stop it). What follows is not modelled.
+fn pass_through(d: &flinch_model::scene::Decoupler) -> Option<(f64, &'static str)> {
+    use flinch_model::scene::Decoupler;
+    match d {
+        Decoupler::Rigid => None,
+        Decoupler::Linear(_) => Some((0.2, "a linear module's travel beyond 0.2 m, the largest stroke the validator accepts for any module: the spring held nothing (decoupler.stiffness)")),
+        Decoupler::Bistable(b) => Some((2.0 * (b.front_stroke + b.back_stroke), "the tool went into the back end-stop deeper than the module's whole stroke C1 + C2: the stop did not stop it (decoupler.back_stop.stiffness)")),
+        Decoupler::Hydraulic(h) => Some((2.0 * h.stroke, "the piston went into the back end-stop deeper than the stroke L: the stop did not stop it (decoupler.back_stop.stiffness)")),
+    }
 }
 
 impl Run {
@@ -50,7 +100,8 @@ impl Run {
         };
         let driver = Driver::new(&sim, 0.0, y0, Settings { max_step: s.max_step, ..Default::default() });
         sim.on_step(0.0, 0.0, &y0, &|_| y0);
-        Self { sim, stepper, driver, method: s.method, duration: scene.duration_s }
+        let headline = flinch_model::headline::headline(scene);
+        Self { sim, stepper, driver, method: s.method, duration: scene.duration_s, headline, commanded: (scene.motion, scene.target.gap), pass_through: pass_through(&scene.decoupler), tool_mass: scene.tool.mass }
     }
 
     /// Integrates to `t` (clamped to the scene's duration).
@@ -165,6 +216,8 @@ impl Run {
         };
         let mut summary = Summary {
             scene: s.name.clone(),
+            simulated: self.headline.simulated.clone(),
+            name_mismatches: self.headline.mismatches.iter().cloned().chain(flinch_model::headline::mode_mismatch(&s.name, mode)).collect(),
             t_contact: s.t_contact,
             t_detect: s.t_detect,
             t_brake,
@@ -182,7 +235,9 @@ impl Run {
             steps: stats.steps,
             rhs_evals: s.rhs_evals.get(),
             t_stop: s.plant.motion.t_stop(),
-            approach_velocity: s.v_in_first,
+            approach_speed_mps: s.v_in_first,
+            as_commanded: true,
+            not_as_commanded: self.not_as_commanded(s.t_contact, s.v_in_first),
             contacts: s.contacts,
             object_peak_velocity: object.then_some(s.peak_object_v),
             max_travel: s.max_travel,
@@ -244,13 +299,42 @@ impl Run {
             }
             summary.body_limits_pass = Some(c.failures.is_empty());
         }
+        summary.as_commanded = summary.not_as_commanded.is_empty();
+        let sane = [("peak force on the robot", summary.peak_robot_force, summary.peak_robot_force_event.as_str()), ("peak contact force", summary.peak_contact_force, "contact")];
+        let insane: Vec<String> = sane.iter().filter_map(|(w, f, e)| implausible_force(w, *f, e, self.tool_mass)).collect();
+        summary.warnings.extend(insane);
         summary.failures = crate::verdict::failures(&summary);
+        // docs/verdicts.md: a flange that passed through the tool fails the run, whatever else.
+        if let Some((limit, why)) = self.pass_through.filter(|(l, _)| summary.max_travel > *l) {
+            summary.failures.push(format!("the flange passed through the tool: decoupler travel {:.1} mm beyond {:.1} mm, {why}; what follows is not modelled", summary.max_travel * 1e3, limit * 1e3));
+        }
         summary.safe = summary.failures.is_empty();
         summary
     }
 }
 
 impl Run {
+    /// What the run did not simulate as the scene commands it: the flange still accelerating
+    /// when the tool met the target (exact from the motion law: the commanded speed at
+    /// t_contact below `motion.speed`, before any braking).
+    fn not_as_commanded(&self, t_contact: Option<f64>, approach: Option<f64>) -> Vec<String> {
+        let (m, gap) = self.commanded;
+        let Some(tc) = t_contact else { return Vec::new() };
+        let braking = self.sim.plant.motion.t_brake().is_some_and(|tb| tb <= tc);
+        let v = self.sim.plant.motion.at(tc).v;
+        if m.start_at_speed || braking || v >= m.speed * (1.0 - 1e-9) {
+            return Vec::new();
+        }
+        vec![format!(
+            "the flange had reached only {:.3} m/s of motion.speed = {} m/s when the tool met the target (gap {:.1} mm < V_c^2/2a_c = {:.1} mm): the impact is at {}, not V_c; raise target.gap or set motion.start_at_speed",
+            v,
+            m.speed,
+            gap * 1e3,
+            m.speed * m.speed / (2.0 * m.accel) * 1e3,
+            approach.map_or("the speed the flange had".to_string(), |a| format!("{a:.3} m/s")),
+        )]
+    }
+
     /// At the run's end: how far the flange can still advance towards the target (m; see
     /// `Summary::flange_reach_after_end_m`), and the stroke left (m; None without a back
     /// end-stop or for a rigid tool).

@@ -40,8 +40,14 @@ pub struct Sample {
 /// What a run reports: the `--json` contract of SCENES.md plus extras.
 #[derive(Debug, Clone, Serialize, PartialEq, schemars::JsonSchema)]
 pub struct Summary {
-    /// Scene name.
+    /// Scene name, as the scene file writes it (free text: it can be stale).
     pub scene: String,
+    /// What was simulated: V_c, DT, the module, the tool, the target and gap
+    /// (`flinch_model::headline`).
+    pub simulated: String,
+    /// Claims of the scene's name that the simulated scene contradicts (`V_c = 0.2 m/s` while
+    /// 0.5 m/s ran, `(mode 3)` while the run reached mode 1, ...); empty when none.
+    pub name_mismatches: Vec<String>,
     /// First tool-target contact, s.
     pub t_contact: Option<f64>,
     /// Detection, s.
@@ -72,8 +78,14 @@ pub struct Summary {
     pub rhs_evals: u64,
     /// Flange standstill, s.
     pub t_stop: Option<f64>,
-    /// Approach velocity of the first contact, m/s.
-    pub approach_velocity: Option<f64>,
+    /// Approach speed of the first contact (tool towards target), m/s.
+    pub approach_speed_mps: Option<f64>,
+    /// False when the run did not simulate what the scene commands: the flange had not reached
+    /// `motion.speed` when the tool met the target (the gap is shorter than V_c^2 / 2 a_c), so the
+    /// impact is slower than V_c. The reasons are in `not_as_commanded`.
+    pub as_commanded: bool,
+    /// Why the run is not as commanded, one sentence each (empty when it is).
+    pub not_as_commanded: Vec<String>,
     /// Number of tool-target contacts (bounces).
     pub contacts: u32,
     /// Largest object velocity, m/s.

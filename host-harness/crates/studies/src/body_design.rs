@@ -200,6 +200,20 @@ pub fn regions(which: &str) -> Result<Vec<&'static Preset>, String> {
     body::preset(which).map(|p| vec![p]).ok_or_else(|| format!("--body-region: must be one of \"all\" | {}, got {which:?}", body::REGION_NAMES.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(" | ")))
 }
 
+/// The input checks of [`design`], before it simulates (`design::refusal_of`): `None` when good.
+pub fn refusal(t: &Template, which: &str, dead_time: Option<f64>, rigid_sensor_n: f64) -> Option<String> {
+    if let Err(e) = regions(which) {
+        return Some(e);
+    }
+    if !matches!(t.base.target.kind, TargetKind::BodyRegion(_)) {
+        return Some("target.kind: flinch design --body-region needs a [target] with kind = \"body_region\" (its contact, area and gap are used for every region)".into());
+    }
+    if dead_time.is_some_and(|d| !(d >= 0.0 && d.is_finite())) {
+        return Some(format!("--dead-time: must be >= 0 and finite, got {}", dead_time.unwrap_or(f64::NAN)));
+    }
+    (!(rigid_sensor_n.is_finite() && rigid_sensor_n > 0.0)).then(|| format!("--rigid-sensor: must be > 0 and finite, got {rigid_sensor_n}"))
+}
+
 /// Answers `--body-region` for a scene whose target is a body region.
 pub fn design(t: &Template, which: &str, dead_time: Option<f64>, rigid_sensor_n: f64) -> Result<BodyDesign, String> {
     let base = &t.base;
@@ -279,8 +293,10 @@ pub fn design(t: &Template, which: &str, dead_time: Option<f64>, rigid_sensor_n:
         ),
         format!("rigid tool: decoupler.kind = \"rigid\" (m_t joins the robot) and a {rigid_sensor_n} N force sensor in the tool (--rigid-sensor; 25 N as tables5-7_rigid.toml, Ch. 3.1.2)"),
         format!(
-            "closed form (ISO/TS 15066 Annex A): v = F / sqrt(mu k), {}; m_R = m_t = {m_t} kg with the module (the tool alone meets the body), {} for the rigid tool. Impact energy only: the robot driving on until it detects and brakes, its compliance and the module's stroke are not in it",
-            if own.contact == BodyContact::Transient { "mu = (1/m_H + 1/m_R)^-1, F = 2x Table A.2 (transient)" } else { "mu = m_R (clamped: the body cannot recoil), F = Table A.2 (quasi-static)" },
+            "closed form (ISO/TS 15066 Annex A): v = F / sqrt(mu k), {}, F the smaller of the force limit and the pressure limit x the contact area ({}: {}); m_R = m_t = {m_t} kg with the module (the tool alone meets the body), {} for the rigid tool. Impact energy only: the robot driving on until it detects and brakes, its compliance and the module's stroke are not in it",
+            if own.contact == BodyContact::Transient { "mu = (1/m_H + 1/m_R)^-1, limits 2x Table A.2 (transient)" } else { "mu = m_R (clamped: the body cannot recoil), limits Table A.2 (quasi-static)" },
+            own.region.name,
+            own.closed_form_force().map_or("contact not permitted".to_string(), |(f, why)| format!("{f:.0} N, {why}")),
             match m_r {
                 Some(m) => format!("m_R = m_r + m_t = {} kg", m + m_t),
                 None => "m_R infinite (no [robot]: the flange follows its command)".into(),
@@ -373,8 +389,8 @@ pub fn human(r: &BodyDesign) -> String {
 }
 
 /// Runs `flinch design SCENE --body-region WHICH` (`design::run` passes its arguments).
-pub fn run(scene: &std::path::Path, which: &str, dead_time: Option<f64>, rigid_sensor: f64, json: bool) -> Result<bool, String> {
-    let t = Template::load(scene).map_err(|e| e.to_string())?;
+pub fn run(scene: &std::path::Path, sets: &[flinch_model::overrides::Set], which: &str, dead_time: Option<f64>, rigid_sensor: f64, json: bool) -> Result<bool, String> {
+    let t = Template::load_with(scene, sets).map_err(|e| e.to_string())?;
     let r = design(&t, which, dead_time, rigid_sensor).map_err(|e| format!("{}: {e}", scene.display()))?;
     if json {
         println!("{}", serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?);

@@ -98,11 +98,21 @@ pub fn check(scene: &Scene) -> Result<BudgetCheck, String> {
     Ok(BudgetCheck { stopping_distance: stop, stopping_law: stopping_law(m), stroke, switch_travel: threshold, remaining, margin: remaining - stop, fits, safe: failures.is_empty(), failures, explanations, simulated, output_faults })
 }
 
+/// The name, what was simulated and each claim of the name it contradicts, as every scene
+/// command starts (`flinch_model::headline`).
+pub fn headline_lines(name: &str, simulated: &str, mismatches: &[String]) -> String {
+    let mut t = format!("{name}\n  simulated: {simulated}\n");
+    for m in mismatches {
+        t.push_str(&format!("  NAME MISMATCH: {m}\n"));
+    }
+    t
+}
+
 /// The human text of `flinch check`.
 pub fn human(c: &BudgetCheck) -> String {
     use flinch_sim::verdict::{mm, mm_signed};
     let s = &c.simulated;
-    let mut t = format!("{}\n", s.scene);
+    let mut t = headline_lines(&s.scene, &s.simulated, &s.name_mismatches);
     t.push_str(&format!("  stopping distance after detection {} = {}\n", c.stopping_law, mm(c.stopping_distance)));
     t.push_str(&format!("  stroke C = {}, switch travel {}, left at detection {}\n", mm(c.stroke), mm(c.switch_travel), mm(c.remaining)));
     t.push_str(&format!("  budget: {} (margin {})\n", if c.fits { "FITS" } else { "DOES NOT FIT: escalate to a category-0 stop" }, mm_signed(c.margin)));

@@ -52,6 +52,10 @@ pub struct DesignArgs {
     /// With --body-region: the force threshold of the rigid tool's sensor, N.
     #[arg(long = "rigid-sensor", value_name = "N", default_value_t = crate::body_design::RIGID_SENSOR_N)]
     pub rigid_sensor: f64,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = flinch_model::overrides::Set::parse)]
+    pub set: Vec<flinch_model::overrides::Set>,
 }
 
 /// One simulated candidate.
@@ -270,6 +274,56 @@ pub fn speed_for_budget(room: f64, dead_time: f64, decel: f64) -> f64 {
     decel * (-dead_time + (dead_time * dead_time + 2.0 * room / decel).sqrt())
 }
 
+/// Why `flinch design` refuses its input before simulating anything (exit 2): a bad `--plot`
+/// name, a scene that cannot be read, a module or sensor it cannot size, an option out of range,
+/// a design point the scene validator refuses, a body-region question it cannot answer. `None`:
+/// the input is good; whatever fails after that is a runtime failure (exit 3). Issue 26 item 7:
+/// these exited 3.
+pub fn refusal_of(a: &DesignArgs) -> Option<String> {
+    if let Some(p) = &a.plot {
+        if let Err(e) = flinch_output::figure::check_extension(p) {
+            return Some(format!("--plot {e}"));
+        }
+    }
+    let t = match Template::load_with(&a.scene, &a.set) {
+        Ok(t) => t,
+        Err(e) => return Some(e.to_string()),
+    };
+    let at = |e: String| format!("{}: {e}", a.scene.display());
+    if let Some(which) = &a.body_region {
+        if a.stroke.is_some() || a.speed.is_some() || a.plot.is_some() {
+            return Some("--body-region: --stroke, --speed and --plot do not apply (the speed is what it searches)".into());
+        }
+        return crate::body_design::refusal(&t, which, a.dead_time, a.rigid_sensor).map(at);
+    }
+    refusal(&t, a.stroke, a.speed, a.dead_time).map(at)
+}
+
+/// The input checks of [`design`], before it simulates: see [`refusal_of`].
+pub fn refusal(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: Option<f64>) -> Option<String> {
+    let base = &t.base;
+    let module = match Module::of(base) {
+        Ok(m) => m,
+        Err(e) => return Some(e),
+    };
+    if !matches!(base.sensor, Some(Sensor::Travel { .. })) {
+        return Some("sensor.kind: flinch design needs a travel switch (sensor.kind = \"travel\")".into());
+    }
+    for (name, v) in [("--stroke", stroke), ("--speed", speed), ("--dead-time", dead_time)] {
+        if let Some(v) = v {
+            let ok = if name == "--dead-time" { v >= 0.0 && v.is_finite() } else { v > 0.0 && v.is_finite() };
+            if !ok {
+                return Some(format!("{name}: must be {} and finite, got {v}", if name == "--dead-time" { ">= 0" } else { "> 0" }));
+            }
+        }
+    }
+    let c = stroke.unwrap_or(module.stroke());
+    let v = speed.unwrap_or(base.motion.speed);
+    let dt = dead_time.unwrap_or(base.motion.dead_time);
+    let cand = Candidates { t, module, dead_time: dt, base };
+    cand.scene(v, c).err().map(|e| format!("the design point (--stroke, --speed, --dead-time) is refused by the scene validator: {e}"))
+}
+
 /// Answers the design questions for a scene with optional overrides.
 pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: Option<f64>) -> Result<DesignReport, String> {
     let base = &t.base;
@@ -383,7 +437,9 @@ pub fn human(r: &DesignReport) -> String {
     use flinch_sim::verdict::{mm, mm_signed, mps, ms};
     use std::fmt::Write;
     let mut o = String::new();
-    let _ = writeln!(o, "{} ({} module, m_t = {} kg)", r.scene, r.module, r.tool_mass);
+    // The design point as simulated (after --speed, --stroke, --dead-time and --set).
+    let s = &r.design.summary;
+    o.push_str(&check::headline_lines(&r.scene, &s.simulated, &s.name_mismatches));
     match r.stopping_table_max_speed_mps {
         None => {
             let _ = writeln!(o, "  robot: V_c = {}, DT = {}, d_c = {} m/s^2; switch travel d_sw = {}", mps(r.speed), ms(r.dead_time), r.decel, mm(r.switch_travel));
@@ -492,9 +548,9 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
         if a.stroke.is_some() || a.speed.is_some() || a.plot.is_some() {
             return Err("--body-region: --stroke, --speed and --plot do not apply (the speed is what it searches)".into());
         }
-        return crate::body_design::run(&a.scene, which, a.dead_time, a.rigid_sensor, a.json);
+        return crate::body_design::run(&a.scene, &a.set, which, a.dead_time, a.rigid_sensor, a.json);
     }
-    let t = Template::load(&a.scene).map_err(|e| e.to_string())?;
+    let t = Template::load_with(&a.scene, &a.set).map_err(|e| e.to_string())?;
     let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     if a.json {
         print!("{}", flinch_output::to_json(&flinch_output::Versioned::new(&r)));

@@ -72,6 +72,13 @@ pub(super) fn line_at(text: &str, offset: usize) -> usize {
         + 1
 }
 
+/// The candidate closest to `word` when it is close enough to be a typo (edit distance at most a
+/// third of the word, at least 1), for "did you mean".
+pub fn closest<'a>(word: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let limit = (word.chars().count() / 3).max(1);
+    candidates.map(|c| (strsim::levenshtein(word, c), c)).filter(|(d, _)| *d <= limit).min_by_key(|(d, _)| *d).map(|(_, c)| c)
+}
+
 /// A derived value for messages, to 6 significant digits.
 pub(super) fn approx(x: f64) -> String {
     num(format!("{x:.5e}").parse().unwrap_or(x))
@@ -417,10 +424,12 @@ impl Ctx<'_> {
             if !allowed.iter().any(|k| k.name == key) {
                 let line = self.key_line(tab, key);
                 let list = allowed.iter().map(|k| k.name).collect::<Vec<_>>().join(", ");
+                let near = closest(key, allowed.iter().map(|k| k.name));
+                let hint = near.map_or(String::new(), |n| format!("; did you mean `{n}`?"));
                 self.err(
                     line,
                     tab.key(key),
-                    format!("unknown key{what}; allowed keys: {list}"),
+                    format!("unknown key{what}; allowed keys: {list}{hint}"),
                 );
             }
         }
@@ -587,7 +596,8 @@ impl Ctx<'_> {
         match options.iter().position(|name| *name == s) {
             Some(i) => values.get(i).copied().map(Some),
             None => {
-                self.bad(tab, key.name, format!("must be {what}, got \"{s}\""));
+                let hint = closest(s, options.iter().copied()).map_or(String::new(), |n| format!(" (did you mean \"{n}\"?)"));
+                self.bad(tab, key.name, format!("must be {what}, got \"{s}\"{hint}"));
                 None
             }
         }

@@ -143,6 +143,21 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
         }
     }
 
+    // A linear decoupler with k = 0 holds nothing: the flange accelerates away from a tool that
+    // never moves and drives through it (and through the target: issue 26 item 6). That is the
+    // free tool of Fig. 1b / 4b only when the tool already cruises with the flange.
+    if let (Some(super::Decoupler::Linear(l)), Some(m)) = (&decoupler, motion) {
+        if l.stiffness == 0.0 && !m.start_at_speed {
+            if let Some(dt) = cx.table(&root, &decoupler::TABLE) {
+                cx.bad(
+                    &dt,
+                    "stiffness",
+                    "0 holds the tool to nothing: the flange would accelerate away from a tool at rest and pass through it; a free tool (k = 0, Fig. 1b / 4b) needs motion.start_at_speed = true (the tool already cruising with the flange), otherwise give k > 0".into(),
+                );
+            }
+        }
+    }
+
     let scene = Scene {
         name: name?,
         duration_s: duration_s?,

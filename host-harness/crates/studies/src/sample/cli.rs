@@ -57,6 +57,10 @@ pub struct SampleArgs {
     /// Threads (default: all cores). The result does not depend on it.
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = flinch_model::overrides::Set::parse)]
+    pub set: Vec<flinch_model::overrides::Set>,
 }
 
 /// A count given as 10000 or 1e4.
@@ -128,7 +132,10 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
     if args.jobs == Some(0) {
         return Err(Failure::bad_input("--jobs must be at least 1"));
     }
-    let (file, text) = flinch_model::shipped::read(scene).map_err(|e| Failure::bad_input(e.0))?;
+    let varied: Vec<&str> = args.vary.iter().map(|v| v.split_once('=').map_or(v.as_str(), |(k, _)| k).trim()).collect();
+    flinch_model::overrides::refuse_overlap(&args.set, &varied, "--vary").map_err(Failure::bad_input)?;
+    let loaded = flinch_model::overrides::load(scene, &args.set).map_err(Failure::bad_input)?;
+    let (file, text) = (loaded.file, loaded.text);
     let template = Template::from_text(&text, &file).map_err(|e| Failure::bad_input(e.0))?;
     let plan = Plan::new(template, &text, &args.vary, args.seed, samples, chunk, args.truncate).map_err(|e| Failure::bad_input(e.0))?;
     for v in &plan.vary {

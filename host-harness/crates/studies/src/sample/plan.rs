@@ -218,6 +218,8 @@ impl Plan {
         let mut r = SampleReport {
             schema_version: SCHEMA_VERSION,
             scene: self.template.base.name.clone(),
+            simulated: flinch_model::headline::headline(&self.template.base).simulated,
+            name_mismatches: flinch_model::headline::headline(&self.template.base).mismatches,
             scene_file: self.template.file().to_string(),
             scene_fnv1a64: self.scene_hash.clone(),
             flinch_version: env!("CARGO_PKG_VERSION").to_string(),

@@ -102,6 +102,12 @@ pub struct SampleReport {
     pub schema_version: u32,
     /// Scene name.
     pub scene: String,
+    /// What was simulated before any draw (`flinch_model::headline`): the name can be stale.
+    #[serde(default)]
+    pub simulated: String,
+    /// Claims of the scene's name that the scene (before any draw) contradicts.
+    #[serde(default)]
+    pub name_mismatches: Vec<String>,
     /// The scene as given.
     pub scene_file: String,
     /// FNV-1a 64 of the scene's text and of the files it refers to (its URDF).
@@ -202,7 +208,7 @@ impl SampleReport {
 
     /// What the human summary prints.
     pub fn human(&self) -> String {
-        let mut t = format!("{}\n", self.scene);
+        let mut t = crate::check::headline_lines(&self.scene, &self.simulated, &self.name_mismatches);
         let of = if self.complete { format!("{} samples", self.drawn) } else { format!("{} of {} samples (ranges {})", self.drawn, self.samples, self.ranges.iter().map(|r| format!("{}..{}", r[0], r[1])).collect::<Vec<_>>().join(", ")) };
         t.push_str(&format!("  {of}, seed {}: {} ran, {} refused by the validator, {} solver failures\n", self.seed, self.ran, self.refused, self.solver_failed));
         for v in &self.vary {

@@ -40,6 +40,10 @@ pub struct SweepArgs {
     /// Threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
+    /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
+    /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = flinch_model::overrides::Set::parse)]
+    pub set: Vec<flinch_model::overrides::Set>,
 }
 
 /// Parses the axes, honouring `--log KEY`; refuses a `--log` key that is not swept.
@@ -74,7 +78,10 @@ pub fn run(args: &SweepArgs) -> Result<bool, Failure> {
     if let Some(p) = &svg {
         flinch_output::figure::check_extension(p).map_err(|e| Failure::bad_input(format!("--plot {e}")))?;
     }
-    let template = Template::load(&args.scene).map_err(|e| Failure::bad_input(e.to_string()))?;
+    let varied: Vec<&str> = axes.iter().map(|a| a.key.as_str()).collect();
+    flinch_model::overrides::refuse_overlap(&args.set, &varied, "--vary").map_err(Failure::bad_input)?;
+    let template = Template::load_with(&args.scene, &args.set).map_err(|e| Failure::bad_input(e.to_string()))?;
+    output::note(flinch_model::headline::headline(&template.base).lines().trim_end());
     let built = if args.strict { Sweep::new(&template, axes) } else { Sweep::keep_going(&template, axes) };
     let sweep = built.map_err(|e| Failure::bad_input(e.to_string()))?;
     if sweep.refused_count() == sweep.len() {

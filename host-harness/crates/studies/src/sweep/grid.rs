@@ -157,7 +157,7 @@ impl Sweep {
                 }
             }
         }
-        Ok(Self { axes, values, scenes, refused, scene_name: template.base.name.clone() })
+        Ok(Self { axes, values, scenes, refused, scene_name: flinch_model::headline::headline(&template.base).flagged_name() })
     }
 
     /// Number of points.

@@ -61,9 +61,9 @@ pub fn metric(s: &Summary, name: &str) -> Option<f64> {
 pub const METRICS: &[&str] = &[
     "t_contact", "t_detect", "t_brake", "detection_delay", "reaction_time", "peak_contact_force", "peak_robot_force",
     "object_final_velocity", "mode", "stroke_exhausted", "achieved_restitution", "steps", "rhs_evals", "t_stop",
-    "approach_velocity", "contacts", "object_peak_velocity", "max_travel", "decoupler_impulse", "peak_gas_pressure",
+    "approach_speed_mps", "contacts", "object_peak_velocity", "max_travel", "decoupler_impulse", "peak_gas_pressure",
     "rejected_steps", "events", "peak_robot_force_t_s", "first_impact_peak_robot_force_n", "first_impact_peak_robot_force_t_s",
-    "stroke_left_min_m", "target_deformation_max_m", "closest_approach_m", "concluded", "t_end_s", "flange_reach_after_end_m", "safe",
+    "stroke_left_min_m", "target_deformation_max_m", "closest_approach_m", "concluded", "t_end_s", "flange_reach_after_end_m", "safe", "as_commanded", "body_limits_pass",
 ];
 
 /// Checks a metric name before anything runs.

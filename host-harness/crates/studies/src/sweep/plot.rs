@@ -80,6 +80,26 @@ pub struct HeatMap {
     pub exhausted: Vec<bool>,
     /// Status of every cell (refused and failed cells are drawn as such).
     pub status: Vec<Status>,
+    /// Cells that ran and are NOT SAFE (outlined red).
+    pub not_safe: Vec<bool>,
+    /// Cells that ran and are not concluded (a dotted orange border).
+    pub inconclusive: Vec<bool>,
+    /// Cells not simulated as commanded (hatched): the flange had not reached V_c at contact.
+    pub not_commanded: Vec<bool>,
+    /// A boolean metric: the words for 0 and 1 (two colours and a two-entry key, no colour bar).
+    pub boolean: Option<(&'static str, &'static str)>,
+}
+
+/// The two colours of a boolean metric: 0 (vermillion) and 1 (bluish green), Okabe-Ito.
+pub const BOOL_COLOURS: [RGBColor; 2] = [RGBColor(213, 94, 0), RGBColor(0, 158, 115)];
+
+/// The words for 0 and 1 of a boolean metric, `None` for a number.
+pub fn boolean_words(metric: &str) -> Option<(&'static str, &'static str)> {
+    match metric {
+        "safe" => Some(("NOT SAFE", "SAFE")),
+        "stroke_exhausted" | "concluded" | "as_commanded" | "body_limits_pass" => Some(("no", "yes")),
+        _ => None,
+    }
 }
 
 /// Cell edges in value coordinates: midpoints between values (geometric on a log axis), half a
@@ -131,7 +151,11 @@ where
         (false, true) => cells(&main, h, x0..x1, (y0..y1).log_scale().with_key_points(ticks(y0, y1, true)), &ex, &ey, &frac)?,
         (true, true) => cells(&main, h, (x0..x1).log_scale().with_key_points(ticks(x0, x1, true)), (y0..y1).log_scale().with_key_points(ticks(y0, y1, true)), &ex, &ey, &frac)?,
     }
-    colour_bar(&side, h, zlo, zhi)?;
+    if h.boolean.is_some() {
+        two_colour_key(&side, h)?;
+    } else {
+        colour_bar(&side, h, zlo, zhi)?;
+    }
     Ok(())
 }
 
@@ -164,6 +188,7 @@ where
         let c = match status(i, j) {
             Status::Refused => refused,
             Status::Failed => failed,
+            Status::Ok if z.is_finite() && h.boolean.is_some() => BOOL_COLOURS[usize::from(z >= 0.5)],
             Status::Ok if z.is_finite() && (!h.z_log || z > 0.0) => viridis(frac(z)),
             Status::Ok => refused,
         };
@@ -185,6 +210,30 @@ where
                 cross(i, j, RGBColor(90, 90, 90))?;
             } else if h.exhausted.get(i * ny + j).copied().unwrap_or(false) {
                 cross(i, j, RGBColor(230, 30, 30))?;
+            }
+        }
+    }
+    // What a cell did not test: hatched (not as commanded), a dotted orange border (not
+    // concluded), a red outline (NOT SAFE); drawn inside the cell so neighbours stay apart.
+    let lerp = |e: &[f64], k: usize, t: f64, log: bool| if log { (e[k].ln() + (e[k + 1].ln() - e[k].ln()) * t).exp() } else { e[k] + (e[k + 1] - e[k]) * t };
+    let flag = |v: &[bool], i: usize, j: usize| v.get(i * ny + j).copied().unwrap_or(false);
+    for i in 0..nx {
+        for j in 0..ny {
+            let at = |tx: f64, ty: f64| (lerp(ex, i, tx, h.x.log), lerp(ey, j, ty, h.y.log));
+            if flag(&h.not_commanded, i, j) {
+                for k in 1..5 {
+                    let t = k as f64 / 5.0;
+                    chart.draw_series(LineSeries::new(vec![at(t, 0.04), at(0.04, t)], RGBColor(70, 70, 70).stroke_width(1)))?;
+                    chart.draw_series(LineSeries::new(vec![at(0.96, t), at(t, 0.96)], RGBColor(70, 70, 70).stroke_width(1)))?;
+                }
+            }
+            if flag(&h.inconclusive, i, j) {
+                let ring = [at(0.12, 0.12), at(0.88, 0.12), at(0.88, 0.88), at(0.12, 0.88), at(0.12, 0.12)];
+                chart.draw_series(DashedLineSeries::new(ring, 3, 4, RGBColor(230, 159, 0).stroke_width(3)))?;
+            }
+            if flag(&h.not_safe, i, j) {
+                let ring = vec![at(0.06, 0.06), at(0.94, 0.06), at(0.94, 0.94), at(0.06, 0.94), at(0.06, 0.06)];
+                chart.draw_series(LineSeries::new(ring, RGBColor(200, 0, 0).stroke_width(3)))?;
             }
         }
     }
@@ -271,8 +320,31 @@ where
     // The metric's name and unit, rotated beside the bar.
     let desc = ("sans-serif", 15).into_font().color(&BLACK).transform(FontTransform::Rotate270).pos(Pos::new(HPos::Center, VPos::Center));
     area.draw(&Text::new(format!("{}{}", h.z_label, if h.z_log { " (log scale)" } else { "" }), (12, (top + bottom) / 2), desc))?;
-    // Key.
-    let mut y = bottom + 30;
+    symbols_key(area, h, bottom + 30)
+}
+
+/// A boolean metric's key: two swatches with their words, then the symbols.
+fn two_colour_key<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, h: &HeatMap) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let (no, yes) = h.boolean.unwrap_or(("0", "1"));
+    let font = ("sans-serif", 15).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+    area.draw(&Text::new(h.z_label.clone(), (18, 30), font.clone()))?;
+    for (k, (word, c)) in [(yes, BOOL_COLOURS[1]), (no, BOOL_COLOURS[0])].into_iter().enumerate() {
+        let y = 64 + 34 * k as i32;
+        area.draw(&Rectangle::new([(18, y - 12), (50, y + 12)], c.filled()))?;
+        area.draw(&Text::new(word.to_string(), (60, y), font.clone()))?;
+    }
+    symbols_key(area, h, 160)
+}
+
+/// The key to the symbols drawn on cells, from `y0` down; an entry only for what is present.
+fn symbols_key<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, h: &HeatMap, y0: i32) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let mut y = y0;
     let key = ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
     let mut entry = |draw: &KeySymbol<'_, DB>, text: &str| -> DrawResult {
         draw(area, (18, y))?;
@@ -291,6 +363,15 @@ where
     if h.exhausted.iter().any(|&e| e) {
         entry(&x_mark(RGBColor(230, 30, 30)), "stroke exhausted")?;
     }
+    if h.not_safe.iter().any(|&b| b) {
+        entry(&|a, (x, y)| { a.draw(&Rectangle::new([(x, y - 8), (x + 16, y + 8)], RGBColor(200, 0, 0).stroke_width(3)))?; Ok(()) }, "NOT SAFE (outlined)")?;
+    }
+    if h.inconclusive.iter().any(|&b| b) {
+        entry(&|a, (x, y)| { a.draw(&PathElement::new(vec![(x, y - 8), (x + 16, y - 8), (x + 16, y + 8), (x, y + 8), (x, y - 8)], RGBColor(230, 159, 0).stroke_width(3)))?; Ok(()) }, "not concluded (orange border)")?;
+    }
+    if h.not_commanded.iter().any(|&b| b) {
+        entry(&|a, (x, y)| { for k in 0..4 { a.draw(&PathElement::new(vec![(x + 4 * k, y + 8), (x + 4 * k + 8, y - 8)], RGBColor(70, 70, 70).stroke_width(1)))?; } Ok(()) }, "V_c not reached (hatched)")?;
+    }
     if h.status.contains(&Status::Refused) {
         entry(&|a, (x, y)| { a.draw(&Rectangle::new([(x, y - 8), (x + 16, y + 8)], RGBColor(215, 215, 215).filled()))?; x_mark(RGBColor(90, 90, 90))(a, (x + 1, y)) }, "refused by the validator")?;
     }
@@ -298,6 +379,30 @@ where
         entry(&|a, (x, y)| { a.draw(&Rectangle::new([(x, y - 8), (x + 16, y + 8)], RGBColor(120, 120, 120).filled()))?; Ok(()) }, "solver failed")?;
     }
     Ok(())
+}
+
+/// The marks of a line chart at `metric`'s value: NOT SAFE (red ring), not concluded (orange
+/// diamond), not as commanded (hollow grey circle; the legend gives the fastest impact reached),
+/// each series only when such a point exists.
+fn marks(r: &SweepResult, metric: &str) -> Vec<Series> {
+    let at = |pred: &dyn Fn(&flinch_sim::Summary) -> bool| -> Vec<(f64, f64)> {
+        r.points.iter().filter_map(|p| p.outcome.as_ref().ok().filter(|s| pred(s)).and_then(|s| super::metric(s, metric).map(|y| (p.values[0], y)))).collect()
+    };
+    let mut out = Vec::new();
+    let not_safe = at(&|s| !s.safe);
+    if !not_safe.is_empty() {
+        out.push(Series { name: "NOT SAFE".into(), points: not_safe, color: RGBColor(200, 0, 0), style: Style::Ring });
+    }
+    let open = at(&|s| !s.concluded);
+    if !open.is_empty() {
+        out.push(Series { name: "not concluded (counts as NOT SAFE)".into(), points: open, color: RGBColor(230, 159, 0), style: Style::Diamond });
+    }
+    let short = at(&|s| !s.as_commanded);
+    if !short.is_empty() {
+        let reached = r.points.iter().filter_map(|p| p.outcome.as_ref().ok()).filter(|s| !s.as_commanded).filter_map(|s| s.approach_speed_mps).fold(0.0, f64::max);
+        out.push(Series { name: format!("not as commanded: V_c not reached at contact (impact <= {reached:.3} m/s)"), points: short, color: RGBColor(90, 90, 90), style: Style::Hollow });
+    }
+    out
 }
 
 /// A label for a swept key (the key, and its unit when it is a well-known one).
@@ -357,9 +462,24 @@ pub fn draw_with(path: &Path, r: &SweepResult, metric: &str, log_color: bool) ->
                     force.push(Series { name: name.into(), points: pts, color: c, style: Style::Crosses });
                 }
             }
+            force.extend(marks(r, "peak_robot_force"));
             let mut panels = vec![figure::Panel { caption: "peak forces".into(), y_label: "force [N]".into(), series: force, ..Default::default() }];
             if metric != "peak_robot_force" && metric != "peak_contact_force" {
-                panels.push(figure::Panel { caption: metric.into(), y_label: metric_label(metric), series: vec![series(metric, metric, PALETTE[2])], ..Default::default() });
+                let mut s = vec![series(metric, metric, PALETTE[2])];
+                let words = boolean_words(metric);
+                if words.is_some() {
+                    s[0].style = Style::Steps;
+                }
+                s.extend(marks(r, metric));
+                panels.push(figure::Panel {
+                    caption: metric.into(),
+                    y_label: metric_label(metric),
+                    series: s,
+                    y_range: words.map(|_| (-0.3, 1.3)),
+                    y_ticks: words.map_or(Vec::new(), |(no, yes)| vec![(0.0, no.to_string()), (1.0, yes.to_string())]),
+                    weight: if words.is_some() { 0.6 } else { 1.0 },
+                    ..Default::default()
+                });
             }
             let modes = r.metric("mode");
             if modes.iter().any(|m| m.is_finite()) {
@@ -391,6 +511,10 @@ pub fn draw_with(path: &Path, r: &SweepResult, metric: &str, log_color: bool) ->
                 modes,
                 exhausted,
                 status: r.points.iter().map(|p| p.status).collect(),
+                not_safe: r.points.iter().map(|p| p.outcome.as_ref().is_ok_and(|s| !s.safe)).collect(),
+                inconclusive: r.points.iter().map(|p| p.outcome.as_ref().is_ok_and(|s| !s.concluded)).collect(),
+                not_commanded: r.points.iter().map(|p| p.outcome.as_ref().is_ok_and(|s| !s.as_commanded)).collect(),
+                boolean: boolean_words(metric),
             };
             heat_map(path, &h)
         }

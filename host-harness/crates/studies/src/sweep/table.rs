@@ -32,9 +32,13 @@ pub fn csv_io(e: csv::Error) -> io::Error {
 
 impl SweepResult {
     /// Writes the CSV (the `csv` crate quotes): the swept keys, every `Summary` field, then
-    /// `status` (ok, refused, failed) and `reason` (the validator's or the solver's message).
+    /// `status` (ok, inconclusive: ran but not concluded, refused, failed) and `reason` (the
+    /// validator's or the solver's message; for a point that ran, why it is not concluded or not
+    /// as commanded).
     pub fn write_csv(&self, out: &mut dyn Write) -> io::Result<()> {
-        let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).collect()).unwrap_or_default();
+        // `simulated` is the same text at every point but the swept keys: the sweep prints it once
+        // (standard error); `name_mismatches` stays, per point.
+        let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).filter(|k| k != "simulated").collect()).unwrap_or_default();
         let mut w = csv::Writer::from_writer(out);
         let mut header: Vec<String> = self.axes.iter().map(|a| a.key.clone()).collect();
         header.extend(names.iter().cloned());
@@ -47,8 +51,15 @@ impl SweepResult {
                 Ok(s) => {
                     let fields = summary_map(s);
                     row.extend(names.iter().map(|n| fields.get(n).map_or(String::new(), csv_cell)));
-                    row.push(p.status.as_str().into());
-                    row.push(String::new());
+                    // A point that ran but is not concluded is `inconclusive` (the set `sample`
+                    // uses); the reason says why, and why a point is not as commanded.
+                    let mut why: Vec<String> = Vec::new();
+                    if !s.concluded {
+                        why.push(format!("not concluded: {}", s.failures.iter().find(|f| f.starts_with("not concluded")).map_or("the robot had not stopped by the run's end", |f| f.trim_start_matches("not concluded: "))));
+                    }
+                    why.extend(s.not_as_commanded.iter().map(|m| format!("not as commanded: {m}")));
+                    row.push(if s.concluded { p.status.as_str() } else { "inconclusive" }.into());
+                    row.push(why.join("; "));
                 }
                 Err(e) => {
                     row.extend(names.iter().map(|_| String::new()));

@@ -151,8 +151,14 @@ impl Template {
     /// Reads and validates a scene file.
     /// Reads a scene argument (a file, `-`, or a shipped scene's name: [`flinch_model::shipped::read`]).
     pub fn load(path: &Path) -> Result<Self, SweepError> {
-        let (file, text) = flinch_model::shipped::read(path).map_err(|e| SweepError(e.0))?;
-        Self::from_text(&text, &file)
+        Self::load_with(path, &[])
+    }
+
+    /// Reads a scene argument and applies `--set` overrides to it
+    /// ([`flinch_model::overrides::load`]): the template is the scene as overridden.
+    pub fn load_with(path: &Path, sets: &[flinch_model::overrides::Set]) -> Result<Self, SweepError> {
+        let l = flinch_model::overrides::load(path, sets).map_err(SweepError)?;
+        Self::from_text(&l.text, &l.file)
     }
 
     /// A template from scene text; `file` names it in messages.

@@ -1,6 +1,8 @@
 //! The sweep's unit tests.
 
 use super::{axis::*, template::*, grid::*};
+#[allow(unused_imports)]
+use super::table::*;
 
 
 #[test]
@@ -65,4 +67,79 @@ fn grid_is_row_major() {
     assert_eq!(grid_index(&[2, 3], 0), vec![0, 0]);
     assert_eq!(grid_index(&[2, 3], 2), vec![0, 2]);
     assert_eq!(grid_index(&[2, 3], 3), vec![1, 0]);
+}
+
+/// A sweep of Tables 5-7 over speed with `--set` overrides applied.
+fn speed_sweep(sets: &[&str], vary: &str) -> SweepResult {
+    let sets: Vec<flinch_model::overrides::Set> = sets.iter().map(|s| flinch_model::overrides::Set::parse(s).unwrap()).collect();
+    let t = Template::load_with(std::path::Path::new("tables5-7_bistable"), &sets).unwrap();
+    Sweep::keep_going(&t, vec![Axis::parse(vary, false).unwrap()]).unwrap().run(Progress::Hidden)
+}
+
+fn svg_of(r: &SweepResult, metric: &str, name: &str) -> String {
+    let p = std::env::temp_dir().join(format!("flinch-sweep-marks-{}-{name}.svg", std::process::id()));
+    super::plot::draw(&p, r, metric).unwrap();
+    let s = std::fs::read_to_string(&p).unwrap();
+    let _ = std::fs::remove_file(&p);
+    s
+}
+
+/// Every NOT SAFE, not concluded and not-as-commanded point is marked, and each legend entry is
+/// there exactly when such a point exists (issue 26 item 3; before it, none of these entries
+/// existed and a point whose flange never reached V_c looked like any other).
+#[test]
+fn not_safe_inconclusive_and_not_as_commanded_points_are_marked() {
+    // The README's old sweep: 10 mm gap, so above sqrt(2 a_c gap) = 0.141 m/s V_c is never reached;
+    // 0.02 m/s is too slow to stop within the run (not concluded, NOT SAFE).
+    let r = speed_sweep(&[], "motion.speed=0.02:0.3:8");
+    let s = svg_of(&r, "peak_robot_force", "old");
+    for entry in ["NOT SAFE", "not concluded (counts as NOT", "not as commanded: V_c not"] {
+        assert!(s.contains(entry), "missing legend entry {entry}");
+    }
+    let csv = r.csv();
+    let mut rd = csv::Reader::from_reader(csv.as_bytes());
+    let h = rd.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|x| x == n).unwrap_or_else(|| panic!("no column {n}"));
+    let (v, a, ac, st, why) = (col("motion.speed"), col("approach_speed_mps"), col("as_commanded"), col("status"), col("reason"));
+    let mut short = 0;
+    for row in rd.records().map(Result::unwrap) {
+        let speed: f64 = row[v].parse().unwrap();
+        let reached = (2.0f64 * 1.0 * 0.010).sqrt();
+        if row[st].is_empty() || &row[st] == "refused" {
+            continue;
+        }
+        if speed > reached + 1e-3 {
+            short += 1;
+            assert_eq!(&row[ac], "false", "{speed}");
+            assert!(row[why].contains("not as commanded: the flange had reached only 0.14"), "{}", &row[why]);
+            assert!(row[a].parse::<f64>().unwrap() < 0.15);
+        } else if speed < reached - 1e-3 {
+            assert_eq!(&row[ac], "true", "{speed}");
+        }
+    }
+    assert_eq!(short, 4, "0.18, 0.22, 0.26 and 0.30 m/s");
+    assert!(csv.lines().skip(1).any(|l| l.contains(",inconclusive,")), "the 0.02 m/s point is not concluded");
+    // A sweep where every speed is reached and every point is safe: none of those entries.
+    let r = speed_sweep(&["target.gap=0.05", "duration=1.5"], "motion.speed=0.05:0.25:3");
+    let s = svg_of(&r, "peak_robot_force", "clean");
+    for entry in ["NOT SAFE", "not concluded", "not as commanded"] {
+        assert!(!s.contains(entry), "an entry {entry} without such a point");
+    }
+}
+
+/// A boolean metric is two colours with words, not a colour bar from 0 to 1.
+#[test]
+fn a_boolean_metric_gets_a_two_colour_legend() {
+    let sets: Vec<flinch_model::overrides::Set> = ["target.gap=0.05", "duration=1.5"].iter().map(|s| flinch_model::overrides::Set::parse(s).unwrap()).collect();
+    let t = Template::load_with(std::path::Path::new("tables5-7_bistable"), &sets).unwrap();
+    let axes = vec![Axis::parse("motion.speed=0.2:0.32:3", false).unwrap(), Axis::parse("motion.dead_time=0.016:0.03:2", false).unwrap()];
+    let r = Sweep::keep_going(&t, axes).unwrap().run(Progress::Hidden);
+    let s = svg_of(&r, "safe", "bool");
+    // plotters writes a text element's content on its own line.
+    assert!(s.contains("\nSAFE\n") && s.contains("\nNOT SAFE\n"), "the two words of the key");
+    // No colour bar: its label is the one drawn rotated beside the bar (the y axis's is the other).
+    assert_eq!(s.matches("rotate(270").count(), 1, "a colour bar on a boolean metric");
+    // A number keeps its colour bar.
+    let s = svg_of(&r, "peak_robot_force", "num");
+    assert_eq!(s.matches("rotate(270").count(), 2, "the colour bar of a number");
 }

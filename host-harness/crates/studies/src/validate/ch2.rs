@@ -44,13 +44,13 @@ pub(crate) fn fig13_14(cx: &Ctx, out: &mut Vec<Section>) -> Result<(), String> {
     let c_stiff = cx.run(sc, &[("target.mass", 2.5), ("robot.stiffness", 1e6)])?;
     let c_damp = cx.run(sc, &[("target.mass", 2.5), ("robot.damping", 710.0)])?;
     let kr_open = |f: &dyn Fn(&Summary) -> f64, unit: &str| format!("k_r, c_r (Fig. 12 prints neither; Table 7's 2.3e5 N/m, 71 N s/m here): k_r = 1e5 gives {} {unit}, 1e6 gives {} {unit}; c_r = 710 gives {} {unit}", sig(f(&c_soft)), sig(f(&c_stiff)), sig(f(&c_damp)));
-    let approach = |s: &Summary| s.approach_velocity.unwrap_or(f64::NAN);
+    let approach = |s: &Summary| s.approach_speed_mps.unwrap_or(f64::NAN);
     let mut rows = vec![
         num_row("Fig. 13a, rigid robot: V_p", 2.0, obj(&a), "m/s", 0.01),
         num_row("Fig. 13b, compliant robot (m_r + m_t = 5.35 kg): V_p", 1.94, obj(&b), "m/s", 0.02),
-        num_row("Fig. 13b: impact velocity", 0.98, b.approach_velocity.unwrap_or(f64::NAN), "m/s", 0.02),
+        num_row("Fig. 13b: impact velocity", 0.98, b.approach_speed_mps.unwrap_or(f64::NAN), "m/s", 0.02),
         num_row("Fig. 14a, m_p = 2.5 kg, k_c = 1e5: V_p", 1.88, obj(&c), "m/s", 0.03).open(kr_open(&obj, "m/s")),
-        num_row("Fig. 14a: impact velocity", 0.95, c.approach_velocity.unwrap_or(f64::NAN), "m/s", 0.03).open(kr_open(&approach, "m/s")),
+        num_row("Fig. 14a: impact velocity", 0.95, c.approach_speed_mps.unwrap_or(f64::NAN), "m/s", 0.03).open(kr_open(&approach, "m/s")),
         claim_row("Fig. 14b, k_c = 1e6: V_p", "lower than Fig. 14a (the robot deflects)", format!("{} m/s (14a: {} m/s)", sig(obj(&d)), sig(obj(&c))), "14b < 14a", obj(&d) < obj(&c)),
     ];
     open_rest(&mut rows, "k_r, c_r (Fig. 12 prints neither): Table 7's here; the Fig. 14a rows say how much they move the result");
