@@ -8,7 +8,6 @@
 //! output may go, and how it replaces an old file, is [`crate::writer`]'s.
 
 use std::fmt;
-use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
@@ -85,7 +84,7 @@ pub fn create(path: &Path) -> Result<Box<dyn Write>, Failure> {
 
 /// [`create`] unbuffered: the opened file (`None` for standard output), for writers that buffer
 /// themselves or need `Send` (Parquet).
-pub fn create_file(path: &Path) -> Result<Option<File>, Failure> {
+pub fn create_file(path: &Path) -> Result<Option<crate::writer::OutFile>, Failure> {
     crate::writer::open(path)
 }
 
@@ -102,6 +101,12 @@ pub fn check_target(option: &str, path: &Path) -> Result<(), Failure> {
 /// end; the paths that end the process early call it before `exit`.
 pub fn settle(keep: bool) {
     crate::writer::settle(keep);
+}
+
+/// For the binary: every output's temporary file waits for [`settle`] (a library caller's is
+/// renamed into place when its writer is dropped).
+pub fn defer_to_settle() {
+    crate::writer::defer_to_settle();
 }
 
 /// Whether outputs are kept for a command ending with `code`: everything but bad input (2) and a

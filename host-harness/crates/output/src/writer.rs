@@ -11,14 +11,15 @@
 //!   stream. Every other device (a disk, `/dev/urandom`, a serial port) is refused by name.
 //! - A new file is not created under `/dev` (except `/dev/shm`), `/proc` or `/sys`.
 //! - A regular file (new or old) is written to `.NAME.flinch-PID-N.EXT` in the same folder and
-//!   renamed over the target: at the end of the command for a stream ([`settle`]), as soon as it is
-//!   complete for a plot ([`via_temp`]). A command that fails (exit 2 or 3) removes its temporary
-//!   files, so the old file stays as it was, or no file appears. Only SIGKILL or a power cut can
+//!   renamed over the target: in the `flinch` binary at the end of the command for a stream
+//!   ([`settle`]; a library caller's when its writer is dropped), as soon as it is complete for a
+//!   plot ([`via_temp`]). A command that fails (exit 2 or 3), or a write that fails, removes its
+//!   temporary file, so the old file stays as it was, or no file appears. Only SIGKILL or a power cut can
 //!   leave a temporary file behind (its name says what it is). No fsync: a CSV is not a database.
 use crate::output::Failure;
 use std::fs::{File, Metadata, OpenOptions};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 
 /// Where an output goes.
@@ -131,12 +132,55 @@ fn create_temp(temp: &Path, target: &Path) -> std::io::Result<File> {
     Ok(f)
 }
 
+/// Set by the `flinch` binary: temporary files wait for [`settle`] (the command's ending decides).
+/// Unset (a library caller): each is renamed into place when its writer is dropped after writing
+/// without an error, and removed when a write failed.
+static DEFERRED: AtomicBool = AtomicBool::new(false);
+
+/// Makes [`settle`] decide what becomes of every temporary file (the binary calls it first).
+pub fn defer_to_settle() {
+    DEFERRED.store(true, Ordering::SeqCst);
+}
+
+/// An output file being written: in place, or a temporary file beside its target.
+#[derive(Debug)]
+pub struct OutFile {
+    f: File,
+    /// (temporary, target) when staged.
+    staged: Option<(PathBuf, PathBuf)>,
+    failed: bool,
+}
+
+impl std::io::Write for OutFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.f.write(buf).inspect_err(|_| self.failed = true)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.f.flush().inspect_err(|_| self.failed = true)
+    }
+}
+
+impl Drop for OutFile {
+    fn drop(&mut self) {
+        let Some((temp, target)) = &self.staged else { return };
+        if DEFERRED.load(Ordering::SeqCst) && !self.failed {
+            return;
+        }
+        if let Ok(mut p) = PENDING.lock() {
+            p.retain(|(t, _)| t != temp);
+        }
+        if self.failed || std::fs::rename(temp, target).is_err() {
+            let _ = std::fs::remove_file(temp);
+        }
+    }
+}
+
 /// Opens `path` for writing as [`plan`] says; `None` is standard output.
-pub fn open(path: &Path) -> Result<Option<File>, Failure> {
+pub fn open(path: &Path) -> Result<Option<OutFile>, Failure> {
     match plan(path).map_err(Failure::bad_input)? {
         Plan::Stdout => Ok(None),
-        Plan::InPlace(p) => OpenOptions::new().write(true).open(&p).map(Some).map_err(|e| Failure::runtime(format!("{}: cannot open it: {e}", p.display()))),
-        Plan::Staged { target, temp } => create_temp(&temp, &target).map(Some).map_err(|e| Failure::runtime(format!("{}: cannot create it: {e}", path.display()))),
+        Plan::InPlace(p) => OpenOptions::new().write(true).open(&p).map(|f| Some(OutFile { f, staged: None, failed: false })).map_err(|e| Failure::runtime(format!("{}: cannot open it: {e}", p.display()))),
+        Plan::Staged { target, temp } => create_temp(&temp, &target).map(|f| Some(OutFile { f, staged: Some((temp, target)), failed: false })).map_err(|e| Failure::runtime(format!("{}: cannot create it: {e}", path.display()))),
     }
 }
 
@@ -222,6 +266,7 @@ mod tests {
 
     #[test]
     fn the_old_file_stays_until_the_new_one_is_complete_and_a_failure_leaves_it() {
+        defer_to_settle();
         let d = dir("staged");
         let out = d.join("out.csv");
         std::fs::write(&out, "old\n").unwrap();
