@@ -22,6 +22,7 @@
 
 pub mod cli;
 mod common;
+mod consistency;
 mod dist;
 mod keys;
 mod outcome;

@@ -3,7 +3,7 @@
 use flinch_sim::Summary;
 use serde_json::Value as Json;
 use std::io::{self, Write};
-use super::{grid::*, metrics::*};
+use super::{axis::*, grid::*, metrics::*};
 
 
 pub(crate) fn csv_cell(v: &Json) -> String {
@@ -30,33 +30,102 @@ pub fn csv_io(e: csv::Error) -> io::Error {
     }
 }
 
+/// The CSV's header: the swept keys, the summary fields `names`, `status`, `reason`.
+pub(crate) fn header(axes: &[Axis], names: &[String]) -> Vec<String> {
+    let mut header: Vec<String> = axes.iter().map(|a| a.key.clone()).collect();
+    header.extend(names.iter().cloned());
+    header.push("status".into());
+    header.push("reason".into());
+    header
+}
+
+/// One point's CSV row under the summary fields `names`.
+pub(crate) fn record(p: &Point, names: &[String]) -> Vec<String> {
+    let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
+    match &p.outcome {
+        Ok(s) => {
+            let fields = summary_map(s);
+            row.extend(names.iter().map(|n| fields.get(n).map_or(String::new(), csv_cell)));
+            row.push(p.status.as_str().into());
+            row.push(String::new());
+        }
+        Err(e) => {
+            row.extend(names.iter().map(|_| String::new()));
+            row.push(p.status.as_str().into());
+            row.push(e.clone());
+        }
+    }
+    row
+}
+
+/// A sweep's CSV written row by row as the points arrive in grid order (`flinch sweep`): the same
+/// bytes as [`SweepResult::write_csv`] of the same points. The header needs a run's summary for its
+/// field names: rows before the first point that ran wait (refused or failed rows, a few bytes each).
+pub struct RowWriter<W: Write> {
+    w: csv::Writer<W>,
+    axes: Vec<Axis>,
+    names: Option<Vec<String>>,
+    waiting: Vec<Point>,
+    /// Rows written.
+    pub rows: usize,
+}
+
+impl<W: Write> RowWriter<W> {
+    /// A writer for a sweep over `axes`.
+    pub fn new(out: W, axes: &[Axis]) -> Self {
+        Self { w: csv::Writer::from_writer(out), axes: axes.to_vec(), names: None, waiting: Vec::new(), rows: 0 }
+    }
+
+    /// Takes the next point in grid order.
+    pub fn push(&mut self, p: Point) -> io::Result<()> {
+        if self.names.is_none() {
+            match &p.outcome {
+                Ok(s) => {
+                    let names: Vec<String> = summary_fields(s).into_iter().map(|(k, _)| k).collect();
+                    self.w.write_record(header(&self.axes, &names)).map_err(csv_io)?;
+                    self.names = Some(names);
+                    for q in std::mem::take(&mut self.waiting) {
+                        self.write(&q)?;
+                    }
+                }
+                Err(_) => {
+                    self.waiting.push(p);
+                    return Ok(());
+                }
+            }
+        }
+        self.write(&p)
+    }
+
+    fn write(&mut self, p: &Point) -> io::Result<()> {
+        let names = self.names.as_deref().unwrap_or(&[]);
+        self.w.write_record(record(p, names)).map_err(csv_io)?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Writes what waits (with no summary fields if no point ran) and flushes.
+    pub fn finish(&mut self) -> io::Result<()> {
+        if self.names.is_none() {
+            self.w.write_record(header(&self.axes, &[])).map_err(csv_io)?;
+            self.names = Some(Vec::new());
+            for q in std::mem::take(&mut self.waiting) {
+                self.write(&q)?;
+            }
+        }
+        self.w.flush()
+    }
+}
+
 impl SweepResult {
     /// Writes the CSV (the `csv` crate quotes): the swept keys, every `Summary` field, then
     /// `status` (ok, refused, failed) and `reason` (the validator's or the solver's message).
     pub fn write_csv(&self, out: &mut dyn Write) -> io::Result<()> {
         let names: Vec<String> = self.points.iter().find_map(|p| p.outcome.as_ref().ok()).map(|s| summary_fields(s).into_iter().map(|(k, _)| k).collect()).unwrap_or_default();
         let mut w = csv::Writer::from_writer(out);
-        let mut header: Vec<String> = self.axes.iter().map(|a| a.key.clone()).collect();
-        header.extend(names.iter().cloned());
-        header.push("status".into());
-        header.push("reason".into());
-        w.write_record(&header).map_err(csv_io)?;
+        w.write_record(header(&self.axes, &names)).map_err(csv_io)?;
         for p in &self.points {
-            let mut row: Vec<String> = p.values.iter().map(|x| x.to_string()).collect();
-            match &p.outcome {
-                Ok(s) => {
-                    let fields = summary_map(s);
-                    row.extend(names.iter().map(|n| fields.get(n).map_or(String::new(), csv_cell)));
-                    row.push(p.status.as_str().into());
-                    row.push(String::new());
-                }
-                Err(e) => {
-                    row.extend(names.iter().map(|_| String::new()));
-                    row.push(p.status.as_str().into());
-                    row.push(e.clone());
-                }
-            }
-            w.write_record(&row).map_err(csv_io)?;
+            w.write_record(record(p, &names)).map_err(csv_io)?;
         }
         w.flush()
     }
