@@ -135,7 +135,13 @@ fn chunks_merge_into_the_whole_run() {
         ),
         (|r| r.estimates[0].p = Some(0.9), "p = Some(0.9)"),
         (|r| r.confidence = 0.5, "confidence:"),
-        (|r| r.ran = u64::MAX, "more than 2^64"),
+        (
+            |r| {
+                r.ran = u64::MAX;
+                r.refused += 1;
+            },
+            "more than 2^64",
+        ),
         (|r| r.complete = true, "complete:"),
     ] {
         let mut bad = t2.clone();

@@ -152,8 +152,8 @@ struct BenchArgs {
     /// Output directory for runs.csv, summary.csv, pareto.svg and fixed_point.csv.
     #[arg(long, value_name = "DIR", default_value = "target/bench")]
     out: PathBuf,
-    /// Timed repetitions of every configuration (the median is reported).
-    #[arg(long, default_value_t = 5)]
+    /// Timed repetitions of every configuration (the median is reported), 1 to 1000.
+    #[arg(long, default_value_t = 5, value_parser = opt_repeats)]
     repeats: usize,
     /// A shorter sweep.
     #[arg(long)]
@@ -471,4 +471,12 @@ fn opt_phase(text: &str) -> Result<f64, String> {
 /// `hil --tick`: held to `controller.firmware_tick`'s range (scene::option_number).
 fn opt_tick(text: &str) -> Result<f64, String> {
     scene::option_number("controller.firmware_tick", &scene::CONTROLLER_FIRMWARE_TICK, text)
+}
+
+/// `bench --repeats`: 1 to 1000 (a billion ran forever; issue 27).
+fn opt_repeats(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n @ 1..=1000) => Ok(n),
+        _ => Err(format!("allowed range [1, 1000] timed repetitions, got {text}")),
+    }
 }

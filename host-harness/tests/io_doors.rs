@@ -186,6 +186,9 @@ fn every_number_option_is_held_to_its_key_s_range() {
         (&["design", "tables5-7_bistable", "--speed", "100"], "motion.speed: allowed range"),
         (&["design", "tables5-7_bistable", "--speed", "nan"], "motion.speed: allowed range"),
         (&["design", "tables5-7_bistable", "--dead-time", "1e6"], "motion.dead_time: allowed range"),
+        (&["sweep", "table1_rigid_tool", "--vary", "tool.mass=0.2:1:3", "--jobs", "100000"], "allowed range [1, 1024] threads"),
+        (&["sample", "table1_rigid_tool", "--vary", "tool.mass=uniform:0.3:0.5", "--samples", "10", "--jobs", "100000"], "allowed range [1, 1024] threads"),
+        (&["bench", "--repeats", "1000000000"], "allowed range [1, 1000] timed repetitions"),
     ];
     for (args, want) in cases {
         let mut c = flinch();
