@@ -146,7 +146,7 @@ fn chunks_merge_into_the_whole_run() {
     ] {
         let mut bad = t2.clone();
         tamper(&mut bad);
-        let e = merge(&[t1.clone(), bad], &["a.json".into(), "b.json".into()]).unwrap_err().0;
+        let e = sample::merge_checked(&[t1.clone(), bad], &["a.json".into(), "b.json".into()]).unwrap_err().0;
         assert!(e.contains("b.json: not a consistent") && e.contains(field), "{field}: {e}");
     }
     // What is missing from a partial merge, for the command line's refusal.

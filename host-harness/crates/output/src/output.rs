@@ -85,7 +85,10 @@ pub fn create(path: &Path) -> Result<Box<dyn Write>, Failure> {
 /// [`create`] unbuffered: the opened file (`None` for standard output), for writers that buffer
 /// themselves or need `Send` (Parquet).
 pub fn create_file(path: &Path) -> Result<Option<crate::writer::OutFile>, Failure> {
-    crate::writer::open(path)
+    crate::writer::open(path).map_err(|e| match e {
+        crate::writer::OpenError::Refused(m) => Failure::bad_input(m),
+        crate::writer::OpenError::Failed(m) => Failure::runtime(m),
+    })
 }
 
 /// Refuses, before anything runs, an output the careful writer would refuse (an input of this

@@ -16,8 +16,8 @@
 //!   plot ([`via_temp`]). A command that fails (exit 2 or 3), or a write that fails, removes its
 //!   temporary file, so the old file stays as it was, or no file appears. Only SIGKILL or a power cut can
 //!   leave a temporary file behind (its name says what it is). No fsync: a CSV is not a database.
-use crate::output::Failure;
 use std::fs::{File, Metadata, OpenOptions};
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
@@ -72,7 +72,7 @@ fn temp_beside(target: &Path) -> PathBuf {
 
 /// Decides where `path` may be written; `Err` is the reason it may not (bad input, exit 2).
 pub fn plan(path: &Path) -> Result<Plan, String> {
-    if crate::output::is_stdout(path) {
+    if path.as_os_str() == "-" {
         return Ok(Plan::Stdout);
     }
     let shown = path.display();
@@ -176,11 +176,21 @@ impl Drop for OutFile {
 }
 
 /// Opens `path` for writing as [`plan`] says; `None` is standard output.
-pub fn open(path: &Path) -> Result<Option<OutFile>, Failure> {
-    match plan(path).map_err(Failure::bad_input)? {
+/// Why an output cannot be opened: refused (bad input, exit 2) or the system said no (exit 3).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum OpenError {
+    /// [`plan`] refused it.
+    Refused(String),
+    /// Opening or creating it failed.
+    Failed(String),
+}
+
+/// Opens `path` for writing as [`plan`] says; `None` is standard output.
+pub fn open(path: &Path) -> Result<Option<OutFile>, OpenError> {
+    match plan(path).map_err(OpenError::Refused)? {
         Plan::Stdout => Ok(None),
-        Plan::InPlace(p) => OpenOptions::new().write(true).open(&p).map(|f| Some(OutFile { f, staged: None, failed: false })).map_err(|e| Failure::runtime(format!("{}: cannot open it: {e}", p.display()))),
-        Plan::Staged { target, temp } => create_temp(&temp, &target).map(|f| Some(OutFile { f, staged: Some((temp, target)), failed: false })).map_err(|e| Failure::runtime(format!("{}: cannot create it: {e}", path.display()))),
+        Plan::InPlace(p) => OpenOptions::new().write(true).open(&p).map(|f| Some(OutFile { f, staged: None, failed: false })).map_err(|e| OpenError::Failed(format!("{}: cannot open it: {e}", p.display()))),
+        Plan::Staged { target, temp } => create_temp(&temp, &target).map(|f| Some(OutFile { f, staged: Some((temp, target)), failed: false })).map_err(|e| OpenError::Failed(format!("{}: cannot create it: {e}", path.display()))),
     }
 }
 
@@ -190,7 +200,8 @@ pub fn settle(keep: bool) {
     for (temp, target) in pending {
         if keep {
             if let Err(e) = std::fs::rename(&temp, &target) {
-                crate::output::note(&format!("error: {}: could not move the finished output into place: {e}", target.display()));
+                let msg = format!("error: {}: could not move the finished output into place: {e}", target.display());
+                let _ = writeln!(std::io::stderr().lock(), "{}", crate::terminal::escape(&msg));
                 let _ = std::fs::remove_file(&temp);
             }
         } else {
@@ -248,7 +259,7 @@ mod tests {
         for p in [scene.clone(), hard, d.join("sym.toml"), d.join(".").join("s.toml")] {
             let e = plan(&p).unwrap_err();
             assert!(e.contains("is a file this command reads"), "{e}");
-            assert_eq!(open(&p).unwrap_err().code, crate::output::EXIT_BAD_INPUT);
+            assert!(matches!(open(&p).unwrap_err(), OpenError::Refused(_)));
         }
         assert_eq!(std::fs::read_to_string(&scene).unwrap(), "name = \"x\"\n");
     }

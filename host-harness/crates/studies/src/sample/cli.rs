@@ -1,7 +1,7 @@
 //! The `flinch sample` command line.
 
 use super::parquet_file::{ParquetRows, ROW_GROUP};
-use super::{merge, parse_chunk, Plan, SampleReport, FORMS, STOP};
+use super::{parse_chunk, Plan, SampleReport, FORMS, STOP};
 use flinch_output::output::{self, Failure};
 use crate::sweep::{Progress, Template};
 use std::path::PathBuf;
@@ -93,7 +93,7 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
             let r: SampleReport = serde_json::from_str(&text).map_err(|e| Failure::bad_input(format!("--merge {}: not a `flinch sample --json` report: {e}", p.display())))?;
             reports.push(r);
         }
-        let m = merge(&reports, &names).map_err(|e| Failure::bad_input(e.0))?;
+        let m = super::merge_checked(&reports, &names).map_err(|e| Failure::bad_input(e.0))?;
         if !m.complete {
             let missing = m.missing().iter().map(|r| format!("{}..{}", r[0], r[1])).collect::<Vec<_>>().join(", ");
             if !args.partial {

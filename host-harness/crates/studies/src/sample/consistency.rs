@@ -4,7 +4,20 @@
 //! consistent `flinch sample --json` report: modes: mode_1 + mode_2 + mode_3 + no_mode = 5069, but
 //! 99 of its 100 runs concluded`.
 use super::common::CONFIDENCE;
-use super::report::SampleReport;
+use super::report::{merge, SampleReport};
+use crate::sweep::SweepError;
+
+/// [`merge`] after every report's counts are checked (`flinch sample --merge` calls this): the first
+/// report whose counts do not add up is refused, naming it and the field.
+pub fn merge_checked(reports: &[SampleReport], names: &[String]) -> Result<SampleReport, SweepError> {
+    for (i, r) in reports.iter().enumerate() {
+        if let Err((field, what)) = consistent(r) {
+            let name = names.get(i).cloned().unwrap_or_else(|| format!("report {}", i + 1));
+            return Err(SweepError(format!("--merge {name}: not a consistent `flinch sample --json` report: {field}: {what}")));
+        }
+    }
+    merge(reports, names)
+}
 
 fn add(xs: &[u64]) -> Option<u64> {
     xs.iter().try_fold(0u64, |a, &x| a.checked_add(x))

@@ -36,6 +36,7 @@ mod tally;
 mod tests;
 
 pub use common::*;
+pub use consistency::merge_checked;
 pub use dist::*;
 pub use keys::*;
 pub use outcome::*;
