@@ -308,10 +308,15 @@ fn joint_count_mismatch_is_refused() {
 fn non_physical_inertia_is_refused() {
     let t = two_link_text();
     let e = err(&t.replace("<mass value=\"2\"/>", "<mass value=\"-2\"/>"), "base", "tip");
+    // Held to the URDF range table first, with the file and line (issue 27, urdf_scan.rs).
     assert_eq!(e.element, "link \"link2\"");
-    assert!(e.what.contains("mass value> is -2 kg"), "{e}");
+    assert!(e.what.contains("<mass value>: allowed range [0, 10000] kg") && e.what.contains("got -2"), "{e}");
+    assert!(e.file.starts_with("bad.urdf:"), "{e}");
     let e = err(&t.replace("iyy=\"0.0625\"", "iyy=\"-0.0625\""), "base", "tip");
     assert_eq!(e.element, "link \"link1\"");
+    assert!(e.what.contains("<inertia iyy>: allowed range [0, 10000] kg m^2"), "{e}");
+    // Every entry in range, the tensor not positive semi-definite: refused by the physics check.
+    let e = err(&t.replacen("ixy=\"0\"", "ixy=\"0.06\"", 1), "base", "tip");
     assert!(e.what.contains("negative principal moment"), "{e}");
     // izz larger than ixx + iyy: no body has it
     let e = err(&t.replace("izz=\"0.0625\"", "izz=\"0.5\""), "base", "tip");

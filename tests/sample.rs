@@ -106,6 +106,49 @@ fn chunks_merge_into_the_whole_run() {
         let e = merge(&[t1.clone(), bad], &["a.json".into(), "b.json".into()]).unwrap_err().0;
         assert!(e.contains("b.json: not a consistent"), "{e}");
     }
+    /// Moves `k` concluded runs out of the largest mode count (so `modes` still adds up).
+    fn take(m: &mut flinch_harness::sample::Modes, k: u64) {
+        let big = [&mut m.mode_1, &mut m.mode_2, &mut m.mode_3, &mut m.no_mode].into_iter().max_by_key(|x| **x).unwrap();
+        *big -= k;
+    }
+    // Issue 27: every count adds up, the field named; these were merged before (exit 0), and a
+    // count near 2^64 wrapped the sum.
+    for (tamper, field) in [
+        ((|r: &mut SampleReport| r.modes.mode_1 += 5000) as fn(&mut SampleReport), "modes: mode_1 + mode_2 + mode_3 + no_mode"),
+        (|r| r.modes.no_mode += 1, "modes:"),
+        (|r| r.inconclusive_first = Some(flinch_harness::sample::Inconclusive { count: 77, first_sample: 200, first_reason: "x".into() }), "inconclusive_first:"),
+        (
+            |r| {
+                r.ran -= 3;
+                r.refused += 3;
+                take(&mut r.modes, 3);
+            },
+            "refusals: the groups' counts sum to",
+        ),
+        (
+            |r| {
+                r.ran -= 9;
+                r.solver_failed += 9;
+                take(&mut r.modes, 9);
+            },
+            "solver_failures:",
+        ),
+        (|r| r.estimates[0].p = Some(0.9), "p = Some(0.9)"),
+        (|r| r.confidence = 0.5, "confidence:"),
+        (
+            |r| {
+                r.ran = u64::MAX;
+                r.refused += 1;
+            },
+            "more than 2^64",
+        ),
+        (|r| r.complete = true, "complete:"),
+    ] {
+        let mut bad = t2.clone();
+        tamper(&mut bad);
+        let e = sample::merge_checked(&[t1.clone(), bad], &["a.json".into(), "b.json".into()]).unwrap_err().0;
+        assert!(e.contains("b.json: not a consistent") && e.contains(field), "{field}: {e}");
+    }
     // What is missing from a partial merge, for the command line's refusal.
     assert_eq!(partial.missing(), vec![[200, 400]]);
     assert_eq!(t2.missing(), vec![[0, 200], [400, 601]]);

@@ -110,17 +110,17 @@ struct HilArgs {
     /// The scene; its [controller] table, if any, gives the defaults below.
     scene: PathBuf,
     /// The robot controller's scan cycle, s (e.g. 0.016 Viper, 0.07 experiments, 0.0001 EtherCAT).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = opt_scan_cycle)]
     scan_cycle: Option<f64>,
     /// Phase of the controller's first sample, as a fraction of the scan cycle in [0, 1).
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, value_name = "FRACTION", value_parser = opt_phase)]
     phase: Option<f64>,
     /// The worst phase instead: the sample before the stop output just missed it, so the stop is
     /// seen a whole scan cycle later (the worst case of the dead time).
     #[arg(long, conflicts_with = "phase")]
     worst_phase: bool,
     /// The firmware's tick period, s (whole microseconds).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = opt_tick)]
     tick: Option<f64>,
     /// The robot's reaction after a scan sample sees the stop (brake engage, drive delay), s;
     /// default [controller] reaction_time, else motion.dead_time - scan cycle.
@@ -175,8 +175,8 @@ struct BenchArgs {
     /// Output directory for runs.csv, summary.csv, pareto.svg and fixed_point.csv.
     #[arg(long, value_name = "DIR", default_value = "target/bench")]
     out: PathBuf,
-    /// Timed repetitions of every configuration (the median is reported).
-    #[arg(long, default_value_t = 5)]
+    /// Timed repetitions of every configuration (the median is reported), 1 to 1000.
+    #[arg(long, default_value_t = 5, value_parser = opt_repeats)]
     repeats: usize,
     /// A shorter sweep.
     #[arg(long)]
@@ -204,6 +204,18 @@ fn check_outputs(out: &Output, extra: Option<&Path>) -> Result<(), Failure> {
     Ok(())
 }
 
+/// After the inputs are read: refuses outputs that would replace one of them, or land on a device
+/// or in a kernel folder, before anything runs (the careful writer, flinch_output::writer).
+fn check_targets(out: &Output) -> Result<(), Failure> {
+    if let Some(p) = &out.csv {
+        output::check_target("--csv", p)?;
+    }
+    if let Some(p) = &out.plot {
+        output::check_target("--plot", p)?;
+    }
+    Ok(())
+}
+
 /// Prints a summary where it belongs: standard output, or standard error when the CSV has it.
 fn print_result(out: &Output, text: &str) -> Result<(), Failure> {
     if out.csv.as_deref().is_some_and(output::is_stdout) {
@@ -227,6 +239,7 @@ fn run(args: &RunArgs) -> Result<bool, Failure> {
         Some(p) => Some(measured::Measured::load(p).map_err(Failure::bad_input)?),
         None => None,
     };
+    check_targets(&args.out)?;
     let resampler = meas.as_ref().map(|m| measured::Resampler::new(m, Trace::new(&sc)));
     let r = stream::run(&sc, args.out.csv.as_deref(), args.out.plot.is_some(), resampler).map_err(|f| Failure { message: format!("{}: {}", args.scene.display(), f.message), ..f })?;
     if let Some(p) = &args.out.csv {
@@ -261,15 +274,7 @@ fn controller(args: &HilArgs, sc: &scene::Scene, file: &Path) -> Result<scene::C
     let scan_cycle = args.scan_cycle.or(base.map(|c| c.scan_cycle)).ok_or_else(|| format!("{}: [controller] scan_cycle is missing: add a [controller] table or pass --scan-cycle", file.display()))?;
     let phase = args.phase.or(base.map(|c| c.phase)).unwrap_or(0.0);
     let firmware_tick = args.tick.or(base.map(|c| c.firmware_tick)).unwrap_or(1e-4);
-    if args.scan_cycle.is_some() && !(scan_cycle > 0.0 && scan_cycle.is_finite()) {
-        return Err(format!("--scan-cycle: must be > 0 s, got {scan_cycle}"));
-    }
-    if args.phase.is_some() && !(0.0..1.0).contains(&phase) {
-        return Err(format!("--phase: must be in [0, 1), got {phase}"));
-    }
-    if args.tick.is_some() && !((1e-6..=0.1).contains(&firmware_tick) && hil::whole_us(firmware_tick)) {
-        return Err(format!("--tick: must be in [1e-6, 0.1] s in whole microseconds (the firmware's clock counts them), got {firmware_tick}"));
-    }
+    // --scan-cycle, --phase and --tick were held to their scene keys' ranges by clap (opt_*).
     if let Some(r) = args.reaction_time.filter(|r| !(0.0..=1.0).contains(r)) {
         return Err(format!("--reaction-time: must be in [0, 1] s (a robot's reaction to a stop it has read), got {r}"));
     }
@@ -291,6 +296,11 @@ fn hil_cmd(args: &HilArgs) -> Result<bool, Failure> {
     }
     let ctl = controller(args, &sc, &args.scene).map_err(Failure::bad_input)?;
     let faults = hil::parse_faults(args.fault.as_deref().unwrap_or("")).map_err(Failure::bad_input)?;
+    // A fault after the run's end would silently never be injected: refused (issue 27).
+    if let Some(f) = faults.iter().find(|f| f.at_s >= sc.duration_s) {
+        return Err(Failure::bad_input(format!("--fault: {:?} at {} s is not before the end of the run (duration = {} s); a fault must fall within [0, duration)", f.kind, f.at_s, sc.duration_s)));
+    }
+    check_targets(&args.out)?;
     if args.channels == 1 && faults.iter().any(|f| f.kind == hil::FaultKind::StuckRestB) {
         return Err(Failure::bad_input("--fault stuck-rest-b: needs --channels 2 (this run has one channel)"));
     }
@@ -398,6 +408,23 @@ fn classify(scene_ok: Result<(), String>, r: Result<bool, String>) -> Result<boo
     r.map_err(|e| if refuses_the_scene_kind(&e) { Failure::bad_input(e) } else { Failure::runtime(e) })
 }
 
+/// `avoid`'s input files that are not regular files (a FIFO, a device) or over their caps are bad
+/// input (exit 2), said before anything runs; what is wrong inside them is found while reading.
+fn avoid_inputs(a: &flinch_harness::avoid::AvoidArgs) -> Result<(), Failure> {
+    use flinch_harness::report::input::{check, Kind};
+    let bad = |opt: &str, e: flinch_harness::report::input::InputError| Failure::bad_input(format!("{opt} {e}"));
+    if let Some(p) = &a.calibration {
+        check(p, Kind::Calibration).map_err(|e| bad("--calibration", e))?;
+    }
+    if let Some(p) = a.depth.as_ref().filter(|p| !p.is_dir()) {
+        check(p, Kind::DepthFrame).map_err(|e| bad("--depth", e))?;
+    }
+    if let Some(p) = &a.robot_poses {
+        check(p, Kind::Poses).map_err(|e| bad("--robot-poses", e))?;
+    }
+    Ok(())
+}
+
 /// `check` and `design` need a module with a stroke and a travel switch: a scene without them
 /// (a rigid tool, a linear spring, a force sensor) is the wrong input for the command (exit 2),
 /// not a failure while running it.
@@ -407,6 +434,7 @@ fn refuses_the_scene_kind(e: &str) -> bool {
 
 fn main() -> ExitCode {
     output::install_print_guard();
+    output::defer_to_settle();
     report::font::ensure();
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -417,7 +445,7 @@ fn main() -> ExitCode {
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
         Command::Sample(a) => flinch_harness::sample::cli::run(a),
         Command::Bench(a) => bench_cmd(a),
-        Command::Avoid(a) => flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input).and_then(|sc| match flinch_harness::avoid::run_scene(a, sc) {
+        Command::Avoid(a) => avoid_inputs(a).and_then(|_| flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input)).and_then(|sc| match flinch_harness::avoid::run_scene(a, sc) {
             Ok(v) => match v.code() {
                 0 => Ok(true),
                 1 => Ok(false),
@@ -432,6 +460,9 @@ fn main() -> ExitCode {
         Command::Validate(a) => flinch_harness::validate::run(a).map(|_| true).map_err(Failure::runtime),
         Command::Report(a) => report::html::run(a),
     };
+    // The outputs written through temporary files are renamed into place, or removed when the
+    // command failed (exit 2 or 3), so the old files stay as they were (crate output::writer).
+    output::settle(result.as_ref().map_or_else(|f| output::keeps(f.code), |_| true));
     match result {
         Ok(true) => ExitCode::SUCCESS,
         // An unfavourable verdict is an answer, not an error: exit 1 so scripts can branch.
@@ -442,5 +473,28 @@ fn main() -> ExitCode {
             }
             ExitCode::from(f.code)
         }
+    }
+}
+
+/// `hil --scan-cycle`: held to `controller.scan_cycle`'s range (scene::option_number).
+fn opt_scan_cycle(text: &str) -> Result<f64, String> {
+    scene::option_number("controller.scan_cycle", &scene::CONTROLLER_SCAN_CYCLE, text)
+}
+
+/// `hil --phase`: held to `controller.phase`'s range (scene::option_number).
+fn opt_phase(text: &str) -> Result<f64, String> {
+    scene::option_number("controller.phase", &scene::CONTROLLER_PHASE, text)
+}
+
+/// `hil --tick`: held to `controller.firmware_tick`'s range (scene::option_number).
+fn opt_tick(text: &str) -> Result<f64, String> {
+    scene::option_number("controller.firmware_tick", &scene::CONTROLLER_FIRMWARE_TICK, text)
+}
+
+/// `bench --repeats`: 1 to 1000 (a billion ran forever; issue 27).
+fn opt_repeats(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n @ 1..=1000) => Ok(n),
+        _ => Err(format!("allowed range [1, 1000] timed repetitions, got {text}")),
     }
 }

@@ -101,7 +101,7 @@ fn controller_values_are_refused_with_file_line_and_key() {
     // An option is named as an option.
     let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--tick", "1.5e-6"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o.stderr).contains("--tick: must be in [1e-6, 0.1] s in whole microseconds"), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("'--tick <S>': controller.firmware_tick: a whole number of microseconds"), "{}", text(&o.stderr));
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -61,6 +61,7 @@ mod avoid_budget;
 mod board;
 mod board_serial;
 mod common;
+mod doors;
 mod firmware;
 mod flash;
 mod flash_run;
@@ -190,6 +191,7 @@ fn test() -> ExitCode {
     }));
     results.push(("host tests", host_tests()));
     results.push(("loader fuzz", loader_fuzz()));
+    results.push(("doors fuzz", doors::doors_fuzz()));
 
     let have_target = target_installed();
     let built = if have_target {

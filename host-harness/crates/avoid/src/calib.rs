@@ -153,7 +153,7 @@ impl Calibration {
 
     /// Read a calibration file, checking its size and magic.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let b = std::fs::read(path).map_err(|e| format!("{}: cannot read calibration: {e}", path.display()))?;
+        let b = flinch_output::input::read_bytes(path, flinch_output::input::Kind::Calibration).map_err(|e| format!("cannot read calibration: {e}"))?;
         let bad = |what: &str| format!("{}: not a Flinch calibration file: {what}", path.display());
         if b.len() < 28 || &b[..8] != MAGIC {
             return Err(bad("missing FLAVCAL1 header"));
@@ -166,8 +166,11 @@ impl Calibration {
         };
         let (width, height, n) = (u(8), u(12), u(16));
         let threshold_m = f(20);
-        let mlen = (width * height).div_ceil(8);
-        if width == 0 || height == 0 || b.len() != 28 + n * (16 + mlen) {
+        // Checked: a header's numbers cannot wrap the size they imply.
+        let mlen = width.checked_mul(height).map(|x| x.div_ceil(8));
+        let want = mlen.and_then(|m| m.checked_add(16)).and_then(|r| r.checked_mul(n)).and_then(|x| x.checked_add(28));
+        let mlen = mlen.unwrap_or(0);
+        if width == 0 || height == 0 || want != Some(b.len()) || !threshold_m.is_finite() {
             return Err(bad("size does not match its header"));
         }
         let mut positions = Vec::with_capacity(n);

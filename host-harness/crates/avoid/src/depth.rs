@@ -20,7 +20,13 @@ pub struct DepthImage {
 impl DepthImage {
     /// Load a 16-bit grey PNG or PGM (by extension or content).
     pub fn load(path: &Path) -> Result<Self, String> {
-        let img = image::open(path).map_err(|e| format!("{}: cannot read depth image: {e}", path.display()))?;
+        // Through the one reader: a FIFO, a device or a directory is refused by name, at most 64 MiB.
+        let bytes = flinch_output::input::read_bytes(path, flinch_output::input::Kind::DepthFrame).map_err(|e| format!("cannot read depth image: {e}"))?;
+        let img = image::io::Reader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| format!("{}: cannot read depth image: {e}", path.display()))?
+            .decode()
+            .map_err(|e| format!("{}: cannot read depth image: {e}", path.display()))?;
         let grey = match img {
             image::DynamicImage::ImageLuma16(g) => g,
             other => {

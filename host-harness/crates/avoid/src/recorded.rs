@@ -66,7 +66,9 @@ pub struct Recording {
 }
 
 fn parse_csv(path: &Path, header: &str) -> Result<Vec<Vec<String>>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    // Through the one reader: regular files only, at most 64 MiB.
+    let kind = if header.contains("file") { flinch_output::input::Kind::FrameIndex } else { flinch_output::input::Kind::Poses };
+    let text = flinch_output::input::read_text(path, kind).map_err(|e| e.to_string())?;
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
     match lines.next() {
         Some((_, h)) if h.trim() == header => {}
@@ -101,7 +103,8 @@ impl Recording {
         let mut frames: Vec<(f64, PathBuf)> = Vec::new();
         if depth.is_dir() {
             let index = depth.join("index.csv");
-            if index.is_file() {
+            // Present but not a regular file (a FIFO, a directory) is refused by the reader, not ignored.
+            if std::fs::symlink_metadata(&index).is_ok() {
                 for r in parse_csv(&index, "t_s,file")? {
                     frames.push((number(&index, &r[2], "t_s", &r[0])?, depth.join(&r[1])));
                 }

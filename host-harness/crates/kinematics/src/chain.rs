@@ -93,6 +93,13 @@ impl Chain {
     /// Reads `path` and builds the chain from `base_link` to `tip_link`.
     pub fn load(path: &Path, base_link: &str, tip_link: &str) -> Result<Chain, KinError> {
         let file = path.display().to_string();
+        // A library convenience (the `flinch` commands read URDFs through flinch-output's reader):
+        // a regular file of at most 16 MiB only, so a FIFO or a device cannot block or flood it.
+        match std::fs::metadata(path) {
+            Ok(m) if !m.is_file() => return Err(KinError::new(&file, "urdf", "is not a regular file; a URDF must be one")),
+            Ok(m) if m.len() > 16 << 20 => return Err(KinError::new(&file, "urdf", format!("{} bytes; a URDF is at most 16 MiB", m.len()))),
+            _ => {}
+        }
         let text = std::fs::read_to_string(path)
             .map_err(|e| KinError::new(&file, "urdf", format!("cannot be read: {e}")))?;
         Chain::from_urdf_str(&text, &file, base_link, tip_link)
@@ -100,6 +107,8 @@ impl Chain {
 
     /// Builds the chain from URDF text; `file` names it in messages.
     pub fn from_urdf_str(text: &str, file: &str, base_link: &str, tip_link: &str) -> Result<Chain, KinError> {
+        // Bounded first: depth, element count, one <robot> root, every number in its range.
+        crate::urdf_scan::scan(text, file)?;
         let robot = urdf_rs::read_from_string(text)
             .map_err(|e| match crate::urdf_diag::diagnose(text) {
                 Some((element, what)) => KinError::new(file, element, format!("is not a URDF that parses: {what}")),

@@ -21,6 +21,7 @@ pub mod dynamics;
 pub mod error;
 pub mod reduce;
 pub mod urdf_diag;
+pub mod urdf_scan;
 
 pub use chain::{Chain, JointKind};
 pub use error::KinError;

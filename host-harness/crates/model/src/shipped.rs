@@ -6,7 +6,7 @@
 //! opened: reading a FIFO nobody writes would block forever.
 
 use crate::scene::{self, Scene};
-use std::io::Read;
+use flinch_output::input::{self, Kind};
 use std::path::Path;
 
 include!(concat!(env!("OUT_DIR"), "/scenes.rs"));
@@ -64,29 +64,16 @@ impl std::fmt::Display for InputError {
     }
 }
 
-/// Reads a scene argument: `-` (standard input), a regular file, or a shipped scene's name when no
-/// such file exists. Returns the name to show in messages and the text.
+/// Reads a scene argument: `-` (standard input), a regular file (through the one reader,
+/// `flinch_output::input`: a FIFO, a device or a directory refused by name before it is opened,
+/// at most 1 MiB), or a shipped scene's name when no such file exists. Returns the name to show in
+/// messages and the text.
 pub fn read(arg: &Path) -> Result<(String, String), InputError> {
     let shown = arg.display().to_string();
     if shown == "-" {
-        let mut bytes = Vec::new();
-        std::io::stdin().read_to_end(&mut bytes).map_err(|e| InputError(format!("<stdin>: {e}")))?;
-        return String::from_utf8(bytes).map(|t| ("<stdin>".to_string(), t)).map_err(|e| InputError(format!("<stdin>: not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to())));
+        return input::read_stdin(Kind::Scene).map(|t| ("<stdin>".to_string(), t)).map_err(|e| InputError(e.to_string()));
     }
-    match std::fs::metadata(arg) {
-        Ok(m) if m.is_dir() => Err(InputError(format!("{shown}: is a directory, not a scene file"))),
-        Ok(m) if !m.is_file() => Err(InputError(format!("{shown}: is not a regular file (a FIFO, socket or device); give a scene file, or - to read standard input"))),
-        Ok(_) => {
-            let bytes = std::fs::read(arg).map_err(|e| InputError(format!("{shown}: {e}")))?;
-            match String::from_utf8(bytes) {
-                Ok(t) => Ok((shown, t)),
-                Err(e) => {
-                    let at = e.utf8_error().valid_up_to();
-                    let line = 1 + e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count();
-                    Err(InputError(format!("{shown}:{line}: not UTF-8 text (invalid byte at offset {at}); scene files are UTF-8 TOML")))
-                }
-            }
-        }
+    match std::fs::symlink_metadata(arg) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => match get(&shown) {
             Some(text) => Ok((format!("{} (shipped)", shown.trim_end_matches(".toml")), text.to_string())),
             None => {
@@ -95,7 +82,7 @@ pub fn read(arg: &Path) -> Result<(String, String), InputError> {
                 Err(InputError(format!("{shown}: no such file, and no shipped scene of that name; {hint}")))
             }
         },
-        Err(e) => Err(InputError(format!("{shown}: {e}"))),
+        _ => input::read_text(arg, Kind::Scene).map(|t| (shown, t)).map_err(|e| InputError(e.to_string())),
     }
 }
 
@@ -127,7 +114,7 @@ mod tests {
         let e = read(Path::new("/")).unwrap_err();
         assert!(e.0.contains("is a directory"), "{e}");
         let e = read(Path::new("/dev/null")).unwrap_err();
-        assert!(e.0.contains("not a regular file"), "{e}");
+        assert!(e.0.contains("not a regular file (a character device)"), "{e}");
         let e = read(Path::new("no_such_scene_here")).unwrap_err();
         assert!(e.0.contains("no such file, and no shipped scene"), "{e}");
     }

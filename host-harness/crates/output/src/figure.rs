@@ -192,12 +192,14 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 pub fn with_backend(path: &Path, size: (u32, u32), svg: &dyn Fn(&DrawingArea<SVGBackend, Shift>) -> DrawResult, png: &dyn Fn(&DrawingArea<BitMapBackend, Shift>) -> DrawResult) -> Result<(), String> {
     font::ensure();
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let res = match ext.as_str() {
-        "svg" => svg(&SVGBackend::new(path, size).into_drawing_area()),
-        "png" => png(&BitMapBackend::new(path, size).into_drawing_area()),
-        _ => return Err(format!("{}: the plot file must end in .svg or .png", path.display())),
-    };
-    res.map_err(|e| format!("{}: could not draw the plot: {e}", path.display()))
+    if ext != "svg" && ext != "png" {
+        return Err(format!("{}: the plot file must end in .svg or .png", path.display()));
+    }
+    // Drawn to a temporary file beside `path` and renamed over it when complete (crate::writer).
+    crate::writer::via_temp(path, |to| {
+        let res = if ext == "svg" { svg(&SVGBackend::new(to, size).into_drawing_area()) } else { png(&BitMapBackend::new(to, size).into_drawing_area()) };
+        res.map_err(|e| format!("{}: could not draw the plot: {e}", path.display()))
+    })
 }
 
 /// Checks a plot file name before any work is done.

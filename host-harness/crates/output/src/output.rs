@@ -4,10 +4,10 @@
 //! 3 runtime failure (the solver gave up, an output could not be written), 130 interrupted (Ctrl-C),
 //! 141 the reader of standard output went away (`| head`), quietly, as a tool killed by SIGPIPE.
 //!
-//! Writing never panics: a full disk or `> /dev/full` is exit 3 with the output named.
+//! Writing never panics: a full disk or `> /dev/full` is exit 3 with the output named. Where a file
+//! output may go, and how it replaces an old file, is [`crate::writer`]'s.
 
 use std::fmt;
-use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
@@ -72,12 +72,50 @@ pub fn shown(path: &Path) -> String {
 }
 
 /// Opens an output (`-`: standard output), buffered: one `write` per 64 KiB, not per field.
+/// A regular file is written to a temporary file beside it and renamed over it when the command
+/// ends ([`settle`]); see [`crate::writer`] for what is refused.
 pub fn create(path: &Path) -> Result<Box<dyn Write>, Failure> {
-    if is_stdout(path) {
-        return Ok(Box::new(BufWriter::with_capacity(1 << 16, Stdout)));
+    let f = create_file(path)?;
+    match f {
+        None => Ok(Box::new(BufWriter::with_capacity(1 << 16, Stdout))),
+        Some(f) => Ok(Box::new(BufWriter::with_capacity(1 << 16, f))),
     }
-    let f = File::create(path).map_err(|e| Failure::runtime(format!("{}: cannot create it: {e}", path.display())))?;
-    Ok(Box::new(BufWriter::with_capacity(1 << 16, f)))
+}
+
+/// [`create`] unbuffered: the opened file (`None` for standard output), for writers that buffer
+/// themselves or need `Send` (Parquet).
+pub fn create_file(path: &Path) -> Result<Option<crate::writer::OutFile>, Failure> {
+    crate::writer::open(path).map_err(|e| match e {
+        crate::writer::OpenError::Refused(m) => Failure::bad_input(m),
+        crate::writer::OpenError::Failed(m) => Failure::runtime(m),
+    })
+}
+
+/// Refuses, before anything runs, an output the careful writer would refuse (an input of this
+/// command, a directory, a device, a new file under /dev, /proc or /sys): exit 2 naming `option`.
+/// Call it after the command's inputs are read.
+pub fn check_target(option: &str, path: &Path) -> Result<(), Failure> {
+    crate::writer::plan(path).map(|_| ()).map_err(|e| Failure::bad_input(format!("{option} {e}")))
+}
+
+/// Ends every output this process opened with [`create`]: `keep` renames each temporary file over
+/// its target (a command that ran, or was interrupted with its complete prefix), otherwise removes
+/// them so the old files stay as they were (a refusal, a runtime failure). Main calls it once at the
+/// end; the paths that end the process early call it before `exit`.
+pub fn settle(keep: bool) {
+    crate::writer::settle(keep);
+}
+
+/// For the binary: every output's temporary file waits for [`settle`] (a library caller's is
+/// renamed into place when its writer is dropped).
+pub fn defer_to_settle() {
+    crate::writer::defer_to_settle();
+}
+
+/// Whether outputs are kept for a command ending with `code`: everything but bad input (2) and a
+/// runtime failure (3).
+pub fn keeps(code: u8) -> bool {
+    code != EXIT_BAD_INPUT && code != EXIT_RUNTIME
 }
 
 /// Maps a write error on `path` to the command's ending: a closed reader is exit 141 without a
@@ -102,15 +140,17 @@ impl Write for Stdout {
     }
 }
 
-/// Writes `text` to standard output and flushes.
+/// Writes `text` to standard output and flushes; characters a terminal would obey (controls, bidi
+/// overrides) are shown escaped ([`crate::terminal::escape`]).
 pub fn print(text: &str) -> Result<(), Failure> {
+    let text = crate::terminal::escape(text);
     let mut out = io::stdout().lock();
     out.write_all(text.as_bytes()).and_then(|_| out.flush()).map_err(|e| write_error(Path::new("-"), &e))
 }
 
 /// A message line to standard error ("wrote ...", notes, progress); never fails.
 pub fn note(text: &str) {
-    let _ = writeln!(io::stderr().lock(), "{text}");
+    let _ = writeln!(io::stderr().lock(), "{}", crate::terminal::escape(text));
 }
 
 /// Installs a panic hook that turns a failed `println!` anywhere in the program (a subcommand that
@@ -122,9 +162,11 @@ pub fn install_print_guard() {
         let msg = info.payload().downcast_ref::<String>().map(String::as_str).or_else(|| info.payload().downcast_ref::<&str>().copied()).unwrap_or("");
         if let Some(rest) = msg.strip_prefix("failed printing to stdout: ") {
             if rest.contains("Broken pipe") || rest.contains("os error 32") {
+                settle(true);
                 std::process::exit(i32::from(EXIT_PIPE));
             }
             note(&format!("error: standard output: could not write: {rest}"));
+            settle(false);
             std::process::exit(i32::from(EXIT_RUNTIME));
         }
         default(info);

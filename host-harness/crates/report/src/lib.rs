@@ -15,5 +15,5 @@ pub mod summary;
 pub mod trace;
 
 pub use flinch_output::json::{to_json, Versioned, CHECK_SCHEMA_VERSION, SCHEMA_VERSION};
-pub use flinch_output::{figure, font, output};
+pub use flinch_output::{figure, font, input, output};
 pub use summary::{human, human_measured, json, HilJson, RunJson};

@@ -47,8 +47,9 @@ const GRID_MAX: usize = 50_000;
 impl Measured {
     /// Reads `path`; errors name the file, the line and the column.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let (file, text) = flinch_model::shipped::read(path).map_err(|e| e.0)?;
-        Self::parse(&text, &file)
+        // Through the one reader: regular files only, at most 256 MiB (docs/conventions.md).
+        let text = flinch_output::input::read_text(path, flinch_output::input::Kind::Measured).map_err(|e| e.to_string())?;
+        Self::parse(&text, &path.display().to_string())
     }
 
     /// Parses CSV text.

@@ -237,6 +237,7 @@ impl Streamer {
                 if !f.message.is_empty() {
                     output::note(&format!("error: {f}"));
                 }
+                output::settle(output::keeps(f.code));
                 std::process::exit(i32::from(f.code));
             }
         }
@@ -261,6 +262,8 @@ impl Streamer {
                     written = format!("; {} is partial: it holds the {} rows up to it", output::shown(path), w.rows);
                 }
                 output::note(&format!("interrupted at t = {:.6} s of {} s{written}", s.t, self.duration));
+                // The complete rows so far are kept: the temporary file is renamed into place.
+                output::settle(true);
                 std::process::exit(i32::from(EXIT_INTERRUPTED));
             }
         }

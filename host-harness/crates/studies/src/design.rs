@@ -33,10 +33,10 @@ pub struct DesignArgs {
     #[arg(long, value_name = "M")]
     pub stroke: Option<f64>,
     /// The robot's speed V_c, m/s (default: the scene's motion.speed).
-    #[arg(long, value_name = "M/S")]
+    #[arg(long, value_name = "M/S", value_parser = opt_speed)]
     pub speed: Option<f64>,
     /// The controller's dead time DT, s (default: the scene's motion.dead_time), e.g. 0.07.
-    #[arg(long = "dead-time", value_name = "S")]
+    #[arg(long = "dead-time", value_name = "S", value_parser = opt_dead_time)]
     pub dead_time: Option<f64>,
     /// Draw peak forces and the stroke margin against speed, the safe limit marked (.svg or .png).
     #[arg(long, value_name = "FILE")]
@@ -56,6 +56,16 @@ pub struct DesignArgs {
     /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = flinch_model::overrides::Set::parse)]
     pub set: Vec<flinch_model::overrides::Set>,
+}
+
+/// `--speed`: held to `motion.speed`'s range, with its message (issue 27; exit 2 before any run).
+fn opt_speed(text: &str) -> Result<f64, String> {
+    flinch_model::scene::option_number("motion.speed", &flinch_model::scene::MOTION_SPEED, text)
+}
+
+/// `--dead-time`: held to `motion.dead_time`'s range.
+fn opt_dead_time(text: &str) -> Result<f64, String> {
+    flinch_model::scene::option_number("motion.dead_time", &flinch_model::scene::MOTION_DEAD_TIME, text)
 }
 
 /// One simulated candidate.
@@ -187,6 +197,8 @@ struct Candidates<'a> {
     module: Module,
     dead_time: f64,
     base: &'a Scene,
+    /// Candidates run so far (a bar on a terminal; issue 27).
+    progress: indicatif::ProgressBar,
 }
 
 impl Candidates<'_> {
@@ -214,7 +226,9 @@ impl Candidates<'_> {
     }
     fn safe(&self, v: f64, c: f64) -> Option<bool> {
         let s = self.scene(v, c).ok()?;
-        flinch_sim::run_to_conclusion(&s).ok().map(|r| r.safe)
+        let r = flinch_sim::run_to_conclusion(&s).ok().map(|r| r.safe);
+        self.progress.inc(1);
+        r
     }
 }
 
@@ -322,6 +336,59 @@ pub fn refusal(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time:
     let dt = dead_time.unwrap_or(base.motion.dead_time);
     let cand = Candidates { t, module, dead_time: dt, base };
     cand.scene(v, c).err().map(|e| format!("the design point (--stroke, --speed, --dead-time) is refused by the scene validator: {e}"))
+
+/// Candidates the stroke search scans (in parallel), and its bisection rounds (one at a time).
+const STROKE_SCAN: usize = 16;
+const STROKE_ROUNDS: usize = 14;
+/// Candidates the speed search scans, and its bisection rounds.
+const SPEED_SCAN: usize = 20;
+const SPEED_ROUNDS: usize = 16;
+
+/// What a design search will cost, estimated from the design point's run before it starts.
+#[derive(Debug, Clone, Copy)]
+pub struct Cost {
+    /// Candidate runs at most (a candidate the validator refuses does not run).
+    pub runs: usize,
+    /// Rounds, the scans taking `threads` candidates at once.
+    pub rounds: usize,
+    /// The design point's run, s (on this machine, now).
+    pub point_s: f64,
+    /// Threads.
+    pub threads: usize,
+    /// About this long, s: the stroke search's rounds x the design point's run, plus the speed
+    /// search's rounds x the design point's run scaled by the candidates' mean simulated duration.
+    pub seconds: f64,
+}
+
+impl Cost {
+    /// The cost of the searches with `threads` threads and a design point that took `point_s`.
+    pub fn of(point_s: f64, threads: usize, speed_ratio: f64) -> Self {
+        let t = threads.max(1);
+        let (stroke, speed) = (STROKE_SCAN.div_ceil(t) + STROKE_ROUNDS, SPEED_SCAN.div_ceil(t) + SPEED_ROUNDS);
+        let seconds = point_s * (stroke as f64 + speed as f64 * speed_ratio.max(0.0));
+        Cost { runs: STROKE_SCAN + STROKE_ROUNDS + SPEED_SCAN + SPEED_ROUNDS, rounds: stroke + speed, point_s, threads: t, seconds }
+    }
+
+    /// The note said before a long search.
+    pub fn text(&self) -> String {
+        format!(
+            "design: up to {} candidate runs ({STROKE_SCAN} + {SPEED_SCAN} scanned {} at a time, {STROKE_ROUNDS} + {SPEED_ROUNDS} bisection steps one at a time); the design point's run took {:.2} s; scaled by each candidate's simulated duration, about {:.0} s",
+            self.runs, self.threads, self.point_s, self.seconds
+        )
+    }
+
+    /// A bar over the candidate runs, drawn on a terminal only.
+    fn bar(&self) -> indicatif::ProgressBar {
+        use std::io::IsTerminal;
+        if !std::io::stderr().is_terminal() || self.seconds <= 3.0 {
+            return indicatif::ProgressBar::hidden();
+        }
+        let b = indicatif::ProgressBar::new(self.runs as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed_precise} {msg}: {pos}/{len} candidate runs (at most), eta {eta}") {
+            b.set_style(style);
+        }
+        b
+    }
 }
 
 /// Answers the design questions for a scene with optional overrides.
@@ -343,10 +410,24 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     let v = speed.unwrap_or(base.motion.speed);
     let dt = dead_time.unwrap_or(base.motion.dead_time);
     let decel = base.motion.decel;
-    let cand = Candidates { t, module, dead_time: dt, base };
+    let mut cand = Candidates { t, module, dead_time: dt, base, progress: indicatif::ProgressBar::hidden() };
     // The design point, validated, and the budget of `flinch check` on it.
     let design_scene = cand.scene(v, c).map_err(|e| e.to_string())?;
+    let t0 = std::time::Instant::now();
     let budget = check::check(&design_scene)?;
+    // The cost, known before the search (issue 27: a 92.5 s search was silent): the design point's
+    // run times the rounds of the searches below; said when over 3 s, with a bar on a terminal.
+    // A candidate's run is taken to cost in proportion to its simulated duration (slow speeds
+    // take longer to reach the target); the speed candidates are those of the scan below.
+    let (v_f, _) = speed_for_room(&base.motion, c - d_sw, dt);
+    let top = base.motion.stopping.map_or(f64::INFINITY, |s| s.max_speed());
+    let d0 = cand.duration_for(v).max(1e-9);
+    let speed_ratio = if v_f > 0.0 { (0..SPEED_SCAN).map(|i| cand.duration_for((v_f * (0.1 + 2.9 * i as f64 / 19.0)).min(top)) / d0).sum::<f64>() / SPEED_SCAN as f64 } else { 1.0 };
+    let cost = Cost::of(t0.elapsed().as_secs_f64(), rayon::current_num_threads(), speed_ratio);
+    if cost.seconds > 3.0 {
+        flinch_output::output::note(&cost.text());
+    }
+    cand.progress = cost.bar();
     let design = Trial { speed: v, stroke: c, summary: budget.simulated.clone() };
     let needed = d_sw + budget.stopping_distance;
     let mut notes = Vec::new();
@@ -357,9 +438,10 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
         notes.push(format!("duration lengthened from {} s to {:.2} s to cover detection, the dead time and braking", base.duration_s, cand.duration_for(v)));
     }
     // Smallest stroke, simulated: scan 0.4..2.5 x the formula's, then bisect.
-    let strokes: Vec<f64> = (0..16).map(|i| needed * (0.4 + 2.1 * i as f64 / 15.0)).collect();
+    let strokes: Vec<f64> = (0..STROKE_SCAN).map(|i| needed * (0.4 + 2.1 * i as f64 / 15.0)).collect();
     let unsafe_at = |cc: f64| cand.safe(v, cc).map(|s| !s);
-    let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, 14, flinch_sim::verdict::mm) {
+    cand.progress.set_message("stroke search");
+    let (stroke_sim, stroke_note) = match boundary(&strokes, &unsafe_at, true, STROKE_ROUNDS, flinch_sim::verdict::mm) {
         Ok((_, first_safe)) => (Some(first_safe), None),
         Err(e) => (None, Some(format!("stroke search over {:.2}..{:.2} mm ({} C1:C2 scaled together): {e}{}", strokes[0] * 1e3, strokes[15] * 1e3, module.name(), first_refusal(&e, &cand, &strokes, |x| (v, x))))),
     };
@@ -369,12 +451,13 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
     if formula_capped {
         notes.push(format!("the budget still fits at the stopping table's largest speed {}: the formula limit is that speed (the table is not extrapolated)", flinch_sim::verdict::mps(v_formula)));
     }
-    let speeds: Vec<f64> = (0..20).map(|i| (v_formula * (0.1 + 2.9 * i as f64 / 19.0)).min(table_top.unwrap_or(f64::INFINITY))).collect();
+    cand.progress.set_message("speed search");
+    let speeds: Vec<f64> = (0..SPEED_SCAN).map(|i| (v_formula * (0.1 + 2.9 * i as f64 / 19.0)).min(table_top.unwrap_or(f64::INFINITY))).collect();
     let safe_at = |vv: f64| cand.safe(vv, c);
     let (speed_sim, speed_note, at_limit) = if v_formula <= 0.0 {
         (None, Some("the switch travel takes the whole stroke: no speed is safe".to_string()), None)
     } else {
-        match boundary(&speeds, &safe_at, true, 16, flinch_sim::verdict::mps) {
+        match boundary(&speeds, &safe_at, true, SPEED_ROUNDS, flinch_sim::verdict::mps) {
             Ok((vmax, _)) => (Some(vmax), None, cand.trial(vmax, c).ok()),
             // Safe up to the end of the robot's stopping table: the answer stops there.
             Err(_) if table_top.is_some_and(|top| safe_at(top) == Some(true)) => {
@@ -394,6 +477,7 @@ pub fn design(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time: 
             Err(e) => (None, Some(format!("speed search over {:.3}..{:.3} m/s: {e}{}", speeds[0], speeds[19], first_refusal(&e, &cand, &speeds, |x| (x, c)))), None),
         }
     };
+    cand.progress.finish_and_clear();
     Ok(DesignReport {
         scene: base.name.clone(),
         module: module.name().into(),
@@ -505,7 +589,7 @@ pub fn human(r: &DesignReport) -> String {
 /// Peak forces and the simulated stroke margin against speed, limits marked.
 pub fn draw(path: &Path, t: &Template, r: &DesignReport) -> Result<(), String> {
     let module = Module::of(&t.base)?;
-    let cand = Candidates { t, module, dead_time: r.dead_time, base: &t.base };
+    let cand = Candidates { t, module, dead_time: r.dead_time, base: &t.base, progress: indicatif::ProgressBar::hidden() };
     let top = r.speed_limit_simulated.unwrap_or(r.speed_limit_formula).max(r.speed).max(1e-3) * 1.5;
     let speeds: Vec<f64> = (1..=30).map(|i| top * i as f64 / 30.0).collect();
     let trials: Vec<Option<Trial>> = speeds.par_iter().map(|&v| cand.trial(v, r.stroke).ok()).collect();
@@ -552,11 +636,9 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
     }
     let t = Template::load_with(&a.scene, &a.set).map_err(|e| e.to_string())?;
     let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
-    if a.json {
-        print!("{}", flinch_output::to_json(&flinch_output::Versioned::new(&r)));
-    } else {
-        print!("{}", human(&r));
-    }
+    // Through output::print: a scene's name cannot carry terminal controls to the screen.
+    let text = if a.json { flinch_output::to_json(&flinch_output::Versioned::new(&r)) } else { human(&r) };
+    flinch_output::output::print(&text).map_err(|f| f.message)?;
     if let Some(p) = &a.plot {
         draw(p, &t, &r)?;
         flinch_output::output::note(&format!("wrote {} (plot)", p.display()));

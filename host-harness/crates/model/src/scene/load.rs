@@ -39,14 +39,14 @@ use std::path::Path;
 /// Reads and validates a scene file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
-    match std::fs::read_to_string(path) {
+    match flinch_output::input::read_text(path, flinch_output::input::Kind::Scene) {
         Ok(text) => parse(&text, &file),
         Err(e) => Err(SceneError {
             file,
             issues: vec![SceneIssue {
-                line: None,
+                line: e.line,
                 key: String::new(),
-                message: format!("cannot read the scene file: {e}"),
+                message: format!("cannot read the scene file: {}", e.message),
             }],
         }),
     }

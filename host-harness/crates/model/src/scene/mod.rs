@@ -81,4 +81,23 @@ pub use solver::{
     FAST_ATOL, FAST_RTOL, REFERENCE_ATOL, REFERENCE_RTOL,
 };
 pub use load::{load, parse};
+pub use controller::{FIRMWARE_TICK as CONTROLLER_FIRMWARE_TICK, PHASE as CONTROLLER_PHASE, SCAN_CYCLE as CONTROLLER_SCAN_CYCLE};
+pub use motion_law::{DEAD_TIME as MOTION_DEAD_TIME, SPEED as MOTION_SPEED};
+
+/// A command-line number that stands for a scene key (`hil --scan-cycle` for
+/// `controller.scan_cycle`, `design --speed` for `motion.speed`, ...), held to that key's range
+/// with the key's own refusal (issue 27): `controller.scan_cycle: allowed range [1e-5, 0.1] s
+/// (...), got 9e-6`. Used as a clap value parser, so a bad value is refused (exit 2) before any
+/// file is read. `key_path` is the key as a scene names it.
+pub fn option_number(key_path: &str, key: &Key, text: &str) -> Result<f64, String> {
+    let x: f64 = text.trim().parse().map_err(|_| format!("{key_path}: must be a number, got \"{text}\""))?;
+    let Ty::Number(span) = key.ty else { return Err(format!("{key_path}: is not a number key")) };
+    if !x.is_finite() || !span.contains(x) {
+        return Err(format!("{key_path}: {}", span.refuse(x)));
+    }
+    if key_path == "controller.firmware_tick" && !whole_us(x) {
+        return Err(format!("{key_path}: a whole number of microseconds (the firmware's clock counts them), got {text}"));
+    }
+    Ok(x)
+}
 pub use tables::{key_tables, AVOID_SCENE};

@@ -139,13 +139,15 @@ fn read_urdf(scene_file: &str, rel: &str) -> Result<(String, String), String> {
     } else {
         Path::new(scene_file).parent().map_or_else(|| p.to_path_buf(), |d| d.join(p))
     };
-    match std::fs::read_to_string(&path) {
+    // Through the one reader: a FIFO, a device or a directory is refused by name at once, and no
+    // URDF is read past its cap (16 MiB).
+    match flinch_output::input::read_text(&path, flinch_output::input::Kind::Urdf) {
         Ok(text) => Ok((path.display().to_string(), text)),
         Err(e) => {
             let key = rel.trim_start_matches("./");
             match SHIPPED_URDFS.iter().find(|(k, _)| *k == key) {
-                Some((k, text)) if !path.exists() && scene_file.ends_with(" (shipped)") => Ok((format!("scenes/{k}"), text.to_string())),
-                _ => Err(format!("cannot read the URDF {}: {e}", path.display())),
+                Some((k, text)) if std::fs::symlink_metadata(&path).is_err() && scene_file.ends_with(" (shipped)") => Ok((format!("scenes/{k}"), text.to_string())),
+                _ => Err(format!("cannot read the URDF: {e}")),
             }
         }
     }
@@ -197,7 +199,9 @@ fn per_joint(cx: &mut Ctx, t: &Tab, key: &Key, chain: &Chain, span: impl Fn(usiz
         }
         return ok.then_some(out);
     }
-    let out = cx.numbers(t, key, &key.what(), usize::MAX, span)?;
+    // A list longer than the chain is refused by its length below; its extra items are checked
+    // against the last joint's span (the span of an index past the chain does not exist).
+    let out = cx.numbers(t, key, &key.what(), usize::MAX, |i| span(i.min(n.saturating_sub(1))))?;
     if out.len() != n {
         cx.bad(
             t,
@@ -238,7 +242,7 @@ fn read_urdf_robot(cx: &mut Ctx, t: &Tab) -> Option<UrdfRobot> {
         }
     };
     let kinds = chain.joint_kinds.clone();
-    let joints = per_joint(cx, t, &JOINTS, &chain, |i| if kinds[i] == kinematics::JointKind::Revolute { Q_REVOLUTE } else { Q_PRISMATIC });
+    let joints = per_joint(cx, t, &JOINTS, &chain, |i| if kinds.get(i) == Some(&kinematics::JointKind::Revolute) { Q_REVOLUTE } else { Q_PRISMATIC });
     let k = per_joint(cx, t, &JOINT_STIFFNESS, &chain, |_| K_JOINT);
     let d = per_joint(cx, t, &JOINT_DAMPING, &chain, |_| D_JOINT);
     let joints = joints?;

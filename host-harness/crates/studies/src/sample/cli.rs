@@ -1,7 +1,7 @@
 //! The `flinch sample` command line.
 
 use super::parquet_file::{ParquetRows, ROW_GROUP};
-use super::{merge, parse_chunk, Plan, SampleReport, FORMS, STOP};
+use super::{parse_chunk, Plan, SampleReport, FORMS, STOP};
 use flinch_output::output::{self, Failure};
 use crate::sweep::{Progress, Template};
 use std::path::PathBuf;
@@ -55,7 +55,7 @@ pub struct SampleArgs {
     #[arg(long, requires = "merge")]
     pub partial: bool,
     /// Threads (default: all cores). The result does not depend on it.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = crate::sweep::cli::jobs, value_name = "N")]
     pub jobs: Option<usize>,
     /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
     /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
@@ -93,11 +93,11 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
         let mut reports = Vec::new();
         let names: Vec<String> = args.merge.iter().map(|p| p.display().to_string()).collect();
         for p in &args.merge {
-            let text = std::fs::read_to_string(p).map_err(|e| Failure::bad_input(format!("--merge {}: cannot read it: {e}", p.display())))?;
+            let text = flinch_output::input::read_text(p, flinch_output::input::Kind::MergeReport).map_err(|e| Failure::bad_input(format!("--merge {e}")))?;
             let r: SampleReport = serde_json::from_str(&text).map_err(|e| Failure::bad_input(format!("--merge {}: not a `flinch sample --json` report: {e}", p.display())))?;
             reports.push(r);
         }
-        let m = merge(&reports, &names).map_err(|e| Failure::bad_input(e.0))?;
+        let m = super::merge_checked(&reports, &names).map_err(|e| Failure::bad_input(e.0))?;
         if !m.complete {
             let missing = m.missing().iter().map(|r| format!("{}..{}", r[0], r[1])).collect::<Vec<_>>().join(", ");
             if !args.partial {
@@ -182,7 +182,7 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
     let parquet_path = args.parquet.clone().unwrap_or_default();
     let mut pq = match &args.parquet {
         Some(p) => {
-            let f = std::fs::File::create(p).map_err(|e| Failure::runtime(format!("{}: cannot create it: {e}", p.display())))?;
+            let f = output::create_file(p)?.ok_or_else(|| Failure::bad_input("--parquet -: give --parquet a file name"))?;
             let w: Box<dyn std::io::Write + Send> = Box::new(std::io::BufWriter::with_capacity(1 << 16, f));
             Some(ParquetRows::new(&plan, w, ROW_GROUP).map_err(|e| output::write_error(p, &e))?)
         }

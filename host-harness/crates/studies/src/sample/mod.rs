@@ -22,6 +22,7 @@
 
 pub mod cli;
 mod common;
+mod consistency;
 mod dist;
 mod keys;
 mod outcome;
@@ -35,6 +36,7 @@ mod tally;
 mod tests;
 
 pub use common::*;
+pub use consistency::merge_checked;
 pub use dist::*;
 pub use keys::*;
 pub use outcome::*;

@@ -1,6 +1,6 @@
 //! The `flinch sweep` command line.
 
-use super::{check_metric, plot, Axis, Progress, Sweep, SweepError, Template};
+use super::{check_metric, metric, plot, stream, Axis, Point, Progress, RowWriter, SweepError, SweepResult, Template};
 use flinch_output::output::{self, Failure};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -37,13 +37,22 @@ pub struct SweepArgs {
     /// with status "refused" and the reason, drawn as grey crosses).
     #[arg(long)]
     pub strict: bool,
-    /// Threads (default: all cores).
-    #[arg(long, value_name = "N")]
+    /// Threads (default: all cores), 1 to 1024.
+    #[arg(long, value_name = "N", value_parser = jobs)]
     pub jobs: Option<usize>,
     /// Set a scene key for this run: KEY=VALUE, repeatable (VALUE is TOML; a bare word is a
     /// string), validated like the file: e.g. --set motion.speed=0.5 --set target.region=face.
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = flinch_model::overrides::Set::parse)]
     pub set: Vec<flinch_model::overrides::Set>,
+}
+
+/// `--jobs`: 1 to 1024 threads (each holds a scene and a solver; 100,000 threads took 42 s to make
+/// before a 3-point sweep ran).
+pub fn jobs(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n @ 1..=1024) => Ok(n),
+        _ => Err(format!("allowed range [1, 1024] threads, got {text}")),
+    }
 }
 
 /// Parses the axes, honouring `--log KEY`; refuses a `--log` key that is not swept.
@@ -82,61 +91,90 @@ pub fn run(args: &SweepArgs) -> Result<bool, Failure> {
     flinch_model::overrides::refuse_overlap(&args.set, &varied, "--vary").map_err(Failure::bad_input)?;
     let template = Template::load_with(&args.scene, &args.set).map_err(|e| Failure::bad_input(e.to_string()))?;
     output::note(flinch_model::headline::headline(&template.base).lines().trim_end());
-    let built = if args.strict { Sweep::new(&template, axes) } else { Sweep::keep_going(&template, axes) };
-    let sweep = built.map_err(|e| Failure::bad_input(e.to_string()))?;
-    if sweep.refused_count() == sweep.len() {
-        let first = (0..sweep.len()).find_map(|k| sweep.refusal(k)).unwrap_or_default();
-        return Err(Failure::bad_input(format!("the validator refuses all {} points; the first: {first}", sweep.len())));
+    // Before any point runs: an output that would replace the scene, or land on a device, is refused.
+    for (opt, p) in [("--csv", &csv), ("--plot", &svg)] {
+        if let Some(p) = p {
+            output::check_target(opt, p)?;
+        }
     }
-    // A tool that meets the target while the flange is still accelerating never sees V_c: say so,
-    // since a speed sweep of such a scene saturates at sqrt(2 a_c gap).
-    let early = (0..sweep.len())
-        .filter(|&k| sweep.refusal(k).is_none())
-        .filter(|&k| {
-            let s = sweep.scene(k);
-            !s.motion.start_at_speed && s.target.gap < s.motion.speed * s.motion.speed / (2.0 * s.motion.accel)
-        })
-        .count();
-    if early > 0 {
-        output::note(&format!("note: at {early} of {} points the tool meets the target before the flange reaches motion.speed (gap < V_c^2 / 2 a_c): the impact speed there is sqrt(2 a_c gap), not V_c; raise target.gap or set motion.start_at_speed = true", sweep.len()));
-    }
-    let t0 = Instant::now();
-    let result = sweep.run_with_jobs(Progress::Auto, args.jobs).map_err(|e| Failure::bad_input(e.to_string()))?;
-    let wall = t0.elapsed().as_secs_f64();
     let csv_out = match (&csv, &svg) {
         (Some(p), _) => Some(p.clone()),
         (None, None) => Some(PathBuf::from("-")),
         (None, Some(_)) => None,
     };
-    if let Some(path) = &csv_out {
-        let mut w = output::create(path)?;
-        result.write_csv(&mut w).and_then(|_| w.flush()).map_err(|e| output::write_error(path, &e))?;
+    let pool = match args.jobs {
+        None => None,
+        Some(j) => Some(rayon::ThreadPoolBuilder::new().num_threads(j).build().map_err(|e| Failure::runtime(format!("--jobs {j}: {e}")))?),
+    };
+    // Streamed (issue 27): each row is written as soon as the points before it are, in grid order;
+    // nothing grows with the number of points but the plot's points (kept only with --plot).
+    let mut writer = match &csv_out {
+        Some(p) => Some(RowWriter::new(output::create(p)?, &axes)),
+        None => None,
+    };
+    let _ = ctrlc::set_handler(|| {
+        if !stream::STOP.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            eprintln!("\ninterrupted: finishing the points under way, then keeping the rows before them");
+        }
+    });
+    let mut kept: Vec<Point> = Vec::new();
+    let (mut exhausted, mut not_safe, mut modes_n) = (0usize, 0usize, [0usize; 3]);
+    let t0 = Instant::now();
+    let streamed = stream::stream(&template, axes.clone(), args.strict, Progress::Auto, pool.as_ref(), &mut |p: Point| {
+        if let Ok(s) = &p.outcome {
+            exhausted += usize::from(s.stroke_exhausted);
+            not_safe += usize::from(metric(s, "safe") == Some(0.0));
+            if let Some(m @ 1..=3) = s.mode {
+                modes_n[usize::from(m) - 1] += 1;
+            }
+        }
+        if svg.is_some() {
+            kept.push(p.clone());
+        }
+        match writer.as_mut() {
+            Some(w) => w.push(p),
+            None => Ok(()),
+        }
+    })
+    .map_err(|e| Failure::bad_input(e.to_string()))?;
+    let csv_path = csv_out.clone().unwrap_or_default();
+    let st = streamed.map_err(|e| output::write_error(&csv_path, &e))?;
+    if let Some(w) = writer.as_mut() {
+        w.finish().map_err(|e| output::write_error(&csv_path, &e))?;
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    if st.interrupted {
+        let kept_in = csv_out.as_ref().filter(|p| !output::is_stdout(p)).map_or_else(String::new, |p| format!(": {} holds points 1..{} in grid order", p.display(), st.done));
+        return Err(Failure::interrupted(format!("interrupted after {} of {} points{kept_in}; no plot drawn", st.done, st.total)));
+    }
+    if st.refused == st.total {
+        return Err(Failure::bad_input(format!("the validator refuses all {} points; the first: {}", st.total, st.first_refusal.unwrap_or_default())));
+    }
+    // A tool that meets the target while the flange is still accelerating never sees V_c: say so,
+    // since a speed sweep of such a scene saturates at sqrt(2 a_c gap).
+    if st.early > 0 {
+        output::note(&format!("note: at {} of {} points the tool meets the target before the flange reaches motion.speed (gap < V_c^2 / 2 a_c): the impact speed there is sqrt(2 a_c gap), not V_c; raise target.gap or set motion.start_at_speed = true", st.early, st.total));
     }
     if let Some(path) = &svg {
+        let result = SweepResult { axes: axes.clone(), values: axes.iter().map(Axis::values).collect(), points: kept, scene_name: template.base.name.clone() };
         plot::draw_with(path, &result, &args.metric, args.log_color).map_err(Failure::runtime)?;
     }
-    let exhausted = result.metric("stroke_exhausted").iter().filter(|&&e| e == 1.0).count();
-    let not_safe = result.metric("safe").iter().filter(|&&e| e == 0.0).count();
-    let modes: Vec<String> = (1..=3u8)
-        .map(|m| (m, result.points.iter().filter(|p| p.outcome.as_ref().is_ok_and(|s| s.mode == Some(m))).count()))
-        .filter(|&(_, n)| n > 0)
-        .map(|(m, n)| format!("mode {m}: {n}"))
-        .collect();
+    let modes: Vec<String> = modes_n.iter().enumerate().filter(|(_, &n)| n > 0).map(|(m, n)| format!("mode {}: {n}", m + 1)).collect();
     output::note(&format!(
         "{}: {} points in {:.2} s ({} threads){}{}{}{}{}{}",
         template.base.name,
-        result.points.len(),
+        st.total,
         wall,
         args.jobs.unwrap_or_else(rayon::current_num_threads),
         if modes.is_empty() { String::new() } else { format!("; {}", modes.join(", ")) },
         if exhausted > 0 { format!("; stroke exhausted at {exhausted}") } else { String::new() },
         if not_safe > 0 { format!("; NOT SAFE at {not_safe} (docs/verdicts.md)") } else { String::new() },
-        if result.refused() > 0 { format!("; REFUSED by the validator at {} (status and reason columns; --strict refuses the sweep)", result.refused()) } else { String::new() },
-        if result.failures() > 0 { format!("; SOLVER FAILED at {} (status and reason columns)", result.failures()) } else { String::new() },
+        if st.refused > 0 { format!("; REFUSED by the validator at {} (status and reason columns; --strict refuses the sweep)", st.refused) } else { String::new() },
+        if st.failed > 0 { format!("; SOLVER FAILED at {} (status and reason columns)", st.failed) } else { String::new() },
         [csv_out.as_ref().filter(|p| !output::is_stdout(p)).map(|p| format!("; csv {}", p.display())), svg.as_ref().map(|p| format!("; plot {}", p.display()))].into_iter().flatten().collect::<String>(),
     ));
-    if result.failures() > 0 {
-        return Err(Failure::runtime(format!("the solver failed at {} of {} points", result.failures(), result.points.len())));
+    if st.failed > 0 {
+        return Err(Failure::runtime(format!("the solver failed at {} of {} points", st.failed, st.total)));
     }
     Ok(true)
 }

@@ -106,26 +106,12 @@ impl Sweep {
     }
 
     pub(crate) fn build(template: &Template, axes: Vec<Axis>, strict: bool) -> Result<Self, SweepError> {
-        if axes.is_empty() {
-            return err("nothing to sweep: give --vary KEY=START:STOP:N once or twice");
-        }
-        if axes.len() > 2 {
-            return err(format!("{} --vary axes given: a sweep has one or two", axes.len()));
-        }
-        if axes.len() == 2 && axes[0].key == axes[1].key {
-            return err(format!("--vary {} is given twice: the two axes must be different keys", axes[0].key));
-        }
-        for a in &axes {
-            template.check_key(&a.key, a.start)?;
-        }
-        let values: Vec<Vec<f64>> = axes.iter().map(Axis::values).collect();
-        let keys: Vec<&str> = axes.iter().map(|a| a.key.as_str()).collect();
-        let plan = template.splice_plan(&keys);
-        let sizes: Vec<usize> = values.iter().map(Vec::len).collect();
-        let total: usize = sizes.iter().product();
-        if total > 1_000_000 {
-            return err(format!("{total} points: more than a million; use fewer steps"));
-        }
+        let (axes, values, plan, sizes, total) = prepare(template, axes)?;
+        Self::build_prepared(template, axes, values, plan, sizes, total, strict)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn build_prepared(template: &Template, axes: Vec<Axis>, values: Vec<Vec<f64>>, plan: Option<SplicePlan>, sizes: Vec<usize>, total: usize, strict: bool) -> Result<Self, SweepError> {
         let built: Vec<Result<Scene, SweepError>> = (0..total)
             .into_par_iter()
             .map(|k| {
@@ -137,6 +123,41 @@ impl Sweep {
                 }
             })
             .collect();
+        Self::collect_built(template, axes, values, built, total, strict)
+    }
+}
+
+/// A splice plan of [`Template::splice_plan`].
+pub type SplicePlan = Vec<(std::ops::Range<usize>, toml_edit::Value)>;
+
+/// Checks the axes against the template (one or two, distinct keys, each a numeric key of the
+/// scene, at most a million points): the axes, their values, the splice plan, the sizes, the total.
+pub(crate) fn prepare(template: &Template, axes: Vec<Axis>) -> Result<(Vec<Axis>, Vec<Vec<f64>>, Option<SplicePlan>, Vec<usize>, usize), SweepError> {
+    if axes.is_empty() {
+        return err("nothing to sweep: give --vary KEY=START:STOP:N once or twice");
+    }
+    if axes.len() > 2 {
+        return err(format!("{} --vary axes given: a sweep has one or two", axes.len()));
+    }
+    if axes.len() == 2 && axes[0].key == axes[1].key {
+        return err(format!("--vary {} is given twice: the two axes must be different keys", axes[0].key));
+    }
+    for a in &axes {
+        template.check_key(&a.key, a.start)?;
+    }
+    let values: Vec<Vec<f64>> = axes.iter().map(Axis::values).collect();
+    let keys: Vec<&str> = axes.iter().map(|a| a.key.as_str()).collect();
+    let plan = template.splice_plan(&keys);
+    let sizes: Vec<usize> = values.iter().map(Vec::len).collect();
+    let total: usize = sizes.iter().product();
+    if total > 1_000_000 {
+        return err(format!("{total} points: more than a million; use fewer steps"));
+    }
+    Ok((axes, values, plan, sizes, total))
+}
+
+impl Sweep {
+    fn collect_built(template: &Template, axes: Vec<Axis>, values: Vec<Vec<f64>>, built: Vec<Result<Scene, SweepError>>, total: usize, strict: bool) -> Result<Self, SweepError> {
         let n_refused = built.iter().filter(|b| b.is_err()).count();
         let mut scenes = Vec::with_capacity(total);
         let mut refused = Vec::with_capacity(total);

@@ -18,7 +18,8 @@
 //!
 //! Layout: `template.rs` a scene with keys set, `axis.rs` an axis, `grid.rs` the sweep and its
 //! run, `metrics.rs` the summary fields it reports, `table.rs` its CSV, `plot.rs` its figures,
-//! `error.rs` its error, `cli.rs` the command.
+//! `error.rs` its error, `stream.rs` its run streamed in grid order (what `flinch sweep` uses:
+//! memory flat in the number of points, Ctrl-C keeps the prefix), `cli.rs` the command.
 
 mod axis;
 pub mod cli;
@@ -26,6 +27,7 @@ mod error;
 mod grid;
 mod metrics;
 pub mod plot;
+pub mod stream;
 mod table;
 mod template;
 #[cfg(test)]

@@ -574,3 +574,4 @@ case!(
 // The rest, by element (after the `case!` macro, which they use).
 mod decoupler;
 mod elements;
+mod inputs;
