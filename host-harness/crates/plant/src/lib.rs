@@ -12,6 +12,7 @@ pub mod contact;
 pub mod decoupler;
 pub mod friction;
 pub mod motion_law;
+pub mod planar;
 pub mod robot;
 pub mod sensor;
 pub mod target;
@@ -73,6 +74,21 @@ pub struct Kinematics {
     pub delta: f64,
     /// Its rate, m/s.
     pub delta_dot: f64,
+    /// What only the planar plant fills in (`planar/`; zero in 1-D).
+    pub plane: PlaneKinematics,
+}
+
+/// The planar plant's extras of an instant (`planar/`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PlaneKinematics {
+    /// The flange along its path (m, m/s) and across it (m, m/s).
+    pub path: [f64; 4],
+    /// The tool's slip velocity along the contact's tangent, m/s.
+    pub slip_v: f64,
+    /// The flange across the guide (F . w, m, and its rate, m/s).
+    pub across_u: [f64; 2],
+    /// The rotational module's stage angle from rest, rad, and its rate, rad/s.
+    pub phi: [f64; 2],
 }
 
 /// Forces at one instant, N.
@@ -122,6 +138,8 @@ pub struct Plant {
     /// located events (`flinch-sim`); `None` for every other decoupler. While sticking, the tool's
     /// position is the flange's plus the stuck stroke, whatever the state vector says.
     pub slide: Option<Slide>,
+    /// The planar parts (`planar/`), for a scene with planar keys or `solver.plant = "planar"`.
+    pub planar: Option<planar::Planar>,
 }
 
 impl Plant {
@@ -148,12 +166,20 @@ impl Plant {
             s_rest: 0.0,
             in_contact: false,
             slide: None,
+            planar: None,
         };
+        let obstacle = matches!(scene.target.kind, flinch_model::scene::TargetKind::Obstacle)
+            || matches!(scene.target.kind, flinch_model::scene::TargetKind::BodyRegion(b) if b.contact == flinch_model::body::BodyContact::QuasiStatic);
+        plant.planar = scene.planar.as_ref().map(|p| planar::Planar::new(p, plant.robot.is_some() && obstacle));
         plant.s_rest = plant.rest_stroke();
         // A tool resting on a Hunt-Crossley front stop at t = 0: a landing at (the floor of) zero speed.
         plant.front_chi = plant.decoupler.front_stop().map_or(0.0, |f| f.chi(0.0));
         let x_r0 = plant.robot.map_or(0.0, |r| r.static_offset(plant.tool_mass * plant.gravity));
-        let face0 = x_r0 + plant.s_rest;
+        let face0 = match &plant.planar {
+            // The tool's point along m: the flange lags along its path, the tool rides the guide.
+            Some(p) => planar::frame::dot(planar::frame::comb(x_r0 * planar::frame::dot(p.dir.ep, p.dir.u) + plant.s_rest, p.dir.u, x_r0 * planar::frame::dot(p.dir.ep, p.dir.w), p.dir.w), p.dir.m),
+            None => x_r0 + plant.s_rest,
+        };
         plant.target = Target::new(&scene.target.kind, face0, scene.target.gap);
         let reference = plant.decoupler.front_stop().map_or(plant.s_rest, |f| f.at);
         plant.detector = scene.sensor.as_ref().map(|s| Detector::new(s, reference));
@@ -205,6 +231,11 @@ impl Plant {
         y[VR] = v0;
         y[XT] = x_r0 + self.s_rest;
         y[VT] = v0;
+        if let Some(p) = &self.planar {
+            let along = planar::frame::dot(p.dir.ep, p.dir.u);
+            y[XT] = x_r0 * along + self.s_rest;
+            y[VT] = v0 * along;
+        }
         if let Target::Object { start, .. } = self.target {
             y[XP] = start;
         }
@@ -213,6 +244,9 @@ impl Plant {
 
     /// Positions and velocities of every body.
     pub fn kinematics(&self, t: f64, y: &State) -> Kinematics {
+        if let Some(p) = &self.planar {
+            return planar::kinematics(self, p, t, y);
+        }
         let c = self.motion.at(t);
         let (xr, vr) = if self.robot.is_some() { (y[XR], y[VR]) } else { (c.x, c.v) };
         let (xt, vt) = match self.slide {
@@ -224,11 +258,14 @@ impl Plant {
             Target::Obstacle { surface } => (surface, 0.0),
             Target::Object { .. } => (y[XP], y[VP]),
         };
-        Kinematics { xc: c.x, vc: c.v, ac: c.a, xr, vr, xt, vt, xp, vp, s: xt - xr, s_dot: vt - vr, delta: xt - xp, delta_dot: vt - vp }
+        Kinematics { xc: c.x, vc: c.v, ac: c.a, xr, vr, xt, vt, xp, vp, s: xt - xr, s_dot: vt - vr, delta: xt - xp, delta_dot: vt - vp, plane: PlaneKinematics::default() }
     }
 
     /// Forces at one instant.
     pub fn forces(&self, k: &Kinematics) -> Forces {
+        if let Some(p) = &self.planar {
+            return planar::forces(self, p, k).0;
+        }
         let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
         let mut decoupler = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi);
         if self.slide.is_some() {
@@ -255,6 +292,9 @@ impl Plant {
     /// without the Coulomb friction (`others`). s'' = a0 + b F_f with b = 1/m_t + 1/m_r (a rigid
     /// robot follows its law whatever the force: b = 1/m_t).
     fn slide_terms(&self, k: &Kinematics, contact: f64, others: f64) -> (f64, f64, f64) {
+        if let Some(p) = &self.planar {
+            return planar::slide_terms_at(self, p, k, contact, others);
+        }
         let limit = self.decoupler.friction_limit(k.s);
         let a_t = (others - contact + self.tool_mass * self.gravity) / self.tool_mass;
         let (a_r, inv_mr) = match &self.robot {
@@ -310,6 +350,9 @@ impl Plant {
 
     /// The right-hand side, with the kinematics and forces it used.
     pub fn eval(&self, t: f64, y: &State, dy: &mut State) -> (Kinematics, Forces) {
+        if let Some(p) = &self.planar {
+            return planar::eval(self, p, t, y, dy);
+        }
         let k = self.kinematics(t, y);
         let f = self.forces(&k);
         *dy = [0.0; N];
@@ -336,6 +379,15 @@ impl Plant {
         }
         dy[IMPULSE] = if self.in_contact { f.decoupler.total } else { 0.0 };
         (k, f)
+    }
+
+    /// The planar plant's integrated degree of freedom in the XP/VP slots that is not the target
+    /// (the flange across its path, or the rotational stage), as (position, velocity, mass or
+    /// inertia) slots for the at-rest check; `None` in 1-D.
+    pub fn planar_dof(&self) -> Option<(usize, usize, f64)> {
+        let p = self.planar.as_ref()?;
+        let r = self.robot.as_ref()?;
+        p.across_states.then_some((XP, VP, r.mass))
     }
 
     /// Travel of the tool back from its front stop (or rest position), m.

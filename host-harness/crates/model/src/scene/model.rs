@@ -27,6 +27,8 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// The robot controller for firmware-in-the-loop runs (`[controller]`); `None` in plain runs.
     pub controller: Option<Controller>,
+    /// The planar plant's inputs (`scene/planar.rs`); `None`: the 1-D plant runs the scene.
+    pub planar: Option<Planar>,
 }
 
 /// Motion law, MODEL.md element 1: accelerate at `accel` to `speed`, cruise; braking at `decel`
@@ -396,5 +398,28 @@ impl Controller {
     /// A controller with the category-0 brake's defaults (`plant/brake.rs`).
     pub const fn new(scan_cycle: f64, phase: f64, firmware_tick: f64) -> Self {
         Self { scan_cycle, phase, firmware_tick, brake_delay: DEFAULT_BRAKE_DELAY_S, brake_decel: DEFAULT_BRAKE_DECEL_MPS2 }
+    }
+}
+
+/// The planar plant's inputs (issue 30, `scene/planar.rs`, `plant/planar/`), resolved: present when
+/// a scene sets a planar key or `solver.plant = "planar"`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Planar {
+    /// beta, deg: from the decoupler's axis u (at rest) to the flange's commanded velocity.
+    pub off_axis_deg: f64,
+    /// theta, deg (Fig. 68a): the surface's outward normal is R(theta - 90 deg) u.
+    pub surface_angle_deg: f64,
+    /// Coulomb friction coefficient at the tool-target contact (0: frictionless).
+    pub contact_mu: f64,
+}
+
+impl Planar {
+    /// The axial scene through the planar plant: beta = 0, theta = -90, no contact friction.
+    pub const AXIAL: Planar = Planar { off_axis_deg: 0.0, surface_angle_deg: -90.0, contact_mu: 0.0 };
+
+    /// e_p . (-n): the share of the flange's speed that closes the gap along the surface's normal.
+    pub fn closing(&self) -> f64 {
+        let d = (self.off_axis_deg - (self.surface_angle_deg + 90.0)).to_radians();
+        d.cos()
     }
 }
