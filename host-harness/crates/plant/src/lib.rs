@@ -177,7 +177,14 @@ impl Plant {
         let x_r0 = plant.robot.map_or(0.0, |r| r.static_offset(plant.tool_mass * plant.gravity));
         let face0 = match &plant.planar {
             // The tool's point along m: the flange lags along its path, the tool rides the guide.
-            Some(p) => planar::frame::dot(planar::frame::comb(x_r0 * planar::frame::dot(p.dir.ep, p.dir.u) + plant.s_rest, p.dir.u, x_r0 * planar::frame::dot(p.dir.ep, p.dir.w), p.dir.w), p.dir.m),
+            Some(p) => match &p.scene.rotational {
+                Some(st) => {
+                    let front = plant.decoupler.front_stop().map_or(plant.s_rest, |f| f.at);
+                    let r = planar::rotational_stage::tool_offset(st, front, plant.s_rest, 0.0);
+                    planar::frame::dot([x_r0 * p.dir.ep[0] + r[0], x_r0 * p.dir.ep[1] + r[1]], p.dir.m) + st.tool_radius
+                }
+                None => planar::frame::dot(planar::frame::comb(x_r0 * planar::frame::dot(p.dir.ep, p.dir.u) + plant.s_rest, p.dir.u, x_r0 * planar::frame::dot(p.dir.ep, p.dir.w), p.dir.w), p.dir.m),
+            },
             None => x_r0 + plant.s_rest,
         };
         plant.target = Target::new(&scene.target.kind, face0, scene.target.gap);
@@ -235,6 +242,10 @@ impl Plant {
             let along = planar::frame::dot(p.dir.ep, p.dir.u);
             y[XT] = x_r0 * along + self.s_rest;
             y[VT] = v0 * along;
+            if p.scene.rotational.is_some() {
+                y[XT] = self.s_rest;
+                y[VT] = 0.0;
+            }
         }
         if let Target::Object { start, .. } = self.target {
             y[XP] = start;
@@ -386,8 +397,39 @@ impl Plant {
     /// inertia) slots for the at-rest check; `None` in 1-D.
     pub fn planar_dof(&self) -> Option<(usize, usize, f64)> {
         let p = self.planar.as_ref()?;
+        if let Some(st) = &p.scene.rotational {
+            return Some((XP, VP, st.inertia));
+        }
         let r = self.robot.as_ref()?;
         p.across_states.then_some((XP, VP, r.mass))
+    }
+
+    /// True when the tool cannot yield any further away from the target: it is fastened (rigid),
+    /// on its back stop, or (planar) its guide does not lead away from the target
+    /// (`planar::Planar::retreat_share` <= 0: a 1-D module hit across its axis is a rigid tool; the
+    /// rotational module turns its guide instead, so only its back stop counts).
+    pub fn exhausted(&self, k: &Kinematics) -> bool {
+        let bottomed = self.decoupler.back_stop().is_some_and(|b| b.penetration(k.s) > 0.0);
+        bottomed || self.decoupler.is_rigid() || self.planar.as_ref().is_some_and(|p| p.scene.rotational.is_none() && p.retreat_share(k) <= 0.0)
+    }
+
+    /// The stroke left along the contact's normal, m: the travel to the back stop times the share of
+    /// it that moves the tool away from the target (1 in 1-D, `planar::Planar::retreat_share`);
+    /// 0 for a rigid tool or a guide that does not lead away; `None` without a back stop.
+    pub fn stroke_left(&self, k: &Kinematics) -> Option<f64> {
+        if self.decoupler.is_rigid() {
+            return Some(0.0);
+        }
+        let left = self.decoupler.back_stop().map(|b| -b.penetration(k.s))?;
+        Some(match &self.planar {
+            None => left,
+            // The rotational module yields by turning as well: its stroke is the guide's.
+            Some(p) if p.scene.rotational.is_some() => left,
+            Some(p) => {
+                let share = p.retreat_share(k);
+                if share <= 0.0 { 0.0f64.min(left) } else { left * share }
+            }
+        })
     }
 
     /// Travel of the tool back from its front stop (or rest position), m.

@@ -103,6 +103,10 @@ pub struct Simulation {
     /// Instants a Coulomb slide switched between sticking and slipping (event 7), with the state
     /// taken.
     pub(crate) slide_switches: Vec<(f64, plant::friction::Slide)>,
+    /// The rotational module's largest |stage turn| so far, rad.
+    pub(crate) max_rotation: f64,
+    /// When the rotational module engaged and its stage turn then (s, rad).
+    pub(crate) engaged: Option<(f64, f64)>,
 }
 
 impl System<N> for Simulation {
@@ -299,20 +303,22 @@ impl Hybrid<N, E> for Simulation {
         self.note_robot_peak(t1, f.robot.abs(), first_impact, &f);
         self.peak_object_v = self.peak_object_v.max(k.vp);
         self.max_travel = self.max_travel.max(self.plant.travel(&k));
+        if self.plant.planar.is_some_and(|p| p.scene.rotational.is_some()) {
+            self.note_rotation(t0, t1, &k, dense);
+        }
         if let Some(p) = f.decoupler.gas_pressure {
             self.peak_gas = self.peak_gas.max(p);
         }
         if self.at_rest_from.is_none() && self.plant.motion.t_stop().is_some_and(|ts| t1 >= ts) && t1 < self.duration && self.at_rest(t1, y1) {
             self.at_rest_from = Some(t1);
         }
-        let bottomed = self.plant.decoupler.back_stop().is_some_and(|b| b.penetration(k.s) > 0.0);
-        if k.delta > 0.0 && (bottomed || self.plant.decoupler.is_rigid()) {
+        if k.delta > 0.0 && self.plant.exhausted(&k) {
             self.exhausted = true;
         }
         // The same instants as `exhausted`, so stroke_left_min_m < 0 exactly when it is set (a
         // rigid tool: 0 and exhausted).
         if k.delta > 0.0 {
-            let left = if self.plant.decoupler.is_rigid() { Some(0.0) } else { self.plant.decoupler.back_stop().map(|b| -b.penetration(k.s)) };
+            let left = self.plant.stroke_left(&k);
             self.deformation_max = Some(self.deformation_max.map_or(k.delta, |d| d.max(k.delta)));
             if let Some(l) = left {
                 self.stroke_left_min = Some(self.stroke_left_min.map_or(l, |m| m.min(l)));
@@ -402,6 +408,8 @@ impl Simulation {
             rest_tol: (scene.solver.rtol, scene.solver.atol, scene.motion.speed),
             at_rest_from: None,
             slide_switches: Vec::new(),
+            max_rotation: 0.0,
+            engaged: None,
         };
         if let Some(TargetKind::Object { floor_friction: Some(_), .. }) = Some(scene.target.kind) {
             sim.warnings.push(format!("target.floor_friction regularised with v0 = {} m/s", plant::friction::V0_MIN));
@@ -430,5 +438,30 @@ impl Simulation {
         self.on_front = g[EV_FRONT] > 0.0;
         self.on_back = g[EV_BACK] > 0.0;
         self.refresh_push(t, y);
+    }
+}
+
+impl Simulation {
+    /// The rotational module's bookkeeping after a step [t0, t1] ending at `k`: the largest turn,
+    /// and the first instant the tool has travelled `ENGAGED_TRAVEL_M` back while touching the
+    /// target (bisected on the step's interpolant to 1e-12 s).
+    fn note_rotation(&mut self, t0: f64, t1: f64, k: &Kinematics, dense: &dyn Fn(f64) -> State) {
+        self.max_rotation = self.max_rotation.max(k.plane.phi[0].abs());
+        if self.engaged.is_some() {
+            return;
+        }
+        let engaged = |sim: &Self, k: &Kinematics| k.delta > 0.0 && sim.plant.travel(k) >= crate::summary::ENGAGED_TRAVEL_M;
+        if !engaged(self, k) {
+            return;
+        }
+        let (mut a, mut b) = (t0, t1);
+        if t1 > t0 && !engaged(self, &self.plant.kinematics(t0, &dense(t0))) {
+            while b - a > 1e-12 {
+                let m = 0.5 * (a + b);
+                if engaged(self, &self.plant.kinematics(m, &dense(m))) { b = m } else { a = m }
+            }
+        }
+        let kb = self.plant.kinematics(b, &dense(b));
+        self.engaged = Some((b, kb.plane.phi[0]));
     }
 }

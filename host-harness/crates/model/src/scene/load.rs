@@ -111,9 +111,14 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
         .and_then(|t| motion_law::motion(cx, t, tool.map(|t| t.mass)));
     let robot = optional(cx, &root, &robot::TABLE, robot::robot);
     let gravity = motion.map(|m| m.gravity);
-    let decoupler = cx
-        .table(&root, &decoupler::TABLE)
-        .and_then(|t| decoupler::decoupler(cx, &t, tool.map(|t| t.mass), gravity));
+    let decoupler_tab = cx.table(&root, &decoupler::TABLE);
+    let decoupler = decoupler_tab
+        .as_ref()
+        .and_then(|t| decoupler::decoupler(cx, t, tool.map(|t| t.mass), gravity));
+    let stage = match &decoupler_tab {
+        Some(t) if matches!(decoupler, Some(super::model::Decoupler::Bistable(_))) => optional(cx, t, &decoupler::rotational::TABLE, decoupler::rotational::stage),
+        _ => Some(None),
+    };
     let target_tab = cx.table(&root, &target::TABLE);
     let target = target_tab.as_ref().and_then(|t| target::target(cx, t));
     let sensor = optional(cx, &root, &sensor::TABLE, |cx, t| {
@@ -125,7 +130,10 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
         Some(None) => Some(solver::default_solver()),
         None => None,
     };
-    let planar = planar::planar(cx, motion_tab.as_ref(), target_tab.as_ref(), solver_tab.flatten().as_ref());
+    let planar = planar::planar(cx, motion_tab.as_ref(), target_tab.as_ref(), solver_tab.flatten().as_ref(), stage);
+    if let (Some(Some(p)), Some(d), Some(tg), Some(dt)) = (planar, &decoupler, target, &decoupler_tab) {
+        planar::check_rotational(cx, dt, &p, d, &tg);
+    }
     let controller = optional(cx, &root, &controller::TABLE, controller::controller);
 
     // The motion must bring the tool to the target: before contact nothing brakes.

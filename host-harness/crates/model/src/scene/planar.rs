@@ -10,7 +10,7 @@
 //! faces the motion (theta = beta - 90); theta only, the motion is along -n (beta = theta + 90).
 
 use super::check::{num, Bound::*, Ctx, Key, Tab, Ty};
-use super::model::{Motion, Planar};
+use super::model::{Decoupler, FrictionLaw, Motion, Planar, Stage, Target, TargetKind};
 
 /// beta.
 pub const OFF_AXIS: Key = Key::number("off_axis_deg", "deg", Incl(-180.0), Incl(180.0), "any direction in the plane of motion", "beta, the angle from the decoupler's axis (at rest) to the flange's commanded velocity, counter-clockwise (planar plant, docs/planar.md)")
@@ -30,17 +30,18 @@ pub const MIN_CLOSING: f64 = 0.02;
 
 /// Reads the planar keys of `[motion]`, `[target]` and `[solver]`; `None` (reported) when invalid,
 /// `Some(None)` for a 1-D scene.
-pub(super) fn planar(cx: &mut Ctx, motion: Option<&Tab>, target: Option<&Tab>, solver: Option<&Tab>) -> Option<Option<Planar>> {
+pub(super) fn planar(cx: &mut Ctx, motion: Option<&Tab>, target: Option<&Tab>, solver: Option<&Tab>, stage: Option<Option<Stage>>) -> Option<Option<Planar>> {
+    let stage = stage?;
     let beta = match motion { Some(t) => cx.maybe_number(t, &OFF_AXIS)?, None => None };
     let (theta, mu) = match target {
         Some(t) => (cx.maybe_number(t, &SURFACE_ANGLE)?, cx.maybe_number(t, &CONTACT_MU)?),
         None => (None, None),
     };
     let plant = match solver { Some(t) => cx.maybe_choice(t, &PLANT, &[false, true])?, None => None };
-    let any_key = beta.is_some() || theta.is_some() || mu.is_some();
+    let any_key = beta.is_some() || theta.is_some() || mu.is_some() || stage.is_some();
     if plant == Some(false) && any_key {
         if let Some(s) = solver {
-            cx.bad(s, PLANT.name, "must be \"planar\" (or left out) when motion.off_axis_deg, target.surface_angle_deg or target.friction_mu is set: the 1-D plant cannot run them".into());
+            cx.bad(s, PLANT.name, "must be \"planar\" (or left out) when motion.off_axis_deg, target.surface_angle_deg, target.friction_mu or [decoupler.rotational] is set: the 1-D plant cannot run them".into());
         }
         return None;
     }
@@ -53,7 +54,7 @@ pub(super) fn planar(cx: &mut Ctx, motion: Option<&Tab>, target: Option<&Tab>, s
         (None, Some(t)) => (wrap_deg(t + 90.0), t),
         (Some(b), Some(t)) => (b, t),
     };
-    let p = Planar { off_axis_deg: beta, surface_angle_deg: theta, contact_mu: mu.unwrap_or(0.0) };
+    let p = Planar { off_axis_deg: beta, surface_angle_deg: theta, contact_mu: mu.unwrap_or(0.0), rotational: stage };
     let closing = p.closing();
     if closing < MIN_CLOSING {
         let (tab, key) = match (target, motion) {
@@ -85,4 +86,21 @@ pub(super) fn check_gap(cx: &mut Ctx, target: &Tab, p: &Planar, m: &Motion, dura
 pub fn wrap_deg(a: f64) -> f64 {
     let w = a.rem_euclid(360.0);
     if w > 180.0 { w - 360.0 } else { w }
+}
+
+/// The rotational module runs against a fixed obstacle with a regularised (or no) slide friction:
+/// its stage angle takes the state slots a free object would use, and the guide's stick-slip in a
+/// turning frame is not built (docs/planar.md).
+pub(super) fn check_rotational(cx: &mut Ctx, decoupler: &Tab, p: &Planar, d: &Decoupler, target: &Target) {
+    if p.rotational.is_none() {
+        return;
+    }
+    if !matches!(target.kind, TargetKind::Obstacle) {
+        cx.bad(decoupler, "rotational", "needs target.kind = \"obstacle\": the 2-D module is modelled against a fixed surface (the thesis's beam, Fig. 67)".into());
+    }
+    if let Decoupler::Bistable(b) = d {
+        if b.friction.is_some_and(|f| f.law == FrictionLaw::StickSlip) {
+            cx.bad(decoupler, "rotational", "needs decoupler.friction.law = \"regularised\" (v0 > 0): the guide's stick-slip on a turning stage is not modelled".into());
+        }
+    }
 }

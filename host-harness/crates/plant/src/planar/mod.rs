@@ -25,6 +25,7 @@
 
 pub mod frame;
 pub mod robot;
+pub mod rotational_stage;
 pub mod surface_contact;
 
 use crate::friction::Slide;
@@ -52,7 +53,7 @@ impl Planar {
         Self {
             scene: *p,
             dir: Directions::new(p.off_axis_deg, p.surface_angle_deg),
-            across_states,
+            across_states: across_states && p.rotational.is_none(),
             friction: surface_contact::SurfaceFriction::new(p.contact_mu),
         }
     }
@@ -82,6 +83,9 @@ fn flange(plant: &Plant, p: &Planar, c: &crate::motion_law::Commanded, y: &State
 /// along m, the flange along the guide (xr, vr), the tool along the guide (xt, vt), the target along
 /// m (xp, vp); the planar extras in `Kinematics::plane`.
 pub(crate) fn kinematics(plant: &Plant, p: &Planar, t: f64, y: &State) -> Kinematics {
+    if let Some(st) = &p.scene.rotational {
+        return rotational_stage::kinematics(plant, p, st, t, y);
+    }
     let c = plant.motion.at(t);
     let f = flange(plant, p, &c, y);
     let d = &p.dir;
@@ -111,6 +115,10 @@ pub(crate) fn kinematics(plant: &Plant, p: &Planar, t: f64, y: &State) -> Kinema
 /// force along the guide, and the force on the robot (its magnitude, signed by its component along
 /// the path; the 1-D plant's signed force for an axial scene).
 pub(crate) fn forces(plant: &Plant, p: &Planar, k: &Kinematics) -> (Forces, Loads) {
+    if let Some(st) = &p.scene.rotational {
+        let (f, acc) = rotational_stage::forces(plant, p, st, k);
+        return (f, Loads { accel: [acc[0], 0.0], ..Loads::default() });
+    }
     let contact = plant.contact.force(k.delta, k.delta_dot, plant.target_chi);
     let friction = p.friction.force(contact, k.plane.slip_v);
     let mut decoupler = plant.decoupler.force(k.s, k.s_dot, plant.front_chi, plant.back_chi);
@@ -162,6 +170,9 @@ pub(crate) fn slide_terms(plant: &Plant, p: &Planar, k: &Kinematics, l: &Loads, 
 
 /// The right-hand side (`Plant::eval` for a planar scene).
 pub(crate) fn eval(plant: &Plant, p: &Planar, t: f64, y: &State, dy: &mut State) -> (Kinematics, Forces) {
+    if let Some(st) = &p.scene.rotational {
+        return rotational_stage::eval(plant, p, st, t, y, dy);
+    }
     let k = kinematics(plant, p, t, y);
     let (f, l) = forces(plant, p, &k);
     *dy = [0.0; crate::N];
@@ -193,4 +204,15 @@ pub(crate) fn eval(plant: &Plant, p: &Planar, t: f64, y: &State, dy: &mut State)
 pub(crate) fn slide_terms_at(plant: &Plant, p: &Planar, k: &Kinematics, contact: f64, others: f64) -> (f64, f64, f64) {
     let l = loads(plant, p, contact, p.friction.force(contact, k.plane.slip_v));
     slide_terms(plant, p, k, &l, others)
+}
+
+impl Planar {
+    /// How far the tool moves away from the target (along -m) per metre of travel back along its
+    /// guide (-u): u . m, 1 in 1-D, 0 for a guide parallel to the surface (beta or theta 90 deg off
+    /// the axis), negative when the guide leads into the target. The rotational module's guide
+    /// turns with its stage.
+    pub fn retreat_share(&self, k: &Kinematics) -> f64 {
+        let u = frame::rot(k.plane.phi[0], self.dir.u);
+        dot(u, self.dir.m)
+    }
 }
