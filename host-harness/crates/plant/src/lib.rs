@@ -15,7 +15,10 @@ pub mod motion_law;
 pub mod planar;
 pub mod robot;
 pub mod sensor;
+pub mod state;
 pub mod target;
+
+pub use state::*;
 
 use flinch_model::scene::Scene;
 use contact::Contact;
@@ -25,82 +28,6 @@ use motion_law::MotionLaw;
 use robot::CompliantRobot;
 use sensor::Detector;
 use target::Target;
-
-/// Number of states.
-pub const N: usize = 7;
-/// The state vector.
-pub type State = [f64; N];
-/// x_r, m.
-pub const XR: usize = 0;
-/// x_r', m/s.
-pub const VR: usize = 1;
-/// x_t, m.
-pub const XT: usize = 2;
-/// x_t', m/s.
-pub const VT: usize = 3;
-/// x_p, m.
-pub const XP: usize = 4;
-/// x_p', m/s.
-pub const VP: usize = 5;
-/// Decoupler impulse during contact (eq 21), N s.
-pub const IMPULSE: usize = 6;
-
-/// Positions and velocities of every body at one instant (rigid ones filled in from the law).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Kinematics {
-    /// x_c, x_c', m, m/s.
-    pub xc: f64,
-    /// x_c'.
-    pub vc: f64,
-    /// x_c'' (kept so the right-hand side evaluates the motion law once).
-    pub ac: f64,
-    /// x_r.
-    pub xr: f64,
-    /// x_r'.
-    pub vr: f64,
-    /// x_t (tool face).
-    pub xt: f64,
-    /// x_t'.
-    pub vt: f64,
-    /// Target face position.
-    pub xp: f64,
-    /// Target velocity.
-    pub vp: f64,
-    /// s = x_t - x_r.
-    pub s: f64,
-    /// s'.
-    pub s_dot: f64,
-    /// Penetration into the target, m (positive in contact).
-    pub delta: f64,
-    /// Its rate, m/s.
-    pub delta_dot: f64,
-    /// What only the planar plant fills in (`planar/`; zero in 1-D).
-    pub plane: PlaneKinematics,
-}
-
-/// The planar plant's extras of an instant (`planar/`).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct PlaneKinematics {
-    /// The flange along its path (m, m/s) and across it (m, m/s).
-    pub path: [f64; 4],
-    /// The tool's slip velocity along the contact's tangent, m/s.
-    pub slip_v: f64,
-    /// The flange across the guide (F . w, m, and its rate, m/s).
-    pub across_u: [f64; 2],
-    /// The rotational module's stage angle from rest, rad, and its rate, rad/s.
-    pub phi: [f64; 2],
-}
-
-/// Forces at one instant, N.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Forces {
-    /// Contact force on the target (>= 0).
-    pub contact: f64,
-    /// The decoupler's force on the tool, by part.
-    pub decoupler: DecouplerForce,
-    /// Force the tool puts on the robot (decoupler, or the contact for a rigid tool), signed.
-    pub robot: f64,
-}
 
 /// The assembled plant, with the contact dampings fixed at their onsets.
 #[derive(Debug, Clone)]
@@ -256,7 +183,7 @@ impl Plant {
     /// Positions and velocities of every body.
     pub fn kinematics(&self, t: f64, y: &State) -> Kinematics {
         if let Some(p) = &self.planar {
-            return planar::kinematics(self, p, t, y);
+            return planar::kinematics(&self.parts(), p, t, y);
         }
         let c = self.motion.at(t);
         let (xr, vr) = if self.robot.is_some() { (y[XR], y[VR]) } else { (c.x, c.v) };
@@ -275,7 +202,7 @@ impl Plant {
     /// Forces at one instant.
     pub fn forces(&self, k: &Kinematics) -> Forces {
         if let Some(p) = &self.planar {
-            return planar::forces(self, p, k).0;
+            return planar::forces(&self.parts(), p, k).0;
         }
         let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
         let mut decoupler = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi);
@@ -304,7 +231,7 @@ impl Plant {
     /// robot follows its law whatever the force: b = 1/m_t).
     fn slide_terms(&self, k: &Kinematics, contact: f64, others: f64) -> (f64, f64, f64) {
         if let Some(p) = &self.planar {
-            return planar::slide_terms_at(self, p, k, contact, others);
+            return planar::slide_terms_at(&self.parts(), p, k, contact, others);
         }
         let limit = self.decoupler.friction_limit(k.s);
         let a_t = (others - contact + self.tool_mass * self.gravity) / self.tool_mass;
@@ -362,7 +289,7 @@ impl Plant {
     /// The right-hand side, with the kinematics and forces it used.
     pub fn eval(&self, t: f64, y: &State, dy: &mut State) -> (Kinematics, Forces) {
         if let Some(p) = &self.planar {
-            return planar::eval(self, p, t, y, dy);
+            return planar::eval(&self.parts(), p, t, y, dy);
         }
         let k = self.kinematics(t, y);
         let f = self.forces(&k);
@@ -390,6 +317,25 @@ impl Plant {
         }
         dy[IMPULSE] = if self.in_contact { f.decoupler.total } else { 0.0 };
         (k, f)
+    }
+
+    /// The elements the planar plant reads, borrowed.
+    pub fn parts(&self) -> Parts<'_> {
+        Parts {
+            motion: &self.motion,
+            robot: self.robot.as_ref(),
+            tool_mass: self.tool_mass,
+            gravity: self.gravity,
+            decoupler: &self.decoupler,
+            contact: &self.contact,
+            target: self.target,
+            target_chi: self.target_chi,
+            back_chi: self.back_chi,
+            front_chi: self.front_chi,
+            s_rest: self.s_rest,
+            in_contact: self.in_contact,
+            slide: self.slide,
+        }
     }
 
     /// The planar plant's integrated degree of freedom in the XP/VP slots that is not the target
@@ -430,6 +376,14 @@ impl Plant {
                 if share <= 0.0 { 0.0f64.min(left) } else { left * share }
             }
         })
+    }
+
+    /// The force along the guide that moves the tool 0.1 mm off its front stop (or rest), N: the
+    /// decoupler's force there at rest (friction at zero speed is zero in the regularised law, so
+    /// this is the lower bound: a "blocked" judged against it is judged early, on the safe side).
+    pub fn release_force(&self) -> f64 {
+        let s = self.decoupler.front_stop().map_or(self.s_rest, |f| f.at) - 1e-4;
+        self.decoupler.force(s, 0.0, self.front_chi, self.back_chi).total.abs()
     }
 
     /// Travel of the tool back from its front stop (or rest position), m.

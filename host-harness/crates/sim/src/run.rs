@@ -232,6 +232,8 @@ impl Run {
             module_rotation_deg_null_reason: None,
             t_engaged_s: None,
             max_rotation_deg: None,
+            module_blocked_t_s: s.blocked.map(|b| b.0),
+            module_blocked_force_n: s.blocked.map(|b| b.1),
         };
         if let Some(p) = s.plant.planar.filter(|p| p.scene.rotational.is_some()) {
             summary.max_rotation_deg = Some(s.max_rotation.to_degrees());

@@ -107,7 +107,20 @@ pub struct Simulation {
     pub(crate) max_rotation: f64,
     /// When the rotational module engaged and its stage turn then (s, rad).
     pub(crate) engaged: Option<(f64, f64)>,
+    /// Planar runs: since when (s) the module has been pushed far above its release force without
+    /// moving, and the stage angle then (rad); see `BLOCKED_AFTER_S`.
+    pub(crate) pushed_still: Option<(f64, f64)>,
+    /// Planar runs: the first instant the module was blocked and the contact force then (s, N).
+    pub(crate) blocked: Option<(f64, f64)>,
 }
+
+/// A planar module counts as blocked when, touching the target, the contact force has stayed above
+/// `BLOCKED_FACTOR` times the force that releases it along the contact's normal for this long, s. An impact is shorter: the hits of
+/// the Fig. 69 runs last a few ms and move the stage (tests/rotational.rs).
+pub const BLOCKED_AFTER_S: f64 = 0.02;
+/// The margin on the release force (the force builds up inside its friction cone before the module
+/// yields).
+pub const BLOCKED_FACTOR: f64 = 2.0;
 
 impl System<N> for Simulation {
     fn rhs(&self, t: f64, y: &State, dy: &mut State) {
@@ -306,6 +319,9 @@ impl Hybrid<N, E> for Simulation {
         if self.plant.planar.is_some_and(|p| p.scene.rotational.is_some()) {
             self.note_rotation(t0, t1, &k, dense);
         }
+        if self.plant.planar.is_some() {
+            self.note_blocked(t1, &k, f.contact);
+        }
         if let Some(p) = f.decoupler.gas_pressure {
             self.peak_gas = self.peak_gas.max(p);
         }
@@ -410,6 +426,8 @@ impl Simulation {
             slide_switches: Vec::new(),
             max_rotation: 0.0,
             engaged: None,
+            pushed_still: None,
+            blocked: None,
         };
         if let Some(TargetKind::Object { floor_friction: Some(_), .. }) = Some(scene.target.kind) {
             sim.warnings.push(format!("target.floor_friction regularised with v0 = {} m/s", plant::friction::V0_MIN));
@@ -463,5 +481,47 @@ impl Simulation {
         }
         let kb = self.plant.kinematics(b, &dense(b));
         self.engaged = Some((b, kb.plane.phi[0]));
+    }
+}
+
+impl Simulation {
+    /// Planar runs against a fixed target: is the module pushed far above what makes it yield
+    /// ([`BLOCKED_AFTER_S`])? The share of the push that drives the tool along its guide is
+    /// c - mu sqrt(1 - c^2), c = u . m, mu the contact's friction (the friction cone about the
+    /// normal). A yielding module balances that share with its own force (spring, damper, slide
+    /// friction: `DecouplerForce::spring + friction`, not the stops); a blocked one (its guide
+    /// across the push, locked by friction, on its front stop with a stage that cannot turn) lets the
+    /// contact force grow far above it. The bar is `BLOCKED_FACTOR` x (that force + the release
+    /// force) over the share (over 1 when the share is not positive: the guide jams). A bottomed tool
+    /// is `stroke_exhausted`, not this; an axial frictionless scene is the 1-D one and is not judged
+    /// here (its runs stay identical to the 1-D plant's).
+    fn note_blocked(&mut self, t: f64, k: &Kinematics, contact: f64) {
+        if self.blocked.is_some() {
+            return;
+        }
+        let Some(p) = self.plant.planar else { return };
+        let c = p.retreat_share(k);
+        let axial = p.scene.rotational.is_none() && p.scene.contact_mu == 0.0 && c == 1.0;
+        let bottomed = self.plant.decoupler.back_stop().is_some_and(|b| b.penetration(k.s) > 0.0);
+        if axial || self.plant.target.is_object() || bottomed {
+            self.pushed_still = None;
+            return;
+        }
+        let drive = c - p.scene.contact_mu * (1.0 - c * c).max(0.0).sqrt();
+        let d = self.plant.decoupler.force(k.s, k.s_dot, self.plant.front_chi, self.plant.back_chi);
+        let own = (d.spring + d.friction).abs() + self.plant.release_force();
+        let release = own / if drive > 0.0 { drive } else { 1.0 };
+        if self.in_contact && contact > BLOCKED_FACTOR * release {
+            let phi = k.plane.phi[0];
+            match self.pushed_still {
+                // The rotational module yields by turning: a stage that turned 1 deg starts the clock again.
+                Some((_, phi0)) if (phi - phi0).abs() > 1f64.to_radians() => self.pushed_still = Some((t, phi)),
+                Some((t0, _)) if t - t0 >= BLOCKED_AFTER_S => self.blocked = Some((t, contact)),
+                Some(_) => {}
+                None => self.pushed_still = Some((t, phi)),
+            }
+        } else {
+            self.pushed_still = None;
+        }
     }
 }

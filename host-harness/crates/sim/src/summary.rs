@@ -210,6 +210,14 @@ pub struct Summary {
     /// The rotational module: the stage's largest turn from rest in the run (magnitude), deg.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_rotation_deg: Option<f64>,
+    /// Planar runs: when the module was blocked (pushed for `BLOCKED_AFTER_S` far above its release
+    /// force without yielding: locked by friction, a guide across the push, a stage that cannot
+    /// turn), s; a failure of the verdict. Absent when it never was.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub module_blocked_t_s: Option<f64>,
+    /// The contact force then, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub module_blocked_force_n: Option<f64>,
 }
 
 /// The rotational module counts as engaged when its tool has travelled this far back from the front

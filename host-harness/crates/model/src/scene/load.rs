@@ -138,7 +138,7 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
 
     // The motion must bring the tool to the target: before contact nothing brakes.
     if let (Some(m), Some(d), Some(tg), Some(tt), Some(Some(p))) = (motion, duration_s, target, &target_tab, planar) {
-        planar::check_gap(cx, tt, &p, &m, d, tg.gap);
+        planar::check_gap(cx, tt, &p, motion_law::cruise_travel(&m, d), d, tg.gap);
     } else if let (Some(m), Some(d), Some(tg), Some(tt)) = (motion, duration_s, target, &target_tab) {
         let travel = motion_law::cruise_travel(&m, d);
         if tg.gap >= travel {

@@ -10,7 +10,7 @@
 //! faces the motion (theta = beta - 90); theta only, the motion is along -n (beta = theta + 90).
 
 use super::check::{num, Bound::*, Ctx, Key, Tab, Ty};
-use super::model::{Decoupler, FrictionLaw, Motion, Planar, Stage, Target, TargetKind};
+use super::model::{Decoupler, FrictionLaw, Planar, Stage, Target, TargetKind};
 
 /// beta.
 pub const OFF_AXIS: Key = Key::number("off_axis_deg", "deg", Incl(-180.0), Incl(180.0), "any direction in the plane of motion", "beta, the angle from the decoupler's axis (at rest) to the flange's commanded velocity, counter-clockwise (planar plant, docs/planar.md)")
@@ -71,9 +71,10 @@ pub(super) fn planar(cx: &mut Ctx, motion: Option<&Tab>, target: Option<&Tab>, s
     Some(Some(p))
 }
 
-/// The gap is closed along the normal: the commanded travel times e_p . (-n) must exceed it.
-pub(super) fn check_gap(cx: &mut Ctx, target: &Tab, p: &Planar, m: &Motion, duration: f64, gap: f64) {
-    let travel = super::motion_law::cruise_travel(m, duration) * p.closing();
+/// The gap is closed along the normal: the commanded travel (`cruise`, m, unbraked in `duration`)
+/// times e_p . (-n) must exceed it.
+pub(super) fn check_gap(cx: &mut Ctx, target: &Tab, p: &Planar, cruise: f64, duration: f64, gap: f64) {
+    let travel = cruise * p.closing();
     if gap >= travel {
         cx.bad(target, "gap", format!(
             "the commanded motion closes only {} m of it along the surface's normal in duration = {} s (motion.off_axis_deg and target.surface_angle_deg), so the tool never reaches the target; must be < {} m, got {}",

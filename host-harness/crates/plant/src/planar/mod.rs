@@ -26,38 +26,15 @@
 pub mod frame;
 pub mod robot;
 pub mod rotational_stage;
+pub mod setup;
 pub mod surface_contact;
 
+pub use setup::Planar;
+use setup::{loads, Loads};
+
 use crate::friction::Slide;
-use crate::{Forces, Kinematics, Plant, State, IMPULSE, VP, VR, VT, XP, XR, XT};
-use flinch_model::scene::Planar as PlanarScene;
-use frame::{comb, dot, Directions, V2};
-
-/// The planar parts of a plant.
-#[derive(Debug, Clone, Copy)]
-pub struct Planar {
-    /// The scene's resolved angles.
-    pub scene: PlanarScene,
-    /// The directions of the approach.
-    pub dir: Directions,
-    /// The flange's position across its path is integrated (XP, VP hold y_r, y_r').
-    pub across_states: bool,
-    /// The contact's Coulomb friction.
-    pub friction: surface_contact::SurfaceFriction,
-}
-
-impl Planar {
-    /// From the scene's planar keys; `across_states` when the robot is compliant and the target a
-    /// fixed obstacle.
-    pub fn new(p: &PlanarScene, across_states: bool) -> Self {
-        Self {
-            scene: *p,
-            dir: Directions::new(p.off_axis_deg, p.surface_angle_deg),
-            across_states: across_states && p.rotational.is_none(),
-            friction: surface_contact::SurfaceFriction::new(p.contact_mu),
-        }
-    }
-}
+use crate::state::{Forces, Kinematics, Parts as Plant, State, IMPULSE, VP, VR, VT, XP, XR, XT};
+use frame::{comb, dot, V2};
 
 /// Where the flange is: along and across its path (path frame) and in the plane.
 #[derive(Debug, Clone, Copy)]
@@ -107,7 +84,7 @@ pub(crate) fn kinematics(plant: &Plant, p: &Planar, t: f64, y: &State) -> Kinema
     Kinematics {
         xc: c.x, vc: c.v, ac: c.a, xr, vr, xt, vt, xp, vp,
         s: xt - xr, s_dot: vt - vr, delta: tm - xp, delta_dot: tvm - vp,
-        plane: crate::PlaneKinematics { path: [f.x, f.v, f.y, f.vy], slip_v: dot(tool_v, d.t), across_u: [fw, vw], ..Default::default() },
+        plane: crate::state::PlaneKinematics { path: [f.x, f.v, f.y, f.vy], slip_v: dot(tool_v, d.t), across_u: [fw, vw], ..Default::default() },
     }
 }
 
@@ -137,26 +114,6 @@ pub(crate) fn forces(plant: &Plant, p: &Planar, k: &Kinematics) -> (Forces, Load
     (Forces { contact, decoupler, robot }, Loads { accel: acc, ..loads0 })
 }
 
-/// The contact's force on the tool and the tool's weight, split along and across the guide, and
-/// the flange's acceleration (path frame) once known.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Loads {
-    /// The contact's force on the tool, N (vector).
-    pub contact: V2,
-    /// The tool's weight m_t g e_p (`motion.gravity` along the path), N.
-    pub weight: V2,
-    /// The flange's acceleration along and across its path, m/s^2.
-    pub accel: [f64; 2],
-}
-
-fn loads(plant: &Plant, p: &Planar, normal: f64, friction: f64) -> Loads {
-    let d = &p.dir;
-    // The target pushes the tool along -m; friction acts along t.
-    let contact = comb(-normal, d.m, friction, d.t);
-    let w = plant.tool_mass * plant.gravity;
-    Loads { contact, weight: [w * d.ep[0], w * d.ep[1]], accel: [0.0, 0.0] }
-}
-
 /// For a Coulomb slide along the guide: the friction limit (N), the friction that would keep
 /// s'' = 0 (N) and s'' without it (m/s^2), as `Plant::slide_terms` in 1-D.
 pub(crate) fn slide_terms(plant: &Plant, p: &Planar, k: &Kinematics, l: &Loads, others: f64) -> (f64, f64, f64) {
@@ -175,7 +132,7 @@ pub(crate) fn eval(plant: &Plant, p: &Planar, t: f64, y: &State, dy: &mut State)
     }
     let k = kinematics(plant, p, t, y);
     let (f, l) = forces(plant, p, &k);
-    *dy = [0.0; crate::N];
+    *dy = [0.0; crate::state::N];
     if plant.robot.is_some() {
         dy[XR] = k.plane.path[1];
         dy[VR] = l.accel[0];
@@ -206,13 +163,3 @@ pub(crate) fn slide_terms_at(plant: &Plant, p: &Planar, k: &Kinematics, contact:
     slide_terms(plant, p, k, &l, others)
 }
 
-impl Planar {
-    /// How far the tool moves away from the target (along -m) per metre of travel back along its
-    /// guide (-u): u . m, 1 in 1-D, 0 for a guide parallel to the surface (beta or theta 90 deg off
-    /// the axis), negative when the guide leads into the target. The rotational module's guide
-    /// turns with its stage.
-    pub fn retreat_share(&self, k: &Kinematics) -> f64 {
-        let u = frame::rot(k.plane.phi[0], self.dir.u);
-        dot(u, self.dir.m)
-    }
-}

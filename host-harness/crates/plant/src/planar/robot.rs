@@ -12,9 +12,9 @@
 //! axial path w . e_p = 0 and this is eq 33 exactly, in the 1-D plant's operation order.
 
 use super::frame::{comb, dot, V2};
-use super::{Loads, Planar};
+use super::setup::{Loads, Planar};
 use crate::motion_law::Commanded;
-use crate::{Kinematics, Plant};
+use crate::state::{Kinematics, Parts as Plant};
 
 /// The flange's acceleration along and across its path, m/s^2, under the decoupler's force
 /// `dec` (N, on the tool along u).

@@ -23,9 +23,9 @@
 //! would). Units: m, rad, kg, kg m^2, N, N m.
 
 use super::frame::{comb, cross, dot, perp, rot, V2};
-use super::{Loads, Planar};
+use super::setup::{Loads, Planar};
 use crate::motion_law::Commanded;
-use crate::{Forces, Kinematics, Plant, State, IMPULSE, VP, VR, VT, XP, XR, XT};
+use crate::state::{Forces, Kinematics, Parts as Plant, State, IMPULSE, VP, VR, VT, XP, XR, XT};
 use flinch_model::scene::Stage;
 
 /// The preload's smoothing angle: M0 is reached within about this turn, rad (1 deg).
@@ -79,7 +79,7 @@ pub(crate) fn kinematics(plant: &Plant, p: &Planar, st: &Stage, t: f64, y: &Stat
     Kinematics {
         xc: c.x, vc: c.v, ac: c.a, xr: x, vr: v, xt: x + y[XT], vt: v + y[VT], xp: surface, vp: 0.0,
         s: y[XT], s_dot: y[VT], delta, delta_dot: dot(g.tool_v, d.m),
-        plane: crate::PlaneKinematics {
+        plane: crate::state::PlaneKinematics {
             path: [x, v, 0.0, 0.0],
             slip_v: dot(g.tool_v, d.t) + st.tool_radius * y[VP],
             across_u: [0.0, 0.0],
@@ -159,7 +159,7 @@ pub(crate) fn forces(plant: &Plant, p: &Planar, st: &Stage, k: &Kinematics) -> (
     let contact = plant.contact.force(k.delta, k.delta_dot, plant.target_chi);
     let friction = p.friction.force(contact, k.plane.slip_v);
     let decoupler = plant.decoupler.force(k.s, k.s_dot, plant.front_chi, plant.back_chi);
-    let l = super::loads(plant, p, contact, friction);
+    let l = super::setup::loads(plant, p, contact, friction);
     let (acc, tdd) = solve(plant, p, st, k, &l, decoupler.total);
     let mt = plant.tool_mass;
     let on_robot = [l.contact[0] + l.weight[0] - mt * tdd[0], l.contact[1] + l.weight[1] - mt * tdd[1]];
@@ -171,7 +171,7 @@ pub(crate) fn forces(plant: &Plant, p: &Planar, st: &Stage, k: &Kinematics) -> (
 pub(crate) fn eval(plant: &Plant, p: &Planar, st: &Stage, t: f64, y: &State, dy: &mut State) -> (Kinematics, Forces) {
     let k = kinematics(plant, p, st, t, y);
     let (f, acc) = forces(plant, p, st, &k);
-    *dy = [0.0; crate::N];
+    *dy = [0.0; crate::state::N];
     if plant.robot.is_some() {
         dy[XR] = k.vr;
         dy[VR] = acc[0];

@@ -26,7 +26,7 @@ pub const STIFFNESS: Key = Key::number("stiffness", "N m/rad", Incl(0.0), Incl(1
 pub const PRELOAD: Key = Key::number("preload", "N m", Incl(0.0), Incl(10.0), "holds the stage against the path's acceleration; 0.02 for a 0.1 kg tool at 40 mm under 5 m/s^2", "M0, the retaining springs' preload: the moment needed to start turning the stage (reached within about 1 deg of rest, smooth)")
     .default(0.0);
 /// Bearing friction.
-pub const BEARING_TORQUE: Key = Key::number("bearing_torque", "N m", Incl(0.0), Incl(1.0), "ball and axial roller bearings: 1e-4-1e-2 N m", "the stage bearings' friction moment, regularised M tanh(phi' / 0.01 rad/s)")
+pub const BEARING_TORQUE: Key = Key::number("bearing_torque", "N m", Incl(0.0), Incl(0.01), "ball and axial roller bearings of a hand-sized stage: 1e-4-1e-2 N m; more makes the regularised bearing friction too stiff to integrate in reasonable time", "the stage bearings' friction moment, regularised M tanh(phi' / 0.01 rad/s)")
     .default(0.0);
 
 /// The keys of `[decoupler.rotational]`.
