@@ -4,7 +4,7 @@
 /// Units by suffix (docs/conventions.md).
 pub const SUFFIXES: &[(&str, &str)] = &[
     ("_n_per_m", "N/m"), ("_ns_per_m", "N s/m"), ("_mps2", "m/s^2"), ("_mps", "m/s"), ("_pa", "Pa"), ("_kg", "kg"), ("_hz", "Hz"), ("_bps", "bit/s"),
-    ("_m2", "m^2"), ("_px", "px"), ("_rad", "rad"), ("_j", "J"), ("_n_s", "N s"), ("_s", "s"), ("_m", "m"), ("_n", "N"),
+    ("_m2", "m^2"), ("_px", "px"), ("_rad", "rad"), ("_deg", "deg"), ("_j", "J"), ("_n_s", "N s"), ("_s", "s"), ("_m", "m"), ("_n", "N"),
 ];
 
 /// Units of the scene contract's summary names and of the dimensionless fields ("1").

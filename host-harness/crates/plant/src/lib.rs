@@ -12,9 +12,13 @@ pub mod contact;
 pub mod decoupler;
 pub mod friction;
 pub mod motion_law;
+pub mod planar;
 pub mod robot;
 pub mod sensor;
+pub mod state;
 pub mod target;
+
+pub use state::*;
 
 use flinch_model::scene::Scene;
 use contact::Contact;
@@ -24,67 +28,6 @@ use motion_law::MotionLaw;
 use robot::CompliantRobot;
 use sensor::Detector;
 use target::Target;
-
-/// Number of states.
-pub const N: usize = 7;
-/// The state vector.
-pub type State = [f64; N];
-/// x_r, m.
-pub const XR: usize = 0;
-/// x_r', m/s.
-pub const VR: usize = 1;
-/// x_t, m.
-pub const XT: usize = 2;
-/// x_t', m/s.
-pub const VT: usize = 3;
-/// x_p, m.
-pub const XP: usize = 4;
-/// x_p', m/s.
-pub const VP: usize = 5;
-/// Decoupler impulse during contact (eq 21), N s.
-pub const IMPULSE: usize = 6;
-
-/// Positions and velocities of every body at one instant (rigid ones filled in from the law).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Kinematics {
-    /// x_c, x_c', m, m/s.
-    pub xc: f64,
-    /// x_c'.
-    pub vc: f64,
-    /// x_c'' (kept so the right-hand side evaluates the motion law once).
-    pub ac: f64,
-    /// x_r.
-    pub xr: f64,
-    /// x_r'.
-    pub vr: f64,
-    /// x_t (tool face).
-    pub xt: f64,
-    /// x_t'.
-    pub vt: f64,
-    /// Target face position.
-    pub xp: f64,
-    /// Target velocity.
-    pub vp: f64,
-    /// s = x_t - x_r.
-    pub s: f64,
-    /// s'.
-    pub s_dot: f64,
-    /// Penetration into the target, m (positive in contact).
-    pub delta: f64,
-    /// Its rate, m/s.
-    pub delta_dot: f64,
-}
-
-/// Forces at one instant, N.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Forces {
-    /// Contact force on the target (>= 0).
-    pub contact: f64,
-    /// The decoupler's force on the tool, by part.
-    pub decoupler: DecouplerForce,
-    /// Force the tool puts on the robot (decoupler, or the contact for a rigid tool), signed.
-    pub robot: f64,
-}
 
 /// The assembled plant, with the contact dampings fixed at their onsets.
 #[derive(Debug, Clone)]
@@ -122,6 +65,8 @@ pub struct Plant {
     /// located events (`flinch-sim`); `None` for every other decoupler. While sticking, the tool's
     /// position is the flange's plus the stuck stroke, whatever the state vector says.
     pub slide: Option<Slide>,
+    /// The planar parts (`planar/`), for a scene with planar keys or `solver.plant = "planar"`.
+    pub planar: Option<planar::Planar>,
 }
 
 impl Plant {
@@ -148,12 +93,27 @@ impl Plant {
             s_rest: 0.0,
             in_contact: false,
             slide: None,
+            planar: None,
         };
+        let obstacle = matches!(scene.target.kind, flinch_model::scene::TargetKind::Obstacle)
+            || matches!(scene.target.kind, flinch_model::scene::TargetKind::BodyRegion(b) if b.contact == flinch_model::body::BodyContact::QuasiStatic);
+        plant.planar = scene.planar.as_ref().map(|p| planar::Planar::new(p, plant.robot.is_some() && obstacle));
         plant.s_rest = plant.rest_stroke();
         // A tool resting on a Hunt-Crossley front stop at t = 0: a landing at (the floor of) zero speed.
         plant.front_chi = plant.decoupler.front_stop().map_or(0.0, |f| f.chi(0.0));
         let x_r0 = plant.robot.map_or(0.0, |r| r.static_offset(plant.tool_mass * plant.gravity));
-        let face0 = x_r0 + plant.s_rest;
+        let face0 = match &plant.planar {
+            // The tool's point along m: the flange lags along its path, the tool rides the guide.
+            Some(p) => match &p.scene.rotational {
+                Some(st) => {
+                    let front = plant.decoupler.front_stop().map_or(plant.s_rest, |f| f.at);
+                    let r = planar::rotational_stage::tool_offset(st, front, plant.s_rest, 0.0);
+                    planar::frame::dot([x_r0 * p.dir.ep[0] + r[0], x_r0 * p.dir.ep[1] + r[1]], p.dir.m) + st.tool_radius
+                }
+                None => planar::frame::dot(planar::frame::comb(x_r0 * planar::frame::dot(p.dir.ep, p.dir.u) + plant.s_rest, p.dir.u, x_r0 * planar::frame::dot(p.dir.ep, p.dir.w), p.dir.w), p.dir.m),
+            },
+            None => x_r0 + plant.s_rest,
+        };
         plant.target = Target::new(&scene.target.kind, face0, scene.target.gap);
         let reference = plant.decoupler.front_stop().map_or(plant.s_rest, |f| f.at);
         plant.detector = scene.sensor.as_ref().map(|s| Detector::new(s, reference));
@@ -205,6 +165,15 @@ impl Plant {
         y[VR] = v0;
         y[XT] = x_r0 + self.s_rest;
         y[VT] = v0;
+        if let Some(p) = &self.planar {
+            let along = planar::frame::dot(p.dir.ep, p.dir.u);
+            y[XT] = x_r0 * along + self.s_rest;
+            y[VT] = v0 * along;
+            if p.scene.rotational.is_some() {
+                y[XT] = self.s_rest;
+                y[VT] = 0.0;
+            }
+        }
         if let Target::Object { start, .. } = self.target {
             y[XP] = start;
         }
@@ -213,6 +182,9 @@ impl Plant {
 
     /// Positions and velocities of every body.
     pub fn kinematics(&self, t: f64, y: &State) -> Kinematics {
+        if let Some(p) = &self.planar {
+            return planar::kinematics(&self.parts(), p, t, y);
+        }
         let c = self.motion.at(t);
         let (xr, vr) = if self.robot.is_some() { (y[XR], y[VR]) } else { (c.x, c.v) };
         let (xt, vt) = match self.slide {
@@ -224,11 +196,14 @@ impl Plant {
             Target::Obstacle { surface } => (surface, 0.0),
             Target::Object { .. } => (y[XP], y[VP]),
         };
-        Kinematics { xc: c.x, vc: c.v, ac: c.a, xr, vr, xt, vt, xp, vp, s: xt - xr, s_dot: vt - vr, delta: xt - xp, delta_dot: vt - vp }
+        Kinematics { xc: c.x, vc: c.v, ac: c.a, xr, vr, xt, vt, xp, vp, s: xt - xr, s_dot: vt - vr, delta: xt - xp, delta_dot: vt - vp, plane: PlaneKinematics::default() }
     }
 
     /// Forces at one instant.
     pub fn forces(&self, k: &Kinematics) -> Forces {
+        if let Some(p) = &self.planar {
+            return planar::forces(&self.parts(), p, k).0;
+        }
         let contact = self.contact.force(k.delta, k.delta_dot, self.target_chi);
         let mut decoupler = self.decoupler.force(k.s, k.s_dot, self.front_chi, self.back_chi);
         if self.slide.is_some() {
@@ -255,6 +230,9 @@ impl Plant {
     /// without the Coulomb friction (`others`). s'' = a0 + b F_f with b = 1/m_t + 1/m_r (a rigid
     /// robot follows its law whatever the force: b = 1/m_t).
     fn slide_terms(&self, k: &Kinematics, contact: f64, others: f64) -> (f64, f64, f64) {
+        if let Some(p) = &self.planar {
+            return planar::slide_terms_at(&self.parts(), p, k, contact, others);
+        }
         let limit = self.decoupler.friction_limit(k.s);
         let a_t = (others - contact + self.tool_mass * self.gravity) / self.tool_mass;
         let (a_r, inv_mr) = match &self.robot {
@@ -310,6 +288,9 @@ impl Plant {
 
     /// The right-hand side, with the kinematics and forces it used.
     pub fn eval(&self, t: f64, y: &State, dy: &mut State) -> (Kinematics, Forces) {
+        if let Some(p) = &self.planar {
+            return planar::eval(&self.parts(), p, t, y, dy);
+        }
         let k = self.kinematics(t, y);
         let f = self.forces(&k);
         *dy = [0.0; N];
@@ -336,6 +317,73 @@ impl Plant {
         }
         dy[IMPULSE] = if self.in_contact { f.decoupler.total } else { 0.0 };
         (k, f)
+    }
+
+    /// The elements the planar plant reads, borrowed.
+    pub fn parts(&self) -> Parts<'_> {
+        Parts {
+            motion: &self.motion,
+            robot: self.robot.as_ref(),
+            tool_mass: self.tool_mass,
+            gravity: self.gravity,
+            decoupler: &self.decoupler,
+            contact: &self.contact,
+            target: self.target,
+            target_chi: self.target_chi,
+            back_chi: self.back_chi,
+            front_chi: self.front_chi,
+            s_rest: self.s_rest,
+            in_contact: self.in_contact,
+            slide: self.slide,
+        }
+    }
+
+    /// The planar plant's integrated degree of freedom in the XP/VP slots that is not the target
+    /// (the flange across its path, or the rotational stage), as (position, velocity, mass or
+    /// inertia) slots for the at-rest check; `None` in 1-D.
+    pub fn planar_dof(&self) -> Option<(usize, usize, f64)> {
+        let p = self.planar.as_ref()?;
+        if let Some(st) = &p.scene.rotational {
+            return Some((XP, VP, st.inertia));
+        }
+        let r = self.robot.as_ref()?;
+        p.across_states.then_some((XP, VP, r.mass))
+    }
+
+    /// True when the tool cannot yield any further away from the target: it is fastened (rigid),
+    /// on its back stop, or (planar) its guide does not lead away from the target
+    /// (`planar::Planar::retreat_share` <= 0: a 1-D module hit across its axis is a rigid tool; the
+    /// rotational module turns its guide instead, so only its back stop counts).
+    pub fn exhausted(&self, k: &Kinematics) -> bool {
+        let bottomed = self.decoupler.back_stop().is_some_and(|b| b.penetration(k.s) > 0.0);
+        bottomed || self.decoupler.is_rigid() || self.planar.as_ref().is_some_and(|p| p.scene.rotational.is_none() && p.retreat_share(k) <= 0.0)
+    }
+
+    /// The stroke left along the contact's normal, m: the travel to the back stop times the share of
+    /// it that moves the tool away from the target (1 in 1-D, `planar::Planar::retreat_share`);
+    /// 0 for a rigid tool or a guide that does not lead away; `None` without a back stop.
+    pub fn stroke_left(&self, k: &Kinematics) -> Option<f64> {
+        if self.decoupler.is_rigid() {
+            return Some(0.0);
+        }
+        let left = self.decoupler.back_stop().map(|b| -b.penetration(k.s))?;
+        Some(match &self.planar {
+            None => left,
+            // The rotational module yields by turning as well: its stroke is the guide's.
+            Some(p) if p.scene.rotational.is_some() => left,
+            Some(p) => {
+                let share = p.retreat_share(k);
+                if share <= 0.0 { 0.0f64.min(left) } else { left * share }
+            }
+        })
+    }
+
+    /// The force along the guide that moves the tool 0.1 mm off its front stop (or rest), N: the
+    /// decoupler's force there at rest (friction at zero speed is zero in the regularised law, so
+    /// this is the lower bound: a "blocked" judged against it is judged early, on the safe side).
+    pub fn release_force(&self) -> f64 {
+        let s = self.decoupler.front_stop().map_or(self.s_rest, |f| f.at) - 1e-4;
+        self.decoupler.force(s, 0.0, self.front_chi, self.back_chi).total.abs()
     }
 
     /// Travel of the tool back from its front stop (or rest position), m.

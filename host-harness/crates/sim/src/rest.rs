@@ -60,6 +60,9 @@ impl Simulation {
         if let plant::target::Target::Object { mass, .. } = self.plant.target {
             dofs.push((plant::XP, plant::VP, mass));
         }
+        if let Some(d) = self.plant.planar_dof() {
+            dofs.push(d);
+        }
         if dofs.iter().any(|&(_, v, _)| y[v].is_nan() || tol_v.is_nan() || y[v].abs() > tol_v) {
             return false;
         }

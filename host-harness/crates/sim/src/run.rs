@@ -281,7 +281,25 @@ impl Run {
             body_pressure_limit_pa: None,
             body_pressure_margin_pa: None,
             body_limits_pass: None,
+            off_axis_deg: s.plant.planar.map(|p| p.scene.off_axis_deg),
+            surface_angle_deg: s.plant.planar.map(|p| p.scene.surface_angle_deg),
+            module_rotation_deg: None,
+            module_rotation_deg_null_reason: None,
+            t_engaged_s: None,
+            max_rotation_deg: None,
+            module_blocked_t_s: s.blocked.map(|b| b.0),
+            module_blocked_force_n: s.blocked.map(|b| b.1),
         };
+        if let Some(p) = s.plant.planar.filter(|p| p.scene.rotational.is_some()) {
+            summary.max_rotation_deg = Some(s.max_rotation.to_degrees());
+            match s.engaged {
+                Some((t, phi)) => {
+                    summary.t_engaged_s = Some(t);
+                    summary.module_rotation_deg = Some(p.scene.surface_angle_deg - phi.to_degrees());
+                }
+                None => summary.module_rotation_deg_null_reason = Some(format!("the bi-stable mechanism never travelled {} mm back while the tool touched the target", crate::summary::ENGAGED_TRAVEL_M * 1e3)),
+            }
+        }
         if let Some(b) = &s.body {
             let c = flinch_model::body::check(b, s.peak_contact);
             summary.body_region = Some(b.region.name.to_string());

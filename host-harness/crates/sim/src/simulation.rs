@@ -103,7 +103,24 @@ pub struct Simulation {
     /// Instants a Coulomb slide switched between sticking and slipping (event 7), with the state
     /// taken.
     pub(crate) slide_switches: Vec<(f64, plant::friction::Slide)>,
+    /// The rotational module's largest |stage turn| so far, rad.
+    pub(crate) max_rotation: f64,
+    /// When the rotational module engaged and its stage turn then (s, rad).
+    pub(crate) engaged: Option<(f64, f64)>,
+    /// Planar runs: since when (s) the module has been pushed far above its release force without
+    /// moving, and the stage angle then (rad); see `BLOCKED_AFTER_S`.
+    pub(crate) pushed_still: Option<(f64, f64)>,
+    /// Planar runs: the first instant the module was blocked and the contact force then (s, N).
+    pub(crate) blocked: Option<(f64, f64)>,
 }
+
+/// A planar module counts as blocked when, touching the target, the contact force has stayed above
+/// `BLOCKED_FACTOR` times the force that releases it along the contact's normal for this long, s. An impact is shorter: the hits of
+/// the Fig. 69 runs last a few ms and move the stage (tests/rotational.rs).
+pub const BLOCKED_AFTER_S: f64 = 0.02;
+/// The margin on the release force (the force builds up inside its friction cone before the module
+/// yields).
+pub const BLOCKED_FACTOR: f64 = 2.0;
 
 impl System<N> for Simulation {
     fn rhs(&self, t: f64, y: &State, dy: &mut State) {
@@ -299,20 +316,25 @@ impl Hybrid<N, E> for Simulation {
         self.note_robot_peak(t1, f.robot.abs(), first_impact, &f);
         self.peak_object_v = self.peak_object_v.max(k.vp);
         self.max_travel = self.max_travel.max(self.plant.travel(&k));
+        if self.plant.planar.is_some_and(|p| p.scene.rotational.is_some()) {
+            self.note_rotation(t0, t1, &k, dense);
+        }
+        if self.plant.planar.is_some() {
+            self.note_blocked(t1, &k, f.contact);
+        }
         if let Some(p) = f.decoupler.gas_pressure {
             self.peak_gas = self.peak_gas.max(p);
         }
         if self.at_rest_from.is_none() && self.plant.motion.t_stop().is_some_and(|ts| t1 >= ts) && t1 < self.duration && self.at_rest(t1, y1) {
             self.at_rest_from = Some(t1);
         }
-        let bottomed = self.plant.decoupler.back_stop().is_some_and(|b| b.penetration(k.s) > 0.0);
-        if k.delta > 0.0 && (bottomed || self.plant.decoupler.is_rigid()) {
+        if k.delta > 0.0 && self.plant.exhausted(&k) {
             self.exhausted = true;
         }
         // The same instants as `exhausted`, so stroke_left_min_m < 0 exactly when it is set (a
         // rigid tool: 0 and exhausted).
         if k.delta > 0.0 {
-            let left = if self.plant.decoupler.is_rigid() { Some(0.0) } else { self.plant.decoupler.back_stop().map(|b| -b.penetration(k.s)) };
+            let left = self.plant.stroke_left(&k);
             self.deformation_max = Some(self.deformation_max.map_or(k.delta, |d| d.max(k.delta)));
             if let Some(l) = left {
                 self.stroke_left_min = Some(self.stroke_left_min.map_or(l, |m| m.min(l)));
@@ -402,6 +424,10 @@ impl Simulation {
             rest_tol: (scene.solver.rtol, scene.solver.atol, scene.motion.speed),
             at_rest_from: None,
             slide_switches: Vec::new(),
+            max_rotation: 0.0,
+            engaged: None,
+            pushed_still: None,
+            blocked: None,
         };
         if let Some(TargetKind::Object { floor_friction: Some(_), .. }) = Some(scene.target.kind) {
             sim.warnings.push(format!("target.floor_friction regularised with v0 = {} m/s", plant::friction::V0_MIN));
@@ -430,5 +456,72 @@ impl Simulation {
         self.on_front = g[EV_FRONT] > 0.0;
         self.on_back = g[EV_BACK] > 0.0;
         self.refresh_push(t, y);
+    }
+}
+
+impl Simulation {
+    /// The rotational module's bookkeeping after a step [t0, t1] ending at `k`: the largest turn,
+    /// and the first instant the tool has travelled `ENGAGED_TRAVEL_M` back while touching the
+    /// target (bisected on the step's interpolant to 1e-12 s).
+    fn note_rotation(&mut self, t0: f64, t1: f64, k: &Kinematics, dense: &dyn Fn(f64) -> State) {
+        self.max_rotation = self.max_rotation.max(k.plane.phi[0].abs());
+        if self.engaged.is_some() {
+            return;
+        }
+        let engaged = |sim: &Self, k: &Kinematics| k.delta > 0.0 && sim.plant.travel(k) >= crate::summary::ENGAGED_TRAVEL_M;
+        if !engaged(self, k) {
+            return;
+        }
+        let (mut a, mut b) = (t0, t1);
+        if t1 > t0 && !engaged(self, &self.plant.kinematics(t0, &dense(t0))) {
+            while b - a > 1e-12 {
+                let m = 0.5 * (a + b);
+                if engaged(self, &self.plant.kinematics(m, &dense(m))) { b = m } else { a = m }
+            }
+        }
+        let kb = self.plant.kinematics(b, &dense(b));
+        self.engaged = Some((b, kb.plane.phi[0]));
+    }
+}
+
+impl Simulation {
+    /// Planar runs against a fixed target: is the module pushed far above what makes it yield
+    /// ([`BLOCKED_AFTER_S`])? The share of the push that drives the tool along its guide is
+    /// c - mu sqrt(1 - c^2), c = u . m, mu the contact's friction (the friction cone about the
+    /// normal). A yielding module balances that share with its own force (spring, damper, slide
+    /// friction: `DecouplerForce::spring + friction`, not the stops); a blocked one (its guide
+    /// across the push, locked by friction, on its front stop with a stage that cannot turn) lets the
+    /// contact force grow far above it. The bar is `BLOCKED_FACTOR` x (that force + the release
+    /// force) over the share (over 1 when the share is not positive: the guide jams). A bottomed tool
+    /// is `stroke_exhausted`, not this; an axial frictionless scene is the 1-D one and is not judged
+    /// here (its runs stay identical to the 1-D plant's).
+    fn note_blocked(&mut self, t: f64, k: &Kinematics, contact: f64) {
+        if self.blocked.is_some() {
+            return;
+        }
+        let Some(p) = self.plant.planar else { return };
+        let c = p.retreat_share(k);
+        let axial = p.scene.rotational.is_none() && p.scene.contact_mu == 0.0 && c == 1.0;
+        let bottomed = self.plant.decoupler.back_stop().is_some_and(|b| b.penetration(k.s) > 0.0);
+        if axial || self.plant.target.is_object() || bottomed {
+            self.pushed_still = None;
+            return;
+        }
+        let drive = c - p.scene.contact_mu * (1.0 - c * c).max(0.0).sqrt();
+        let d = self.plant.decoupler.force(k.s, k.s_dot, self.plant.front_chi, self.plant.back_chi);
+        let own = (d.spring + d.friction).abs() + self.plant.release_force();
+        let release = own / if drive > 0.0 { drive } else { 1.0 };
+        if self.in_contact && contact > BLOCKED_FACTOR * release {
+            let phi = k.plane.phi[0];
+            match self.pushed_still {
+                // The rotational module yields by turning: a stage that turned 1 deg starts the clock again.
+                Some((_, phi0)) if (phi - phi0).abs() > 1f64.to_radians() => self.pushed_still = Some((t, phi)),
+                Some((t0, _)) if t - t0 >= BLOCKED_AFTER_S => self.blocked = Some((t, contact)),
+                Some(_) => {}
+                None => self.pushed_still = Some((t, phi)),
+            }
+        } else {
+            self.pushed_still = None;
+        }
     }
 }

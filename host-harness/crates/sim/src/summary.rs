@@ -201,7 +201,41 @@ pub struct Summary {
     /// The force and the pressure are within the limits and the contact is permitted (part of
     /// `safe`, crate::verdict).
     pub body_limits_pass: Option<bool>,
+    /// Planar runs (issue 30, docs/planar.md): beta, the angle from the decoupler's axis to the
+    /// flange's path, deg; absent for a 1-D run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub off_axis_deg: Option<f64>,
+    /// Planar runs: theta of Fig. 68a, the surface's angle to the decoupler's axis, deg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_angle_deg: Option<f64>,
+    /// The rotational module: Fig. 69's angle, the guide's angle to the surface (theta minus the
+    /// stage's turn), at the instant the bi-stable mechanism starts to move (travel
+    /// `ENGAGED_TRAVEL_M` while touching the target), deg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub module_rotation_deg: Option<f64>,
+    /// Why `module_rotation_deg` is null for a rotational module.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub module_rotation_deg_null_reason: Option<String>,
+    /// The rotational module: that instant, s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub t_engaged_s: Option<f64>,
+    /// The rotational module: the stage's largest turn from rest in the run (magnitude), deg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_rotation_deg: Option<f64>,
+    /// Planar runs: when the module was blocked (pushed for `BLOCKED_AFTER_S` far above its release
+    /// force without yielding: locked by friction, a guide across the push, a stage that cannot
+    /// turn), s; a failure of the verdict. Absent when it never was.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub module_blocked_t_s: Option<f64>,
+    /// The contact force then, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub module_blocked_force_n: Option<f64>,
 }
+
+/// The rotational module counts as engaged when its tool has travelled this far back from the front
+/// stop while touching the target, m (Fig. 69 ends where "the bi-stable mechanism starts to push",
+/// a camera judgement at 300 fps; docs/validation.md gives the angle's sensitivity to it).
+pub const ENGAGED_TRAVEL_M: f64 = 1e-4;
 
 /// The achieved restitution of the first contact, `-v_out / v_in`, or null with the reason: it is a
 /// restitution only for an isolated impact, and only in [0, 1]. A driven contact (the issue's

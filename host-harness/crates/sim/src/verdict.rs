@@ -102,6 +102,9 @@ pub fn failures(s: &Summary) -> Vec<String> {
         };
         f.push(format!("stroke exhausted: {how}, so the flange reached the target"));
     }
+    if let (Some(t), Some(n)) = (s.module_blocked_t_s, s.module_blocked_force_n) {
+        f.push(format!("module blocked: at t = {t} s the target was pushed with {n:.0} N for {} ms without the module yielding (its guide across the push, locked by friction, or a stage that cannot turn): it protected no more than a rigid tool", crate::simulation::BLOCKED_AFTER_S * 1e3));
+    }
     f.extend(body_failures(s));
     f
 }

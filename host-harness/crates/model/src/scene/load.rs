@@ -33,7 +33,7 @@
 use super::check::{approx, num, Ctx, Key, SceneError, SceneIssue, Tab};
 use super::model::Scene;
 use super::tables::{key_tables, DURATION, NAME, ROOT};
-use super::{budget, controller, decoupler, motion_law, robot, sensor, solver, target, tool};
+use super::{budget, controller, decoupler, motion_law, planar, robot, sensor, solver, target, tool};
 use std::path::Path;
 
 /// Reads and validates a scene file.
@@ -105,28 +105,41 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
     let tool = cx
         .table(&root, &tool::TABLE)
         .and_then(|t| tool::tool(cx, &t));
-    let motion = cx
-        .table(&root, &motion_law::TABLE)
-        .and_then(|t| motion_law::motion(cx, &t, tool.map(|t| t.mass)));
+    let motion_tab = cx.table(&root, &motion_law::TABLE);
+    let motion = motion_tab
+        .as_ref()
+        .and_then(|t| motion_law::motion(cx, t, tool.map(|t| t.mass)));
     let robot = optional(cx, &root, &robot::TABLE, robot::robot);
     let gravity = motion.map(|m| m.gravity);
-    let decoupler = cx
-        .table(&root, &decoupler::TABLE)
-        .and_then(|t| decoupler::decoupler(cx, &t, tool.map(|t| t.mass), gravity));
+    let decoupler_tab = cx.table(&root, &decoupler::TABLE);
+    let decoupler = decoupler_tab
+        .as_ref()
+        .and_then(|t| decoupler::decoupler(cx, t, tool.map(|t| t.mass), gravity));
+    let stage = match &decoupler_tab {
+        Some(t) if matches!(decoupler, Some(super::model::Decoupler::Bistable(_))) => optional(cx, t, &decoupler::rotational::TABLE, decoupler::rotational::stage),
+        _ => Some(None),
+    };
     let target_tab = cx.table(&root, &target::TABLE);
     let target = target_tab.as_ref().and_then(|t| target::target(cx, t));
     let sensor = optional(cx, &root, &sensor::TABLE, |cx, t| {
         sensor::sensor(cx, t, decoupler.as_ref())
     });
-    let solver = match cx.maybe_table(&root, &solver::TABLE) {
-        Some(Some(t)) => solver::solver(cx, &t, duration_s),
+    let solver_tab = cx.maybe_table(&root, &solver::TABLE);
+    let solver = match &solver_tab {
+        Some(Some(t)) => solver::solver(cx, t, duration_s),
         Some(None) => Some(solver::default_solver()),
         None => None,
     };
+    let planar = planar::planar(cx, motion_tab.as_ref(), target_tab.as_ref(), solver_tab.flatten().as_ref(), stage);
+    if let (Some(Some(p)), Some(d), Some(tg), Some(dt)) = (planar, &decoupler, target, &decoupler_tab) {
+        planar::check_rotational(cx, dt, &p, d, &tg);
+    }
     let controller = optional(cx, &root, &controller::TABLE, controller::controller);
 
     // The motion must bring the tool to the target: before contact nothing brakes.
-    if let (Some(m), Some(d), Some(tg), Some(tt)) = (motion, duration_s, target, &target_tab) {
+    if let (Some(m), Some(d), Some(tg), Some(tt), Some(Some(p))) = (motion, duration_s, target, &target_tab, planar) {
+        planar::check_gap(cx, tt, &p, motion_law::cruise_travel(&m, d), d, tg.gap);
+    } else if let (Some(m), Some(d), Some(tg), Some(tt)) = (motion, duration_s, target, &target_tab) {
         let travel = motion_law::cruise_travel(&m, d);
         if tg.gap >= travel {
             cx.bad(
@@ -169,6 +182,7 @@ fn scene(cx: &mut Ctx, root: &toml_edit::Table) -> Option<Scene> {
         sensor: sensor?,
         solver: solver?,
         controller: controller?,
+        planar: planar?,
     };
     if cx.issues.is_empty() {
         budget::check(cx, &root, &scene);

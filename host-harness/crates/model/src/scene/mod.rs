@@ -59,6 +59,7 @@ mod friction;
 mod load;
 mod model;
 mod motion_law;
+pub mod planar;
 mod robot;
 mod sensor;
 mod solver;

@@ -27,6 +27,8 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// The robot controller for firmware-in-the-loop runs (`[controller]`); `None` in plain runs.
     pub controller: Option<Controller>,
+    /// The planar plant's inputs (`scene/planar.rs`); `None`: the 1-D plant runs the scene.
+    pub planar: Option<Planar>,
 }
 
 /// Motion law, MODEL.md element 1: accelerate at `accel` to `speed`, cruise; braking at `decel`
@@ -423,5 +425,49 @@ impl Controller {
             None if dead_time >= self.scan_cycle => (dead_time - self.scan_cycle, ReactionSource::DeadTimeLessScan),
             None => (0.0, ReactionSource::DeadTimeShorterThanScan),
         }
+    }
+}
+
+/// The planar plant's inputs (issue 30, `scene/planar.rs`, `plant/planar/`), resolved: present when
+/// a scene sets a planar key or `solver.plant = "planar"`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Planar {
+    /// beta, deg: from the decoupler's axis u (at rest) to the flange's commanded velocity.
+    pub off_axis_deg: f64,
+    /// theta, deg (Fig. 68a): the surface's outward normal is R(theta - 90 deg) u.
+    pub surface_angle_deg: f64,
+    /// Coulomb friction coefficient at the tool-target contact (0: frictionless).
+    pub contact_mu: f64,
+    /// The 2-D rotational module's stage (`[decoupler.rotational]`); `None` for a 1-D module.
+    pub rotational: Option<Stage>,
+}
+
+/// The 2-D rotational module's stage (`scene/decoupler/rotational.rs`, Ch. 3.5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stage {
+    /// The stage's and tool's own moment of inertia, kg m^2.
+    pub inertia: f64,
+    /// l, m: stage axis to tool axis along the guide (tool on its front stop), trailing positive.
+    pub lever: f64,
+    /// b, m: the tool's axis across the guide, positive on the side R(-90 deg) u.
+    pub offset_b: f64,
+    /// r_t, m: the tool's disc radius.
+    pub tool_radius: f64,
+    /// k_phi, N m/rad.
+    pub stiffness: f64,
+    /// M0, N m.
+    pub preload: f64,
+    /// Bearing friction moment, N m.
+    pub bearing_torque: f64,
+}
+
+impl Planar {
+    /// The axial scene through the planar plant: beta = 0, theta = -90, no contact friction.
+    pub const AXIAL: Planar = Planar { off_axis_deg: 0.0, surface_angle_deg: -90.0, contact_mu: 0.0, rotational: None };
+
+    /// e_p . (-n): the share of the flange's speed that closes the gap along the surface's normal.
+    pub fn closing(&self) -> f64 {
+        let d = (self.off_axis_deg - (self.surface_angle_deg + 90.0)).to_radians();
+        d.cos()
     }
 }

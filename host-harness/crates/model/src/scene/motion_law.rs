@@ -30,7 +30,7 @@ pub const BRAKE_AFTER_CONTACT: Key = Key::integer("brake_after_contact", 1, 100,
     .optional("0: braking starts dead_time after detection");
 
 /// The keys of `[motion]`.
-pub const KEYS: &[Key] = &[SPEED, ACCEL, DECEL, DEAD_TIME, GRAVITY, START_AT_SPEED, BRAKE_AFTER_CONTACT, stopping::TABLE];
+pub const KEYS: &[Key] = &[SPEED, ACCEL, DECEL, DEAD_TIME, GRAVITY, START_AT_SPEED, BRAKE_AFTER_CONTACT, stopping::TABLE, super::planar::OFF_AXIS];
 
 /// Reads `[motion]`; `tool_mass` (when valid) is held against `stopping.payload`.
 pub(super) fn motion(cx: &mut Ctx, t: &Tab, tool_mass: Option<f64>) -> Option<Motion> {

@@ -59,7 +59,7 @@ pub const SIMPLIFY: Key = Key::of("simplify", Ty::List(&["rigid-robot", "no-fric
     .optional("none: the full model");
 
 /// The keys of `[solver]`.
-pub const KEYS: &[Key] = &[METHOD, RTOL, ATOL, MAX_STEP, OUTPUT_INTERVAL, FIDELITY, SIMPLIFY];
+pub const KEYS: &[Key] = &[METHOD, RTOL, ATOL, MAX_STEP, OUTPUT_INTERVAL, FIDELITY, SIMPLIFY, super::planar::PLANT];
 
 /// The settings of a scene without `[solver]`.
 pub(super) fn default_solver() -> SolverSettings {

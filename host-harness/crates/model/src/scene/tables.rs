@@ -50,6 +50,7 @@ pub fn key_tables() -> &'static [KeyTable] {
         KeyTable { path: "decoupler.front_stop", when: "", keys: decoupler::end_stop::FRONT_KEYS },
         KeyTable { path: "decoupler.back_stop", when: "", keys: decoupler::end_stop::BACK_KEYS },
         KeyTable { path: "decoupler.friction", when: "kind = \"bistable\"", keys: friction::KEYS },
+        KeyTable { path: "decoupler.rotational", when: "kind = \"bistable\"", keys: decoupler::rotational::KEYS },
         KeyTable { path: "target", when: "kind = \"obstacle\"", keys: target::OBSTACLE_KEYS },
         KeyTable { path: "target", when: "kind = \"object\"", keys: target::OBJECT_KEYS },
         KeyTable { path: "target", when: "kind = \"body_region\"", keys: target::BODY_KEYS },

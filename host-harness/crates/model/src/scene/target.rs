@@ -40,9 +40,9 @@ pub const BODY_STIFFNESS: Key = Key::number("stiffness", "N/m", Incl(1e3), Incl(
     .optional("the region's Table A.3 spring constant");
 
 /// The keys of an obstacle.
-pub const OBSTACLE_KEYS: &[Key] = &[KIND, GAP, STIFFNESS, contact::RESTITUTION, contact::DAMPING_LAW, contact::CHI];
+pub const OBSTACLE_KEYS: &[Key] = &[KIND, GAP, STIFFNESS, contact::RESTITUTION, contact::DAMPING_LAW, contact::CHI, super::planar::SURFACE_ANGLE, super::planar::CONTACT_MU];
 /// The keys of a free object.
-pub const OBJECT_KEYS: &[Key] = &[KIND, GAP, STIFFNESS, contact::RESTITUTION, contact::DAMPING_LAW, contact::CHI, MASS, FLOOR_FRICTION];
+pub const OBJECT_KEYS: &[Key] = &[KIND, GAP, STIFFNESS, contact::RESTITUTION, contact::DAMPING_LAW, contact::CHI, MASS, FLOOR_FRICTION, super::planar::SURFACE_ANGLE, super::planar::CONTACT_MU];
 /// The keys of a body region.
 pub const BODY_KEYS: &[Key] = &[KIND, GAP, REGION, CONTACT, AREA, BODY_MASS, BODY_STIFFNESS];
 

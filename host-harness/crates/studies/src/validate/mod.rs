@@ -17,6 +17,7 @@ mod ch4;
 mod cli;
 mod context;
 mod document;
+mod fig69;
 mod pictures;
 mod rows;
 mod statics;

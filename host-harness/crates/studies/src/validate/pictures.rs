@@ -85,6 +85,7 @@ pub fn draw_all(scenes: &Path, dir: &Path) -> Result<(), String> {
         splot::lines(&dir.join("table11_statics.svg"), "Tables 9-11: can the Z prototype's spring hold the switched tool against its weight?", &XAxis { label: "back stroke C2 [mm]".into(), log: false }, &[panel])?;
     }
     table4_timeline(&cx, dir)?;
+    super::fig69::fig69_picture(&cx, dir)?;
     for s in ["table12_hydraulic_object", "table13_bistable_object", "table14_hydraulic_surface", "table15_bistable_surface", "table14_hydraulic_surface_dt10", "table15_bistable_surface_dt10", "table4_bistable_136g"] {
         history(&format!("{s}.toml"), &[], &format!("{s}.svg"))?;
     }

@@ -2,7 +2,7 @@
 //! Ch. 4 and the prototypes in `ch4.rs`).
 
 use std::path::Path;
-use super::{rows::*, context::*, ch2::*, ch3::*, ch4::*};
+use super::{rows::*, context::*, ch2::*, ch3::*, ch4::*, fig69::*};
 
 /// Computes every section's numbers.
 pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
@@ -26,5 +26,7 @@ pub fn tables(scenes: &Path) -> Result<Vec<Section>, String> {
     tables9_11(&cx, &mut out)?;
 
     table4(&cx, &mut out)?;
+
+    fig69(&cx, &mut out)?;
     Ok(out)
 }

@@ -32,6 +32,7 @@ pub const KEYS: &[Key] = &[
     end_stop::FRONT,
     end_stop::BACK,
     friction::TABLE,
+    super::rotational::TABLE,
 ];
 
 /// Reads a bi-stable decoupler and checks that the tool rests on the front stop at t = 0.

@@ -6,6 +6,7 @@ pub mod bistable;
 pub mod end_stop;
 pub mod hydraulic;
 pub mod linear;
+pub mod rotational;
 mod kind;
 mod read;
 
