@@ -5,7 +5,9 @@
 //!   repeats them and gives the total (issue 28). flip-link, the firmware's linker, is installed
 //!   with `cargo install flip-link --locked` when it is missing (here and for the commands that
 //!   build the firmware), and xtask says so.
-//!   1. host tests: `cargo test --workspace` at the repo root (its output is shown as is);
+//!   1. host tests: the binaries of `cargo test --workspace` at the repo root run side by side,
+//!      one per core, slowest first, each binary's output printed whole as it ends (`testpool`),
+//!      then the doc tests;
 //!   2. firmware build: `cargo build --release --target thumbv7em-none-eabihf` inside `firmware/`
 //!      (skipped if that target is not installed), then `cargo clippy -p flinch-firmware --target
 //!      thumbv7em-none-eabihf -- -D warnings` (the panic-free lints are only as good as this run);
@@ -68,6 +70,7 @@ mod python;
 mod qemu;
 mod size;
 mod structure;
+mod testpool;
 mod worst;
 
 use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_avoid_cost};
