@@ -31,9 +31,10 @@
 //!      printed (issue 18).
 //!   7. no fontconfig: the `flinch` binary built with `PKG_CONFIG_PATH` pointing nowhere and
 //!      `FONTCONFIG_FILE` empty draws a PNG and an SVG, and `ldd` lists only the C runtime (issue 16).
-//!   9. python: a fresh venv (`python3 -m venv --clear`), `pip install ./python pytest dask
-//!      distributed pandas numpy` (the extension built by maturin), then pytest on python/tests
-//!      with the `flinch` binary to compare with (issue 14). A failed install is a failure.
+//!   9. python: a fresh venv (`python3 -m venv --clear`) with `pytest dask distributed pandas
+//!      numpy` (made in the background from the start of the run), `pip install ./python` (maturin
+//!      builds the extension), then pytest on
+//!      python/tests with the `flinch` binary to compare with (issue 14). A failed install fails.
 //!
 //!   Exits non-zero if any stage failed; skipped stages do not fail the run, except in CI (`CI` set):
 //!   there a missing target, QEMU or tool is a failure, never a quiet pass.
@@ -44,6 +45,7 @@
 //!   runner (`firmware/scripts/flash-runner`) calls it, so `cargo run --release --bin board` in
 //!   firmware/ flashes an image that arms.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
+//! * `cargo xtask host-tests`: the stage "host tests" alone (the test binaries side by side).
 //! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-clock` board ELF
 //!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
 //!   against `firmware/qemu/board-serial.txt`.
@@ -116,7 +118,14 @@ fn main() -> ExitCode {
             println!("{}", check_board_faults()?);
             Ok(())
         }),
-        Some("python") => single(|| match python_stage() {
+        Some("host-tests") => single(|| match host_tests() {
+            Outcome::Pass(m) => {
+                println!("{m}");
+                Ok(())
+            }
+            Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+        }),
+        Some("python") => single(|| match python_stage(python::prepare()) {
             Outcome::Pass(m) => {
                 println!("{m}");
                 Ok(())
@@ -146,7 +155,7 @@ fn main() -> ExitCode {
             check_size(&s)
         }),
         _ => {
-            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|board-serial|flash [ELF]|python|structure>");
+            eprintln!("usage: cargo xtask <test|host-tests|qemu|size|board-qemu|board-serial|flash [ELF]|python|structure>");
             ExitCode::from(2)
         }
     }
@@ -182,6 +191,8 @@ fn firmware_structure_stage() -> Outcome {
 
 fn test() -> ExitCode {
     let mut results = Timed::new();
+    // The Python stage's venv and test dependencies, fetched while the host tests build and run.
+    let venv = python::prepare();
 
     // Cheap, and a circle or an upward dependency is better named before the long stages run.
     results.push(("structure", structure_stage()));
@@ -367,7 +378,7 @@ fn test() -> ExitCode {
         Err(e) => Outcome::Fail(e),
     }));
 
-    results.push(("python", python_stage()));
+    results.push(("python", python_stage(venv)));
 
     // In CI nothing is skipped quietly: a missing target or tool fails the run.
     if env::var_os("CI").is_some_and(|v| !v.is_empty() && v != "false" && v != "0") {
