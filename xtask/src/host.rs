@@ -1,18 +1,37 @@
 //! The stages that run on the host: the workspace tests, the loader fuzz, the plots without fontconfig.
 
 use crate::common::{cargo, host_flinch, repo_root, run_captured};
+use crate::testpool;
 use crate::Outcome;
 use std::env;
 use std::fs;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+/// `cargo test --workspace`: its binaries built by `cargo test --workspace --no-run`, run side by
+/// side ([`testpool`]: one per core, the slowest first, every one to its end), then its doc tests
+/// (`cargo test --workspace --doc`). The same tests as `cargo test --workspace`, in less wall time.
 pub fn host_tests() -> Outcome {
-    let status = cargo().args(["test", "--workspace"]).current_dir(repo_root()).status();
-    match status {
-        Ok(s) if s.success() => Outcome::Pass("cargo test --workspace".into()),
-        Ok(s) => Outcome::Fail(format!("cargo test --workspace exited with {s}")),
-        Err(e) => Outcome::Fail(format!("could not run cargo: {e}")),
+    let bins = match testpool::build() {
+        Ok(b) => b,
+        Err(e) => return Outcome::Fail(e),
+    };
+    let jobs = std::thread::available_parallelism().map_or(2, |n| n.get());
+    let n = bins.len();
+    let failed = match testpool::run(bins, jobs) {
+        Ok(f) => f,
+        Err(e) => return Outcome::Fail(e),
+    };
+    let doc = cargo().args(["test", "--workspace", "--doc"]).current_dir(repo_root()).status();
+    let doc = match doc {
+        Ok(s) if s.success() => None,
+        Ok(s) => Some(format!("cargo test --workspace --doc exited with {s}")),
+        Err(e) => Some(format!("could not run cargo: {e}")),
+    };
+    if failed.is_empty() && doc.is_none() {
+        Outcome::Pass(format!("cargo test --workspace: {n} test binaries ({jobs} at a time) and the doc tests"))
+    } else {
+        Outcome::Fail(failed.into_iter().chain(doc).collect::<Vec<_>>().join("; "))
     }
 }
 

@@ -5,7 +5,9 @@
 //!   repeats them and gives the total (issue 28). flip-link, the firmware's linker, is installed
 //!   with `cargo install flip-link --locked` when it is missing (here and for the commands that
 //!   build the firmware), and xtask says so.
-//!   1. host tests: `cargo test --workspace` at the repo root (its output is shown as is);
+//!   1. host tests: the binaries of `cargo test --workspace` at the repo root run side by side,
+//!      one per core, slowest first, each binary's output printed whole as it ends (`testpool`),
+//!      then the doc tests;
 //!   2. firmware build: `cargo build --release --target thumbv7em-none-eabihf` inside `firmware/`
 //!      (skipped if that target is not installed), then `cargo clippy -p flinch-firmware --target
 //!      thumbv7em-none-eabihf -- -D warnings` (the panic-free lints are only as good as this run);
@@ -29,9 +31,10 @@
 //!      printed (issue 18).
 //!   7. no fontconfig: the `flinch` binary built with `PKG_CONFIG_PATH` pointing nowhere and
 //!      `FONTCONFIG_FILE` empty draws a PNG and an SVG, and `ldd` lists only the C runtime (issue 16).
-//!   9. python: a fresh venv (`python3 -m venv --clear`), `pip install ./python pytest dask
-//!      distributed pandas numpy` (the extension built by maturin), then pytest on python/tests
-//!      with the `flinch` binary to compare with (issue 14). A failed install is a failure.
+//!   9. python: a fresh venv (`python3 -m venv --clear`) with `pytest dask distributed pandas
+//!      numpy` (made in the background from the start of the run), `pip install ./python` (maturin
+//!      builds the extension), then pytest on
+//!      python/tests with the `flinch` binary to compare with (issue 14). A failed install fails.
 //!
 //!   Exits non-zero if any stage failed; skipped stages do not fail the run, except in CI (`CI` set):
 //!   there a missing target, QEMU or tool is a failure, never a quiet pass.
@@ -42,6 +45,7 @@
 //!   runner (`firmware/scripts/flash-runner`) calls it, so `cargo run --release --bin board` in
 //!   firmware/ flashes an image that arms.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
+//! * `cargo xtask host-tests`: the stage "host tests" alone (the test binaries side by side).
 //! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-clock` board ELF
 //!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
 //!   against `firmware/qemu/board-serial.txt`.
@@ -70,6 +74,7 @@ mod python;
 mod qemu;
 mod size;
 mod structure;
+mod testpool;
 mod worst;
 
 use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_avoid_cost};
@@ -115,7 +120,14 @@ fn main() -> ExitCode {
             println!("{}", check_board_faults()?);
             Ok(())
         }),
-        Some("python") => single(|| match python_stage() {
+        Some("host-tests") => single(|| match host_tests() {
+            Outcome::Pass(m) => {
+                println!("{m}");
+                Ok(())
+            }
+            Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+        }),
+        Some("python") => single(|| match python_stage(python::prepare()) {
             Outcome::Pass(m) => {
                 println!("{m}");
                 Ok(())
@@ -145,7 +157,7 @@ fn main() -> ExitCode {
             check_size(&s)
         }),
         _ => {
-            eprintln!("usage: cargo xtask <test|qemu|size|board-qemu|board-serial|flash [ELF]|python|structure>");
+            eprintln!("usage: cargo xtask <test|host-tests|qemu|size|board-qemu|board-serial|flash [ELF]|python|structure>");
             ExitCode::from(2)
         }
     }
@@ -181,6 +193,8 @@ fn firmware_structure_stage() -> Outcome {
 
 fn test() -> ExitCode {
     let mut results = Timed::new();
+    // The Python stage's venv and test dependencies, fetched while the host tests build and run.
+    let venv = python::prepare();
 
     // Cheap, and a circle or an upward dependency is better named before the long stages run.
     results.push(("structure", structure_stage()));
@@ -367,7 +381,7 @@ fn test() -> ExitCode {
         Err(e) => Outcome::Fail(e),
     }));
 
-    results.push(("python", python_stage()));
+    results.push(("python", python_stage(venv)));
 
     // In CI nothing is skipped quietly: a missing target or tool fails the run.
     if env::var_os("CI").is_some_and(|v| !v.is_empty() && v != "false" && v != "0") {

@@ -2,45 +2,78 @@
 
 use crate::common::{host_flinch, repo_root, run_captured, target_dir, which};
 use crate::Outcome;
-use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The Python package (issue 14): a fresh venv in the target folder, `pip install ./python` with
-/// the test dependencies (maturin builds the extension, in `target/python`), then pytest on
-/// python/tests with FLINCH_BIN set to the host tests' `flinch` binary (the tests compare with it;
-/// [`host_flinch`]: no second build). Skipped without python3 (a failure in CI); any other problem
-/// fails.
-pub fn python_stage() -> Outcome {
-    let Some(python) = which("python3") else {
+/// The test dependencies of the Python package, installed into the venv before it.
+const TEST_DEPS: [&str; 5] = ["pytest", "dask", "distributed", "pandas", "numpy"];
+
+/// The venv made and the test dependencies installed in the background while the host tests
+/// build and run ([`prepare`]): downloading and unpacking NumPy, pandas and Dask is mostly waiting
+/// on the network and the disk, which the stage "python" used to do at the end, after every other
+/// stage (issue 28). Its result: what it printed and how long it took, or why it failed.
+pub struct Prepared(std::thread::JoinHandle<Result<(String, f64), String>>);
+
+/// Starts the venv (`python3 -m venv --clear target/python-venv`) and `pip install` of the test
+/// dependencies on a thread; None without python3 (the stage then skips). Its output is kept and
+/// printed by the stage.
+pub fn prepare() -> Option<Prepared> {
+    let python = which("python3")?;
+    Some(Prepared(std::thread::spawn(move || {
+        let start = Instant::now();
+        let venv = target_dir().join("python-venv");
+        let mut log = String::new();
+        let mut run = |mut cmd: Command, what: &str| -> Result<(), String> {
+            let o = cmd.current_dir(repo_root()).stdin(Stdio::null()).output().map_err(|e| format!("could not run {what}: {e}"))?;
+            log.push_str(&String::from_utf8_lossy(&o.stdout));
+            log.push_str(&String::from_utf8_lossy(&o.stderr));
+            if o.status.success() {
+                Ok(())
+            } else {
+                Err(format!("{what} exited with {}: {log}", o.status))
+            }
+        };
+        let mut venv_cmd = Command::new(&python);
+        venv_cmd.args(["-m", "venv", "--clear"]).arg(&venv);
+        run(venv_cmd, "python3 -m venv")?;
+        let mut pip = Command::new(venv.join("bin").join("python"));
+        pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check"]).args(TEST_DEPS);
+        run(pip, "pip install pytest dask distributed pandas numpy")?;
+        Ok((log, start.elapsed().as_secs_f64()))
+    })))
+}
+
+/// The Python package (issue 14): a fresh venv in the target folder with the test dependencies
+/// ([`prepare`], started in the background by `cargo xtask test`), `pip install ./python` with
+/// them (maturin builds the extension, in `target/python`), then pytest on python/tests with FLINCH_BIN set to the host
+/// tests' `flinch` binary (the tests compare with it; [`host_flinch`]: no second build). Skipped
+/// without python3 (a failure in CI); any other problem fails.
+pub fn python_stage(prepared: Option<Prepared>) -> Outcome {
+    let Some(prepared) = prepared else {
         return Outcome::Skip("python3 not found (the Python package needs CPython >= 3.9 with venv and pip)".into());
     };
-    match python_tests(&python) {
+    match python_tests(prepared) {
         Ok(m) => Outcome::Pass(m),
         Err(e) => Outcome::Fail(e),
     }
 }
 
-fn python_tests(python: &Path) -> Result<String, String> {
+fn python_tests(prepared: Prepared) -> Result<String, String> {
     let start = Instant::now();
     let root = repo_root();
-    let venv = target_dir().join("python-venv");
-    let run = |mut cmd: Command, what: &str| -> Result<(), String> {
-        let status = cmd.current_dir(&root).stdin(Stdio::null()).status().map_err(|e| format!("could not run {what}: {e}"))?;
-        if status.success() {
-            Ok(())
-        } else {
-            Err(format!("{what} exited with {status}"))
-        }
-    };
-    let mut venv_cmd = Command::new(python);
-    venv_cmd.args(["-m", "venv", "--clear"]).arg(&venv);
-    run(venv_cmd, "python3 -m venv")?;
-    let py = venv.join("bin").join("python");
+    let (log, venv_s) = prepared.0.join().map_err(|_| "the venv thread panicked".to_string())??;
+    print!("{log}");
+    let py = target_dir().join("python-venv").join("bin").join("python");
     let mut pip = Command::new(&py);
-    pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "./python", "pytest", "dask", "distributed", "pandas", "numpy"])
-        .env("CARGO_TARGET_DIR", target_dir().join("python"));
-    run(pip, "pip install ./python pytest dask distributed pandas numpy")?;
+    pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "./python"])
+        .args(TEST_DEPS)
+        .env("CARGO_TARGET_DIR", target_dir().join("python"))
+        .current_dir(&root)
+        .stdin(Stdio::null());
+    let status = pip.status().map_err(|e| format!("could not run pip: {e}"))?;
+    if !status.success() {
+        return Err(format!("pip install ./python pytest dask distributed pandas numpy exited with {status}"));
+    }
     let installed = start.elapsed().as_secs_f64();
     let bin = host_flinch(&[])?;
     let mut pytest = Command::new(&py);
@@ -48,7 +81,10 @@ fn python_tests(python: &Path) -> Result<String, String> {
     let (out, status) = run_captured(pytest, "pytest", Duration::from_secs(1200))?;
     print!("{out}");
     let verdict = check_pytest(&out, status.code())?;
-    Ok(format!("{verdict}; venv and pip install {installed:.0} s, total {:.0} s", start.elapsed().as_secs_f64()))
+    Ok(format!(
+        "{verdict}; venv and test dependencies {venv_s:.0} s (in the background), pip install ./python {installed:.0} s, stage {:.0} s",
+        start.elapsed().as_secs_f64()
+    ))
 }
 
 /// pytest's closing line: Ok with it when pytest exited 0 having passed at least one test and
