@@ -334,8 +334,9 @@ pub fn refusal(t: &Template, stroke: Option<f64>, speed: Option<f64>, dead_time:
     let c = stroke.unwrap_or(module.stroke());
     let v = speed.unwrap_or(base.motion.speed);
     let dt = dead_time.unwrap_or(base.motion.dead_time);
-    let cand = Candidates { t, module, dead_time: dt, base };
+    let cand = Candidates { t, module, dead_time: dt, base, progress: indicatif::ProgressBar::hidden() };
     cand.scene(v, c).err().map(|e| format!("the design point (--stroke, --speed, --dead-time) is refused by the scene validator: {e}"))
+}
 
 /// Candidates the stroke search scans (in parallel), and its bisection rounds (one at a time).
 const STROKE_SCAN: usize = 16;
