@@ -40,13 +40,13 @@ fn hil_honours_the_scenes_dead_time() {
         let h = hil_run(&sc, &ctl);
         let f = &h.firmware;
         let want = (dt - SCAN).max(0.0);
-        assert_eq!(f.dead_time.reaction_time_s, want, "DT {dt}");
+        assert_eq!(f.dead_time_model.reaction_time_s, want, "DT {dt}");
         let t_brake = h.summary.t_brake.unwrap();
         assert!((t_brake - (f.stop_seen.unwrap() + want)).abs() < 1e-9, "DT {dt}: braking at {t_brake}, sample {:?}", f.stop_seen);
-        let parts = f.dead_time.stop_output_latency_s.unwrap() + f.dead_time.scan_wait_s.unwrap() + want;
-        assert!((f.dead_time.observed_s.unwrap() - parts).abs() < 1e-9, "{:?}", f.dead_time);
-        assert_eq!(f.dead_time.observed_s, f.observed_dead_time);
-        assert!((f.dead_time.worst_case_s - (flinch_hal_sim::latency::edge_to_stop_s() + SCAN + want)).abs() < 1e-12);
+        let parts = f.dead_time_model.stop_output_latency_s.unwrap() + f.dead_time_model.scan_wait_s.unwrap() + want;
+        assert!((f.dead_time_model.observed_s.unwrap() - parts).abs() < 1e-9, "{:?}", f.dead_time_model);
+        assert_eq!(f.dead_time_model.observed_s, f.observed_dead_time);
+        assert!((f.dead_time_model.worst_case_s - (flinch_hal_sim::latency::edge_to_stop_s() + SCAN + want)).abs() < 1e-12);
         let warned = h.summary.warnings.iter().any(|w| w.contains("shorter than the scan cycle"));
         assert_eq!(warned, dt < SCAN, "DT {dt}: {:?}", h.summary.warnings);
         brakes.push((t_brake, h.summary.max_travel));
@@ -63,7 +63,7 @@ fn changing_the_reaction_time_changes_the_result() {
         ctl.reaction_time = Some(r);
         let h = hil_run(&sc, &ctl);
         let f = &h.firmware;
-        assert_eq!(f.dead_time.reaction_time_source, "controller.reaction_time");
+        assert_eq!(f.dead_time_model.reaction_time_source, "controller.reaction_time");
         assert!((h.summary.t_brake.unwrap() - f.stop_seen.unwrap() - r).abs() < 1e-9);
         // DT = 16 ms is the scan alone: any reaction but 0 contradicts it, and the run says so.
         let warned = h.summary.warnings.iter().any(|w| w.contains("differs from motion.dead_time"));
@@ -86,18 +86,18 @@ fn sixteen_ms_scan_and_thirty_ms_reaction_exhaust_the_stroke_as_run_does_with_46
     let mut given = Controller::new(SCAN, phase, 1e-4);
     given.reaction_time = Some(0.03);
     let h = hil_run(&sc, &given);
-    assert!(h.summary.stroke_exhausted && !h.summary.safe, "{}", h.firmware.dead_time.formed);
+    assert!(h.summary.stroke_exhausted && !h.summary.safe, "{}", h.firmware.dead_time_model.formed);
     // The firmware budgets the same dead time: 0.25 x 46 ms + 15.6 mm > the 25 mm left.
     assert!(h.firmware.category0);
-    let observed = h.firmware.dead_time.observed_s.unwrap();
+    let observed = h.firmware.dead_time_model.observed_s.unwrap();
     assert!((observed - (0.046 - 1e-4)).abs() < 1e-5, "{observed}");
 
     sc.motion.dead_time = 0.046;
     let plain = sim::run(&sc, false).unwrap().0;
     assert!(plain.stroke_exhausted && !plain.safe);
     let split = hil_run(&sc, &Controller::new(SCAN, phase, 1e-4));
-    assert_eq!(split.firmware.dead_time.reaction_time_source, "motion.dead_time - scan_cycle");
-    assert!((split.firmware.dead_time.reaction_time_s - 0.03).abs() < 1e-12);
+    assert_eq!(split.firmware.dead_time_model.reaction_time_source, "motion.dead_time - scan_cycle");
+    assert!((split.firmware.dead_time_model.reaction_time_s - 0.03).abs() < 1e-12);
     assert!(split.summary.stroke_exhausted && split.summary.warnings.iter().all(|w| !w.starts_with("dead time")), "{:?}", split.summary.warnings);
 
     // What the old hil did: the reaction dropped, the stroke holds, the verdict is "safe".
@@ -116,7 +116,7 @@ fn the_worst_case_bounds_the_observed_dead_time_over_phases() {
     let mut seen = Vec::new();
     for i in 0..8 {
         let h = hil_run(&sc, &Controller::new(SCAN, (i as f64 + 0.5) / 8.0, 1e-4));
-        let d = &h.firmware.dead_time;
+        let d = &h.firmware.dead_time_model;
         let o = d.observed_s.unwrap();
         assert!(o >= d.reaction_time_s + flinch_hal_sim::latency::edge_to_stop_s() - 1e-9 && o <= d.worst_case_s + 1e-9, "{d:?}");
         seen.push(o);
@@ -134,7 +134,7 @@ fn with_a_stopping_table_the_reaction_comes_before_the_table() {
     let h0 = hil_run(&sc, &ctl);
     ctl.reaction_time = Some(0.02);
     let h = hil_run(&sc, &ctl);
-    let d = &h.firmware.dead_time;
+    let d = &h.firmware.dead_time_model;
     assert!(d.stopping_table_dead_time_s > 0.0, "{d:?}");
     let want = h.firmware.stop_seen.unwrap() + 0.02;
     let t_brake = h.summary.t_brake.unwrap();
@@ -155,9 +155,9 @@ fn the_report_says_how_the_total_was_formed() {
         assert!(first.contains(part), "{part:?} missing from {first:?}");
     }
     let json = serde_json::to_value(&h.firmware).unwrap();
-    let d = &json["dead_time"];
+    let d = &json["dead_time_model"];
     for key in ["scan_cycle_s", "reaction_time_s", "reaction_time_source", "scene_dead_time_s", "worst_case_s", "stop_output_latency_s", "scan_wait_s", "observed_s", "formed"] {
-        assert!(!d[key].is_null(), "firmware.dead_time.{key} missing: {d}");
+        assert!(!d[key].is_null(), "firmware.dead_time_model.{key} missing: {d}");
     }
 }
 
@@ -181,7 +181,7 @@ fn the_firmware_latency_is_never_negative_on_any_shipped_scene() {
             let f = &h.firmware;
             let Some(lat) = f.firmware_latency else { continue };
             assert!((0.0..1e-6).contains(&lat), "{name} (phase {phase}, tick {tick}): firmware latency {lat} s (switch {:?}, timestamp {:?})", f.switch_time, f.firmware_detect);
-            if let Some(l) = f.dead_time.stop_output_latency_s {
+            if let Some(l) = f.dead_time_model.stop_output_latency_s {
                 assert!(l >= 0.0, "{name}: stop output {l} s after the switch");
             }
             checked += 1;
@@ -200,7 +200,7 @@ fn the_worst_phase_gives_the_worst_case_dead_time() {
     let opts = hil::HilOptions { worst_phase: true, ..Default::default() };
     for tick in [1e-4, 1e-3] {
         let h = hil::run_with(&sc, &Controller::new(SCAN, 0.0, tick), false, &opts).unwrap().0;
-        let d = &h.firmware.dead_time;
+        let d = &h.firmware.dead_time_model;
         assert!(d.worst_phase && d.formed.contains("worst phase"), "{}", d.formed);
         assert!((d.scan_wait_s.unwrap() - SCAN).abs() < 1e-9, "{d:?}");
         assert!((d.observed_s.unwrap() - d.worst_case_s).abs() < 1e-6, "{d:?}");

@@ -144,7 +144,7 @@ fn the_reaction_time_moves_braking_and_the_text_says_how_the_dead_time_was_forme
     let (a, b) = (run(&[]), run(&["--reaction-time", "0.03"]));
     let brake = |v: &serde_json::Value| v["t_brake"].as_f64().unwrap();
     assert!((brake(&b) - brake(&a) - 0.03).abs() < 1e-9, "{} vs {}", brake(&b), brake(&a));
-    assert_eq!(b["firmware"]["dead_time"]["reaction_time_source"], "controller.reaction_time");
+    assert_eq!(b["firmware"]["dead_time_model"]["reaction_time_source"], "controller.reaction_time");
     let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--reaction-time", "0.03"]).output().unwrap();
     let out = text(&o.stdout);
     assert!(out.contains("robot reaction 30.000 ms (controller.reaction_time)") && out.contains("scan wait"), "{out}");
@@ -162,7 +162,7 @@ fn the_worst_phase_flag_waits_the_whole_scan_and_refuses_a_phase_beside_it() {
     let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--worst-phase", "--json"]).output().unwrap();
     assert!(o.status.success(), "{}", text(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let d = &v["firmware"]["dead_time"];
+    let d = &v["firmware"]["dead_time_model"];
     assert_eq!(d["worst_phase"], true);
     assert!((d["scan_wait_s"].as_f64().unwrap() - 0.016).abs() < 1e-9, "{d}");
     let o = flinch().args(["hil", "tables5-7_bistable", "--scan-cycle", "0.016", "--worst-phase", "--phase", "0.3"]).output().unwrap();

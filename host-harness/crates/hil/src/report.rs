@@ -45,11 +45,11 @@ pub struct FirmwareFigures {
     #[serde(rename = "firmware_latency_s")]
     pub firmware_latency: Option<f64>,
     /// The controller sample that saw the stop request, s (braking follows
-    /// `dead_time.reaction_time_s` later).
+    /// `dead_time_model.reaction_time_s` later).
     #[serde(rename = "stop_seen_s")]
     pub stop_seen: Option<f64>,
     /// How the dead time was formed: board latency + scan wait + the robot's reaction (timing.rs).
-    pub dead_time: crate::timing::DeadTimeModel,
+    pub dead_time_model: crate::timing::DeadTimeModel,
     /// Observed dead time t_brake - switch_time, s.
     #[serde(rename = "observed_dead_time_s")]
     pub observed_dead_time: Option<f64>,
@@ -143,8 +143,8 @@ pub enum Record<'a> {
 /// formed first (timing.rs), then the firmware's timestamps, latencies, escalation and faults.
 pub fn human(f: &FirmwareFigures) -> String {
     let ms = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{:.3} ms", v * 1e3));
-    let mut t = format!("  dead time {}\n", f.dead_time.formed);
-    let phase = if f.dead_time.worst_phase { "phase worst".to_string() } else { format!("phase {:.2}", f.phase) };
+    let mut t = format!("  dead time {}\n", f.dead_time_model.formed);
+    let phase = if f.dead_time_model.worst_phase { "phase worst".to_string() } else { format!("phase {:.2}", f.phase) };
     t.push_str(&format!("  firmware in the loop: scan cycle {:.3} ms, {phase}, tick {:.3} ms, filter {}, reset {}\n", f.scan_cycle * 1e3, f.firmware_tick * 1e3, f.filter, f.reset_policy));
     t.push_str(&format!("    switch {}   firmware timestamp {}   latency {}   controller saw the stop {}\n", ms(f.switch_time), ms(f.firmware_detect), ms(f.firmware_latency), ms(f.stop_seen)));
     t.push_str(&format!("    observed dead time {}   event log: {} entr{}\n", ms(f.observed_dead_time), f.event_log.len(), if f.event_log.len() == 1 { "y" } else { "ies" }));

@@ -361,7 +361,7 @@ pub(crate) fn run_loop<S: flinch_firmware::Sensor>(
         firmware_detect,
         firmware_latency: firmware_detect.zip(switch_time).map(|(f, s)| f - s),
         stop_seen,
-        dead_time,
+        dead_time_model: dead_time,
         observed_dead_time: summary.t_brake.zip(switch_time).map(|(b, s)| b - s),
         category0,
         power_removed,
