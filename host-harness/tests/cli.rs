@@ -4,7 +4,7 @@
 
 mod common;
 use std::io::Read;
-use common::{flinch, peak_rss_kb, repo, text};
+use common::{bytes_written, flinch, peak_rss_kb, repo, text};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -179,7 +179,7 @@ fn ctrl_c_stops_a_long_run_with_complete_rows() {
     let mut child = flinch().args(["run"]).arg(&scene).args(["--csv"]).arg(&csv).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
     // Wait for rows to appear, then interrupt.
     let start = Instant::now();
-    while std::fs::metadata(&csv).map_or(0, |m| m.len()) < 200_000 && start.elapsed() < Duration::from_secs(30) {
+    while bytes_written(&csv) < 200_000 && start.elapsed() < Duration::from_secs(30) {
         std::thread::sleep(Duration::from_millis(10));
     }
     assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());

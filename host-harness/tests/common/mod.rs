@@ -58,3 +58,26 @@ pub fn peak_rss_kb(mut cmd: Command, limit: Duration) -> (u64, Output) {
         std::thread::sleep(Duration::from_millis(5));
     }
 }
+
+/// Bytes written so far to the output `target`: the careful writer writes a regular file to a
+/// temporary `.NAME.flinch-PID-N.EXT` beside it and renames it into place when the command ends
+/// (docs/conventions.md "Outputs"), so a test that waits for rows watches both.
+pub fn bytes_written(target: &std::path::Path) -> u64 {
+    let dir = target.parent().unwrap_or(std::path::Path::new("."));
+    let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = name.rsplit_once('.').map_or(name.as_str(), |(s, _)| s).to_string();
+    let temp_prefix = format!(".{stem}.flinch-");
+    std::fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .flatten()
+                .filter(|e| {
+                    let n = e.file_name().to_string_lossy().into_owned();
+                    n == name || n.starts_with(&temp_prefix)
+                })
+                .filter_map(|e| e.metadata().ok().map(|m| m.len()))
+                .max()
+                .unwrap_or(0)
+        })
+        .unwrap_or(0)
+}

@@ -128,6 +128,17 @@ pub fn write_error(path: &Path, e: &io::Error) -> Failure {
     }
 }
 
+/// For a command whose errors are text (`Result<_, String>`): a closed reader ends the process
+/// here as the print guard does (outputs kept, quiet exit 141), since a message string cannot carry
+/// the exit code; any other failure becomes its message (exit 3 in `main`).
+pub fn message_or_end_on_closed_pipe(f: Failure) -> String {
+    if f.code == EXIT_PIPE {
+        settle(true);
+        std::process::exit(i32::from(EXIT_PIPE));
+    }
+    f.message
+}
+
 /// Standard output, unlocked per write so it can sit behind a `Box<dyn Write>`.
 struct Stdout;
 

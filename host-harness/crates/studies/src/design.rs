@@ -639,7 +639,7 @@ pub fn run(a: &DesignArgs) -> Result<bool, String> {
     let r = design(&t, a.stroke, a.speed, a.dead_time).map_err(|e| format!("{}: {e}", a.scene.display()))?;
     // Through output::print: a scene's name cannot carry terminal controls to the screen.
     let text = if a.json { flinch_output::to_json(&flinch_output::Versioned::new(&r)) } else { human(&r) };
-    flinch_output::output::print(&text).map_err(|f| f.message)?;
+    flinch_output::output::print(&text).map_err(flinch_output::output::message_or_end_on_closed_pipe)?;
     if let Some(p) = &a.plot {
         draw(p, &t, &r)?;
         flinch_output::output::note(&format!("wrote {} (plot)", p.display()));

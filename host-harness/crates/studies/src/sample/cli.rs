@@ -197,11 +197,29 @@ pub fn run(args: &SampleArgs) -> Result<bool, Failure> {
     // The Parquet footer is written on every ending: the rows so far are a valid file.
     let finished = pq.as_mut().map(ParquetRows::finish).transpose();
     let csv_path = args.csv.clone().unwrap_or_default();
-    let report = ran.map_err(|e| output::write_error(if pq.as_ref().is_some_and(ParquetRows::failed) { &parquet_path } else { &csv_path }, &e))?;
-    finished.map_err(|e| output::write_error(&parquet_path, &e))?;
-    if let Some(w) = out.as_mut() {
-        w.flush().map_err(|e| output::write_error(&csv_path, &e))?;
-    }
+    // A write error on one output ends the command (exit 3 naming that output), but the other
+    // output holds a complete prefix of the samples, as on Ctrl-C: it is kept (the failed one's
+    // temporary file is removed when its writer is dropped), so hours of samples are not lost
+    // because the other file's disk filled (docs/conventions.md "Outputs").
+    let written = match ran {
+        Err(e) => Err(output::write_error(if pq.as_ref().is_some_and(ParquetRows::failed) { &parquet_path } else { &csv_path }, &e)),
+        Ok(report) => match finished {
+            Err(e) => Err(output::write_error(&parquet_path, &e)),
+            Ok(_) => match out.as_mut().map(|w| w.flush()).transpose() {
+                Err(e) => Err(output::write_error(&csv_path, &e)),
+                Ok(_) => Ok(report),
+            },
+        },
+    };
+    let report = match written {
+        Ok(report) => report,
+        Err(failure) => {
+            drop(out);
+            drop(pq);
+            output::settle(true);
+            return Err(failure);
+        }
+    };
     let wall = t0.elapsed().as_secs_f64();
     output::note(&format!(
         "{} samples in {:.2} s ({} threads, {:.0} samples/s){}{}",
