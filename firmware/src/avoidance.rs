@@ -58,4 +58,4 @@ pub type BoardReal = f32;
 pub type BoardReal = num::I16F16;
 pub use num::Real;
 pub use receiver::{Receiver, RxStats};
-pub use safe::{SafeCommand, SafeController, SafeState, Sensed, SsmParams, Steer};
+pub use safe::{sector_of, Pfl, SafeCommand, SafeController, SafeState, Sensed, SsmParams, Steer, SECTORS};

@@ -28,8 +28,8 @@ use cortex_m_semihosting::{debug, hprintln};
 use flinch_firmware::avoidance::{
     frame, FrameHeader, Receiver,
     num::{I16F16, I20F12, I8F24},
-    sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, SafeController, SafeState, Sensed,
-    SsmParams, Steer, Watchdog,
+    sample, Controller, Gains, Gauss, GaussLibm, GaussLut, GaussMicromath, Grid, Real, Repulsion, Pfl, SafeController, SafeState, Sensed,
+    SsmParams, Steer, Watchdog, SECTORS,
 };
 
 const SYST_CVR: u32 = 0xE000_E018;
@@ -85,6 +85,9 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
         stopping_time_s: R::from_f64(0.1),
         margin_m: R::from_f64(0.035),
         speed_cap_mps: R::from_f64(0.25),
+        whole_body_only: false,
+        // The PFL regime's scale is computed at every step with a command: its cost counted.
+        pfl: Some(Pfl { axis: [R::ONE, R::ZERO], along_mps: R::from_f64(0.29), across_mps: R::from_f64(0.063) }),
     })
     .with_steer(Steer {
         // The barrier at 0.45 m with a 0.05 m band: every separation below 0.5 m is steered.
@@ -111,6 +114,8 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
             // Nearest point straight ahead of the command (head-on: the costliest turn).
             nearest_x_m: x.add(R::from_f64(0.345 + 0.02 * k as f64)),
             nearest_y_m: y,
+            // Every sector as near as the nearest: each one's bound is computed (the costliest).
+            sectors_m: [R::from_f64(0.30 + 0.02 * k as f64); SECTORS],
         };
         let t0 = now_ticks();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));

@@ -8,15 +8,15 @@
 //! `S_p = S_h + S_r + S_s + C + Z_d + Z_r` with
 //!
 //! * `S_h = K (T_r + T_s)`: the human approaching at `K` during the robot's reaction time `T_r` and
-//!   stopping time `T_s`. `K` follows ISO 13855:2010, 6.2, formula (1) `S = K T + C`: first
-//!   `K = 2,000 mm/s`; where the resulting `S` is at most 500 mm that is the distance; where it is
-//!   more, `K = 1,600 mm/s` and `S` not less than 500 mm. Here `S` is the protective separation at
-//!   rest, `S_p(0) = K (T_r + T_s) + C + Z_d + Z_r` (and the host's clearance), and the configured
-//!   `v_h` is the far-field `K` (at least 1.6 m/s: the host's loader refuses less); the near-field
-//!   `K` is `max(2.0 m/s, v_h)`. So: `K = max(2, v_h)` when `max(2, v_h) (T_r + T_s) + margin <=
-//!   0.5 m`, else `K = v_h` with the stop separation `max(v_h (T_r + T_s) + margin, 0.5 m)`.
-//!   Computed once in [`SafeController::new`]: a step costs what it did. The same `K` is the
-//!   approach speed in the age term below.
+//!   stopping time `T_s`. A hand or an arm reaches at `K = 2,000 mm/s` at every distance (ISO
+//!   13855:2010, 6.2: the 1,600 mm/s of formula (1) beyond 500 mm is the speed of a *walking* body,
+//!   not of an arm reaching from where the person stands), so `K = max(2.0 m/s, v_h)` and
+//!   `S_p(0) = K (T_r + T_s) + margin`, at least 100 mm. Only where the scene declares that nothing
+//!   but a whole body can approach ([`SsmParams::whole_body_only`]) does formula (1)'s rule apply:
+//!   `K = max(2, v_h)` when that gives at most 0.5 m, else `K = v_h` (at least 1.6 m/s: the host's
+//!   loader refuses less) with the stop separation `max(v_h (T_r + T_s) + margin, 0.5 m)`.
+//!   Computed once in [`SafeController::new`]. The same `K` is the approach speed in the age term
+//!   below.
 //! * `S_r = v_r T_r`: the robot moving on at its commanded speed `v_r` until it reacts;
 //! * `S_s = v_r T_s / 2`: the robot braking from `v_r` to rest in `T_s` (constant deceleration);
 //! * `C`: the intrusion distance (ISO 13855, 5.3: how far a body part can reach into the sensing
@@ -32,6 +32,29 @@
 //! `v_max = (S - S_p(0)) / (T_r + T_s / 2)`, clamped to `[0, cap]`.
 //! When the numerator is not positive the robot is in a protective stop (command zero). It resumes by
 //! itself when the separation grows again (ISO 10218-1:2011, 5.10.6: SSM may restart automatically).
+//!
+//! # The robot's speed *towards* the person (ISO/TS 15066, 5.5.4.2.3: `v_r` is directed)
+//!
+//! The frame carries the separation per [`SECTORS`] sectors of 45 degrees round the tool
+//! ([`Sensed::sectors_m`], sector `k` from `45 k` to `45 (k + 1)` degrees counter-clockwise from
+//! +x, [`sector_of`]). A point sensed in sector `k` at capture may since have moved by
+//! `r = |p - p_capture| + K age` (the bound above); while `r <= s_k sin 22.5 deg` its direction
+//! from the tool is still within 45 degrees of the sector's centre, and the fastest the command
+//! `v` approaches any point of the sector is `u_k = |v|` when `v` points within 45 degrees of the
+//! centre `c_k`, else `((v . c_k) + |v x c_k|) / sqrt 2` (the cone's nearest edge), and 0 when
+//! that is negative: moving away is not limited. Where `r` is larger the sector's points may lie in
+//! any direction: `u_k = |v|`. The command passes the SSM bound when `u_k <= v_max(s_k - r)` in every
+//! sector; otherwise it is scaled by the smallest `v_max(s_k - r) / u_k`.
+//!
+//! # Power and force limiting (ISO/TS 15066, 5.5.5) beside it
+//!
+//! With [`SsmParams::pfl`] the command may instead be within the speeds at which a contact with the
+//! body regions the scene allows stays within ISO/TS 15066 Table A.2 *with this module*: the
+//! velocity's component along the module's axis at most `along_mps` (the module's speed: it yields
+//! only along its axis) and the component across it at most `across_mps` (a rigid tool's speed).
+//! The command is scaled by `max(SSM scale, PFL scale)`, never above 1 nor the cap: either regime
+//! holds at every step. Both PFL speeds are used at 63/64 of their value (the number type's
+//! rounding stays inside them).
 //!
 //! The clamp is the last operation on the command. Lengths are bounded from above by
 //! `max + min / 2` (no square root; never below the true length, at most 11.8 % above), computed
@@ -58,7 +81,47 @@ pub struct SsmParams<R> {
     pub margin_m: R,
     /// Hard cap on the commanded speed (the configured cruise speed).
     pub speed_cap_mps: R,
+    /// The scene declares that only a whole (walking) body can approach: `K` may fall to `v_h`
+    /// beyond 0.5 m (ISO 13855:2010 6.2, formula (1)). False for hands and arms: `K >= 2.0 m/s`.
+    pub whole_body_only: bool,
+    /// Power and force limiting beside the SSM bound (`None`: SSM alone).
+    pub pfl: Option<Pfl<R>>,
 }
+
+/// The PFL speeds (ISO/TS 15066, 5.5.5 and Annex A) of the module on this robot, for the body
+/// regions the scene allows to be touched. All m/s, the axis a unit vector in the cell's plane.
+#[derive(Clone, Copy, Debug)]
+pub struct Pfl<R> {
+    /// The module's axis in the cell's frame (unit length).
+    pub axis: [R; 2],
+    /// The largest speed along the axis at which a contact stays within the limits with the
+    /// module, m/s.
+    pub along_mps: R,
+    /// The same across the axis, where the module does not yield: a rigid tool's speed, m/s.
+    pub across_mps: R,
+}
+
+/// Sectors of the directional separation ([`Sensed::sectors_m`]): 45 degrees each.
+pub const SECTORS: usize = 8;
+
+/// The sector of direction `(dx, dy)`: `k` covers `45 k` to `45 (k + 1)` degrees counter-clockwise
+/// from +x (no trigonometry; a direction on a boundary goes to one of its two sectors, which the
+/// monitor's 45-degree cones cover either way).
+pub fn sector_of<R: Real>(dx: R, dy: R) -> usize {
+    let steep = dy.abs() > dx.abs();
+    match (dx >= R::ZERO, dy >= R::ZERO) {
+        (true, true) => usize::from(steep),
+        (false, true) => 3 - usize::from(steep),
+        (false, false) => 4 + usize::from(steep),
+        (true, false) => 7 - usize::from(steep),
+    }
+}
+
+/// `cos 22.5 deg`, `sin 22.5 deg`: the sector centres' components.
+const C22: f64 = 0.923_879_532_511_286_7;
+const S22: f64 = 0.382_683_432_365_089_8;
+/// The centres of the sectors, `(cos, sin)` of `22.5 + 45 k` degrees.
+const CENTRES: [[f64; 2]; SECTORS] = [[C22, S22], [S22, C22], [-S22, C22], [-C22, S22], [-C22, -S22], [-S22, -C22], [S22, -C22], [C22, -S22]];
 
 /// What the sensor saw in the last frame.
 #[derive(Clone, Copy, Debug)]
@@ -76,6 +139,17 @@ pub struct Sensed<R> {
     pub nearest_x_m: R,
     /// See `nearest_x_m`.
     pub nearest_y_m: R,
+    /// The separation per direction when the image was taken: the nearest sensed point in each
+    /// sector ([`sector_of`], seen from the tool at capture), from the tool's surface, m; far away
+    /// where nothing was sensed. `separation_m` is at most their minimum.
+    pub sectors_m: [R; SECTORS],
+}
+
+impl<R: Real> Sensed<R> {
+    /// The same separation in every direction (a sensor that gives no direction).
+    pub fn sectors_all(separation_m: R) -> [R; SECTORS] {
+        [separation_m; SECTORS]
+    }
 }
 
 /// The barrier that steers the command round what the sensor sees, before the monitor limits it
@@ -116,6 +190,8 @@ pub enum SafeState {
     ProtectiveStop,
     /// No sensed frame yet: zero command.
     NoData,
+    /// Beyond the SSM bound, within the PFL speeds (possibly scaled to them).
+    Pfl,
 }
 
 /// The monitored command.
@@ -156,6 +232,15 @@ pub struct SafeController<R> {
     inv_per_speed: R,
     /// One half.
     half: R,
+    /// The sector centres in `R`.
+    centres: [[R; 2]; SECTORS],
+    /// `sin 22.5 deg`: a sector's cone holds while the motion since capture is below this times its
+    /// separation.
+    s22: R,
+    /// `1 / sqrt 2`.
+    inv_sqrt2: R,
+    /// The PFL speeds at 63/64 of their value (`None`: SSM alone, or a PFL speed not positive).
+    pfl: Option<Pfl<R>>,
 }
 
 impl<R: Real> SafeController<R> {
@@ -172,7 +257,10 @@ impl<R: Real> SafeController<R> {
         let near = near_k.mul(t).add(params.margin_m);
         // ... and S not less than 100 mm (ISO 13855:2010 6.2, formula (1)).
         let tenth = R::ONE.div(R::from_int(10));
-        let (approach_mps, stop_separation_m) = if near <= half {
+        // A hand or an arm: K = max(2, v_h) at every distance. NaN-safe: a NaN v_h keeps K NaN.
+        let (approach_mps, stop_separation_m) = if !params.whole_body_only {
+            (near_k, if near > tenth { near } else { tenth })
+        } else if near <= half {
             (near_k, if near > tenth { near } else { tenth })
         } else {
             let far = params.human_speed_mps.mul(t).add(params.margin_m);
@@ -191,6 +279,18 @@ impl<R: Real> SafeController<R> {
             rate: R::ZERO,
             side: 0,
             lean_tol: params.speed_cap_mps.div(R::from_int(64)),
+            centres: CENTRES.map(|c| [R::from_f64(c[0]), R::from_f64(c[1])]),
+            s22: R::from_f64(S22),
+            inv_sqrt2: R::from_f64(core::f64::consts::FRAC_1_SQRT_2),
+            pfl: params.pfl.and_then(|p| {
+                let k = R::from_int(63).div(R::from_int(64));
+                // Only positive speeds and a finite axis make a PFL regime; anything else is none.
+                // The axis of unit length to within 1/64 (the 63/64 margin covers a component
+                // under-estimated by that much).
+                let n2 = p.axis[0].mul(p.axis[0]).add(p.axis[1].mul(p.axis[1]));
+                let ok = p.along_mps > R::ZERO && p.across_mps > R::ZERO && n2 >= k && n2 <= R::from_int(65).div(R::from_int(64));
+                ok.then(|| Pfl { axis: p.axis, along_mps: p.along_mps.mul(k), across_mps: p.across_mps.mul(k) })
+            }),
         }
     }
 
@@ -311,35 +411,115 @@ impl<R: Real> SafeController<R> {
 
     /// The monitored command for a requested `(vx, vy)` with the tool at `(x, y)`.
     ///
-    /// Lengths are bounded from above without a square root: `|(a, b)| <= max + min / 2` (within
-    /// 11.8 % above). The tool's motion since capture is over-estimated by it (the separation is
-    /// under-estimated: conservative), and a command is passed unchanged only when that bound of its
-    /// speed is within the limit, and otherwise scaled to the bound: its speed ends between 89.4 %
-    /// of the limit and the limit.
+    /// First the cap: a command whose length bound is above it is scaled to the bound (its speed
+    /// ends between 89.4 % of the cap and the cap); a non-finite one stops. Then the directional SSM
+    /// bound over the sectors and the PFL speeds (module docs): the command is scaled by the larger
+    /// of the two scales, never enlarged. Lengths are bounded from above without a square root:
+    /// `|(a, b)| <= max + min / 2` (within 11.8 % above); the tool's motion since capture is
+    /// over-estimated by it (the separation is under-estimated: conservative).
     pub fn limit(&self, vx: R, vy: R, x: R, y: R, sensed: Option<&Sensed<R>>) -> SafeCommand<R> {
         let stop = |state, separation_m| SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: R::ZERO, separation_m, state };
         let Some(f) = sensed else { return stop(SafeState::NoData, R::ZERO) };
-        let moved = self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m));
-        let s = f.separation_m.sub(moved).sub(self.approach_mps.mul(f.age_s));
-        let limit = self.speed_limit(s);
-        // NaN-safe: anything but a positive limit stops.
-        if limit.partial_cmp(&R::ZERO) != Some(Ordering::Greater) {
-            return stop(SafeState::ProtectiveStop, s);
-        }
-        // `speed` may saturate in fixed point; it is then far above any limit.
+        // What may have changed since capture: the tool's motion and the person's at K.
+        let r = self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m)).add(self.approach_mps.mul(f.age_s));
+        let s = f.separation_m.sub(r);
+        let omni = self.speed_limit(s);
+        let pfl_omni = match self.pfl {
+            Some(p) if p.along_mps < p.across_mps => p.along_mps,
+            Some(p) => p.across_mps,
+            None => R::ZERO,
+        };
+        let any_dir = if omni > pfl_omni { omni } else { pfl_omni };
+        let Some((vx, vy, capped)) = self.capped(vx, vy) else { return stop(SafeState::ProtectiveStop, s) };
         let speed = self.norm_bound(vx, vy);
-        if speed <= limit {
-            return SafeCommand { vx, vy, limit_mps: limit, separation_m: s, state: SafeState::Run };
+        if !(speed > R::ZERO) {
+            // No motion asked: nothing to limit; a protective stop when no direction is free.
+            let state = if any_dir > R::ZERO { SafeState::Run } else { SafeState::ProtectiveStop };
+            return SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: any_dir, separation_m: s, state };
+        }
+        // The SSM scale: the approach towards each sector within its bound.
+        let mut k_ssm = R::ONE;
+        for (c, &sk) in self.centres.iter().zip(f.sectors_m.iter()) {
+            let sk = sk.sub(r);
+            // NaN-safe: a NaN separation gives a zero limit.
+            let l = self.speed_limit(sk);
+            if l >= speed {
+                continue;
+            }
+            let u = if r <= sk.mul(self.s22) {
+                let dot = vx.mul(c[0]).add(vy.mul(c[1]));
+                let cross = vx.mul(c[1]).sub(vy.mul(c[0])).abs();
+                if dot >= cross {
+                    speed
+                } else {
+                    let e = dot.add(cross).mul(self.inv_sqrt2);
+                    if e > R::ZERO {
+                        e
+                    } else {
+                        R::ZERO
+                    }
+                }
+            } else {
+                speed
+            };
+            if u > l {
+                let q = if l > R::ZERO { l.div(u) } else { R::ZERO };
+                if q < k_ssm {
+                    k_ssm = q;
+                }
+            }
+        }
+        // The PFL scale: along and across the module's axis within their speeds.
+        let k_pfl = match self.pfl {
+            Some(p) => {
+                let along = vx.mul(p.axis[0]).add(vy.mul(p.axis[1])).abs();
+                let across = vx.mul(p.axis[1]).sub(vy.mul(p.axis[0])).abs();
+                let (a, b) = (ratio(along, p.along_mps), ratio(across, p.across_mps));
+                if a < b {
+                    a
+                } else {
+                    b
+                }
+            }
+            None => R::ZERO,
+        };
+        let (k, state) = if k_ssm >= R::ONE {
+            (R::ONE, if capped { SafeState::Slow } else { SafeState::Run })
+        } else if k_pfl > k_ssm {
+            (if k_pfl < R::ONE { k_pfl } else { R::ONE }, SafeState::Pfl)
+        } else if k_ssm > R::ZERO {
+            (k_ssm, SafeState::Slow)
+        } else {
+            return SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: R::ZERO, separation_m: s, state: SafeState::ProtectiveStop };
+        };
+        let limit = speed.mul(k);
+        let limit_mps = if limit > any_dir { limit } else { any_dir };
+        if k >= R::ONE {
+            SafeCommand { vx, vy, limit_mps, separation_m: s, state }
+        } else {
+            SafeCommand { vx: vx.mul(k), vy: vy.mul(k), limit_mps, separation_m: s, state }
+        }
+    }
+
+    /// The command within the cap: `(vx, vy, scaled)`; `None` when it is not finite. A command
+    /// whose length bound is within the cap passes unchanged; otherwise it is scaled to the bound,
+    /// its speed between 89.4 % of the cap and the cap.
+    fn capped(&self, vx: R, vy: R) -> Option<(R, R, bool)> {
+        let cap = self.params.speed_cap_mps;
+        // `speed` may saturate in fixed point; it is then far above the cap.
+        let speed = self.norm_bound(vx, vy);
+        if speed <= cap {
+            return Some((vx, vy, false));
         }
         let (ax, ay) = (vx.abs(), vy.abs());
         let m = if ax > ay { ax } else { ay };
         if speed > R::ZERO && m > R::ZERO {
             // Unit components `v / m` in [-1, 1] (no overflow), the bound over `m` in [1, 1.5]:
-            // the result's bound is the limit (to rounding).
+            // the result's bound is the cap (to rounding).
             // Up to 1 m/s a component (every command of a cruise speed), one division: `1 / m`
             // has at least as many significant bits as the number type's fraction (it saturates in
             // I8F24 below 1/128 m/s: both components then get the same smaller factor, the
-            // direction is kept and the result stays under the limit). Above it, two divisions.
+            // direction is kept and the result stays under the cap). Above it, two divisions.
             let (ux, uy) = if m <= R::ONE {
                 let inv = R::ONE.div(m);
                 (vx.mul(inv), vy.mul(inv))
@@ -348,11 +528,11 @@ impl<R: Real> SafeController<R> {
             };
             let (bx, by) = (ux.abs(), uy.abs());
             let r = R::ONE.add(if bx < by { bx } else { by }.mul(self.half));
-            let k = limit.div(r);
-            SafeCommand { vx: ux.mul(k), vy: uy.mul(k), limit_mps: limit, separation_m: s, state: SafeState::Slow }
+            let k = cap.div(r);
+            Some((ux.mul(k), uy.mul(k), true))
         } else {
-            // Not comparable (NaN): stop.
-            stop(SafeState::ProtectiveStop, s)
+            // Not comparable (NaN) or a NaN cap: stop.
+            None
         }
     }
 
@@ -368,6 +548,18 @@ impl<R: Real> SafeController<R> {
     }
 }
 
+/// The factor that brings `x >= 0` within `lim`: 1 when it is, `lim / x` when `lim` is positive,
+/// else 0 (NaN-safe: a NaN `x` or `lim` gives 0).
+fn ratio<R: Real>(x: R, lim: R) -> R {
+    if x <= lim {
+        R::ONE
+    } else if lim > R::ZERO && x > R::ZERO {
+        lim.div(x)
+    } else {
+        R::ZERO
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -380,11 +572,14 @@ mod tests {
             stopping_time_s: R::from_f64(0.1),
             margin_m: R::from_f64(0.02),
             speed_cap_mps: R::from_f64(0.25),
+            whole_body_only: false,
+            pfl: None,
         }
     }
 
     fn sensed<R: Real>(sep: f64, age: f64) -> Sensed<R> {
-        Sensed { separation_m: R::from_f64(sep), tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age), nearest_x_m: R::from_f64(sep + 0.05), nearest_y_m: R::ZERO }
+        let s = R::from_f64(sep);
+        Sensed { separation_m: s, tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age), nearest_x_m: R::from_f64(sep + 0.05), nearest_y_m: R::ZERO, sectors_m: Sensed::sectors_all(s) }
     }
 
     #[test]
@@ -406,44 +601,49 @@ mod tests {
         }
     }
 
-    /// ISO 13855:2010 6.2, formula (1), with the configured `v_h` as the far-field K: 2.0 m/s where
-    /// the separation is within 0.5 m (a 1.6 m/s `v_h` raised), a faster `v_h` kept; where 2.0 m/s
-    /// gives more than 0.5 m, `v_h` with at least 0.5 m. The same in the board's number types.
+    /// A hand or an arm reaches at K = max(2.0 m/s, v_h) at every distance; only a scene that
+    /// declares a whole body alone gets ISO 13855:2010 6.2 formula (1)'s 1.6 m/s beyond 0.5 m (and
+    /// at least 0.5 m there). At least 100 mm either way. The same in the board's number types.
     #[test]
-    fn k_follows_iso_13855_within_half_a_metre() {
-        let with = |v_h: f64, t_s: f64, margin: f64| {
-            SafeController::new(SsmParams { human_speed_mps: v_h, reaction_time_s: 0.01, stopping_time_s: t_s - 0.01, margin_m: margin, speed_cap_mps: 0.25 })
+    fn k_is_two_metres_a_second_for_hands_and_follows_iso_13855_for_whole_bodies() {
+        let with = |v_h: f64, t_s: f64, margin: f64, whole: bool| {
+            SafeController::new(SsmParams { human_speed_mps: v_h, reaction_time_s: 0.01, stopping_time_s: t_s - 0.01, margin_m: margin, speed_cap_mps: 0.25, whole_body_only: whole, pfl: None })
         };
         let cases = [
-            // (v_h, T_r + T_s, margin) -> (K, stop separation)
-            ((1.6, 0.11, 0.02), (2.0, 0.24)),
-            ((2.5, 0.11, 0.02), (2.5, 0.295)),
+            // (v_h, T_r + T_s, margin, whole body) -> (K, stop separation)
+            ((1.6, 0.11, 0.02, false), (2.0, 0.24)),
+            ((2.5, 0.11, 0.02, false), (2.5, 0.295)),
+            // A hand: 2.0 m/s beyond 0.5 m too (the K-falls-to-1.6 finding of issue 29).
+            ((1.6, 0.2, 0.15, false), (2.0, 0.55)),
+            ((1.6, 0.4, 0.1, false), (2.0, 0.9)),
+            ((1.6, 0.11, 0.02, true), (2.0, 0.24)),
             // 2.0 * 0.2 + 0.1 = 0.5: exactly 0.5 m is still the near field.
-            ((1.6, 0.2, 0.1), (2.0, 0.5)),
+            ((1.6, 0.2, 0.1, true), (2.0, 0.5)),
             // 2.0 * 0.2 + 0.15 = 0.55 > 0.5: K = 1.6, 1.6 * 0.2 + 0.15 = 0.47, raised to 0.5.
-            ((1.6, 0.2, 0.15), (1.6, 0.5)),
+            ((1.6, 0.2, 0.15, true), (1.6, 0.5)),
             // 1.6 * 0.4 + 0.1 = 0.74: beyond 0.5 m either way.
-            ((1.6, 0.4, 0.1), (1.6, 0.74)),
+            ((1.6, 0.4, 0.1, true), (1.6, 0.74)),
             // 2.0 * 0.02 + 0 = 0.04: raised to ISO 13855's 100 mm minimum.
-            ((1.6, 0.02, 0.0), (2.0, 0.1)),
+            ((1.6, 0.02, 0.0, false), (2.0, 0.1)),
+            ((1.6, 0.02, 0.0, true), (2.0, 0.1)),
         ];
-        for ((v_h, t, m), (k, stop)) in cases {
-            let c = with(v_h, t, m);
-            assert!((c.approach_speed_mps() - k).abs() < 1e-12 && (c.stop_separation_m() - stop).abs() < 1e-12, "{v_h} {t} {m}: K {} S {}", c.approach_speed_mps(), c.stop_separation_m());
+        for ((v_h, t, m, whole), (k, stop)) in cases {
+            let c = with(v_h, t, m, whole);
+            assert!((c.approach_speed_mps() - k).abs() < 1e-12 && (c.stop_separation_m() - stop).abs() < 1e-12, "{v_h} {t} {m} {whole}: K {} S {}", c.approach_speed_mps(), c.stop_separation_m());
             assert_eq!(c.speed_limit(stop - 1e-9), 0.0);
             assert!(c.speed_limit(stop + 0.01) > 0.0);
             let q = |v: f64| I16F16::from_f64(v);
-            let f = SafeController::new(SsmParams { human_speed_mps: q(v_h), reaction_time_s: q(0.01), stopping_time_s: q(t - 0.01), margin_m: q(m), speed_cap_mps: q(0.25) });
+            let f = SafeController::new(SsmParams { human_speed_mps: q(v_h), reaction_time_s: q(0.01), stopping_time_s: q(t - 0.01), margin_m: q(m), speed_cap_mps: q(0.25), whole_body_only: whole, pfl: None });
             assert!((f.approach_speed_mps().to_f64() - k).abs() < 1e-3 && (f.stop_separation_m().to_f64() - stop).abs() < 1e-3, "I16F16 {v_h} {t} {m}");
-            let g = SafeController::new(SsmParams { human_speed_mps: v_h as f32, reaction_time_s: 0.01, stopping_time_s: (t - 0.01) as f32, margin_m: m as f32, speed_cap_mps: 0.25 });
+            let g = SafeController::new(SsmParams { human_speed_mps: v_h as f32, reaction_time_s: 0.01, stopping_time_s: (t - 0.01) as f32, margin_m: m as f32, speed_cap_mps: 0.25, whole_body_only: whole, pfl: None });
             assert!((f64::from(g.approach_speed_mps()) - k).abs() < 1e-5 && (f64::from(g.stop_separation_m()) - stop).abs() < 1e-5, "f32 {v_h} {t} {m}");
         }
         // The age term uses the same K: 0.1 s old eats 0.2 m at 2.0 m/s.
-        let c = with(1.6, 0.11, 0.02);
+        let c = with(1.6, 0.11, 0.02, false);
         assert_eq!(c.limit(0.1, 0.0, 0.0, 0.0, Some(&sensed(0.43, 0.1))).state, SafeState::ProtectiveStop);
         assert_eq!(c.limit(0.1, 0.0, 0.0, 0.0, Some(&sensed(0.45, 0.1))).state, SafeState::Run);
         // NaN parameters stop.
-        let n = with(f64::NAN, 0.11, 0.02);
+        let n = with(f64::NAN, 0.11, 0.02, false);
         assert_eq!(n.limit(0.1, 0.0, 0.0, 0.0, Some(&sensed(5.0, 0.0))).state, SafeState::ProtectiveStop);
     }
 
@@ -522,7 +722,7 @@ mod tests {
     }
 
     fn at(sep: f64, nearest: [f64; 2]) -> Sensed<f64> {
-        Sensed { separation_m: sep, tool_x_m: 1.0, tool_y_m: 1.0, age_s: 0.0, nearest_x_m: nearest[0], nearest_y_m: nearest[1] }
+        Sensed { separation_m: sep, tool_x_m: 1.0, tool_y_m: 1.0, age_s: 0.0, nearest_x_m: nearest[0], nearest_y_m: nearest[1], sectors_m: [sep; SECTORS] }
     }
 
     /// Head-on in the band: the approach is cut to the barrier's rate (its length bound allows at
@@ -570,7 +770,7 @@ mod tests {
     fn steered_commands_stay_bounded() {
         let q = |v: f64| I16F16::from_f64(v);
         let mut c = SafeController::new(params::<I16F16>()).with_steer(Steer { barrier_m: q(0.4), band_m: q(0.05), view_m: [q(0.0), q(0.0), q(2.0), q(2.0)], edge_margin_m: q(0.045) });
-        let s = Sensed { separation_m: q(0.43), tool_x_m: q(1.0), tool_y_m: q(1.0), age_s: q(0.0), nearest_x_m: q(1.4), nearest_y_m: q(1.3) };
+        let s = Sensed { separation_m: q(0.43), tool_x_m: q(1.0), tool_y_m: q(1.0), age_s: q(0.0), nearest_x_m: q(1.4), nearest_y_m: q(1.3), sectors_m: [q(0.43); SECTORS] };
         for (vx, vy) in [(30000.0, 30000.0), (-30000.0, 5.0), (0.3, 0.2), (0.0, 0.0)] {
             let (sx, sy) = c.steer(q(vx), q(vy), q(1.0), q(1.0), Some(&s));
             let out = c.limit(sx, sy, q(1.0), q(1.0), Some(&s));
@@ -581,5 +781,139 @@ mod tests {
         let (nx, ny) = f.steer(f64::NAN, 0.0, 1.0, 1.0, Some(&at(0.42, [1.5, 1.0])));
         let out = f.limit(nx, ny, 1.0, 1.0, Some(&at(0.42, [1.5, 1.0])));
         assert_eq!((out.vx, out.vy), (0.0, 0.0));
+    }
+    fn sectors(list: &[(usize, f64)]) -> [f64; SECTORS] {
+        let mut s = [10.0; SECTORS];
+        for &(k, d) in list {
+            s[k] = d;
+        }
+        s
+    }
+
+    fn dir(sep: [f64; SECTORS]) -> Sensed<f64> {
+        let min = sep.iter().copied().fold(f64::INFINITY, f64::min);
+        Sensed { separation_m: min, tool_x_m: 0.0, tool_y_m: 0.0, age_s: 0.0, nearest_x_m: 1.0, nearest_y_m: 0.0, sectors_m: sep }
+    }
+
+    #[test]
+    fn sectors_cover_the_plane_counter_clockwise() {
+        for k in 0..360 {
+            let a = (k as f64 + 0.5).to_radians();
+            assert_eq!(sector_of(a.cos(), a.sin()), (k / 45) as usize, "{k} deg");
+            let q = |v: f64| I16F16::from_f64(v);
+            assert_eq!(sector_of(q(a.cos()), q(a.sin())), (k / 45) as usize, "I16F16 {k} deg");
+        }
+    }
+
+    /// ISO/TS 15066 5.5.4.2.3: `v_r` is the speed towards the person. A person 0.25 m behind the
+    /// tool (10 mm above the stop separation): moving away passes at the cap, towards it is cut to
+    /// the bound, across it is cut less than head-on.
+    #[test]
+    fn moving_away_from_a_person_is_not_limited() {
+        let c = SafeController::new(params::<f64>());
+        let behind = dir(sectors(&[(3, 0.25), (4, 0.25)]));
+        let away = c.limit(0.25, 0.0, 0.0, 0.0, Some(&behind));
+        assert_eq!((away.vx, away.vy, away.state), (0.25, 0.0, SafeState::Run));
+        let towards = c.limit(-0.25, 0.0, 0.0, 0.0, Some(&behind));
+        assert_eq!(towards.state, SafeState::Slow);
+        assert!(towards.vx.hypot(towards.vy) <= c.speed_limit(0.25) + 1e-12);
+        let across = c.limit(0.0, 0.25, 0.0, 0.0, Some(&behind));
+        let sp = across.vx.hypot(across.vy);
+        assert!(sp > towards.vx.hypot(towards.vy) && sp < 0.25, "{sp}");
+    }
+
+    /// The nearest point is not the only one: a person 0.245 m behind and another 0.25 m ahead.
+    /// Moving away from the nearer one must still respect the farther one in front.
+    #[test]
+    fn a_second_person_ahead_still_limits() {
+        let c = SafeController::new(params::<f64>());
+        let both = dir(sectors(&[(3, 0.245), (0, 0.25), (7, 0.25)]));
+        let out = c.limit(0.25, 0.0, 0.0, 0.0, Some(&both));
+        assert!(out.vx <= c.speed_limit(0.25) + 1e-12 && c.speed_limit(0.25) < 0.2, "{}", out.vx);
+        assert_eq!(out.state, SafeState::Slow);
+    }
+
+    /// The bound holds for every point the frame could have shown, wherever it moved since capture
+    /// (at most `K age`) and wherever the tool moved: `S_p(v . n) <= s` for the point's true
+    /// direction `n` and separation `s` now, over 20,000 random frames, points and commands.
+    #[test]
+    fn the_directional_bound_holds_for_every_point_a_frame_could_hold() {
+        let c = SafeController::new(params::<f64>());
+        let w = 0.045;
+        let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (k, per) = (c.approach_speed_mps(), 0.01 + 0.1 / 2.0);
+        for _ in 0..20_000 {
+            // One point, sensed at capture in its sector, the others far.
+            let a = rnd() * core::f64::consts::TAU;
+            let d = w + 0.2 + rnd() * 0.3;
+            let q = [d * a.cos(), d * a.sin()];
+            let mut sep = [10.0; SECTORS];
+            sep[sector_of(q[0], q[1])] = d - w;
+            let age = rnd() * 0.1;
+            let sensed = Sensed { separation_m: d - w, tool_x_m: 0.0, tool_y_m: 0.0, age_s: age, nearest_x_m: q[0], nearest_y_m: q[1], sectors_m: sep };
+            // The tool moved since capture, the point moved up to K age.
+            let (tb, tm) = (rnd() * core::f64::consts::TAU, rnd() * 0.01);
+            let p = [tm * tb.cos(), tm * tb.sin()];
+            let (eb, em) = (rnd() * core::f64::consts::TAU, rnd() * k * age);
+            let qn = [q[0] + em * eb.cos(), q[1] + em * eb.sin()];
+            let (vb, vm) = (rnd() * core::f64::consts::TAU, rnd() * 0.4);
+            let out = c.limit(vm * vb.cos(), vm * vb.sin(), p[0], p[1], Some(&sensed));
+            let (rx, ry) = (qn[0] - p[0], qn[1] - p[1]);
+            let dist = rx.hypot(ry);
+            let u = ((out.vx * rx + out.vy * ry) / dist).max(0.0);
+            let s_now = dist - w;
+            let sp = k * (0.01 + 0.1) + 0.02 + u * per;
+            assert!(u == 0.0 || sp <= s_now + 1e-9, "point {q:?} -> {qn:?}, tool {p:?}, age {age}: u {u} needs {sp} > {s_now}");
+        }
+    }
+
+    fn with_pfl() -> SafeController<f64> {
+        SafeController::new(SsmParams { pfl: Some(Pfl { axis: [1.0, 0.0], along_mps: 0.29, across_mps: 0.063 }), ..params::<f64>() })
+    }
+
+    /// PFL (ISO/TS 15066 5.5.5): in contact (separation 0 ahead), a command along the module's axis
+    /// within its speed passes; across it the rigid speed applies; a diagonal keeps both components
+    /// within theirs; without PFL the same command stops.
+    #[test]
+    fn pfl_lets_the_module_touch_along_its_axis_only() {
+        let c = with_pfl();
+        let contact = dir(sectors(&[(0, 0.0), (7, 0.0), (1, 0.0), (2, 0.0)]));
+        let along = c.limit(0.25, 0.0, 0.0, 0.0, Some(&contact));
+        assert_eq!((along.vx, along.vy, along.state), (0.25, 0.0, SafeState::Pfl));
+        let quick = SafeController::new(SsmParams { speed_cap_mps: 0.5, pfl: Some(Pfl { axis: [1.0, 0.0], along_mps: 0.29, across_mps: 0.063 }), ..params::<f64>() });
+        let fast = quick.limit(0.4, 0.0, 0.0, 0.0, Some(&contact));
+        assert!(fast.vx <= 0.29 * 63.0 / 64.0 + 1e-12 && fast.vx > 0.28, "{}", fast.vx);
+        let across = c.limit(0.0, 0.25, 0.0, 0.0, Some(&contact));
+        assert!(across.vy <= 0.063 * 63.0 / 64.0 + 1e-12 && across.vy > 0.06, "{}", across.vy);
+        let diag = c.limit(0.2, 0.2, 0.0, 0.0, Some(&contact));
+        assert!(diag.vx <= 0.29 && diag.vy <= 0.063 * 63.0 / 64.0 + 1e-12, "{diag:?}");
+        let none = SafeController::new(params::<f64>()).limit(0.25, 0.0, 0.0, 0.0, Some(&contact));
+        assert_eq!((none.vx, none.vy, none.state), (0.0, 0.0, SafeState::ProtectiveStop));
+        // A rotated axis, in the board's number type too.
+        let a = [0.6, 0.8];
+        let r = SafeController::new(SsmParams { pfl: Some(Pfl { axis: a, along_mps: 0.29, across_mps: 0.063 }), ..params::<f64>() });
+        let o = r.limit(0.12, 0.16, 0.0, 0.0, Some(&contact));
+        assert!((o.vx - 0.12).abs() < 1e-12 && (o.vy - 0.16).abs() < 1e-12, "along the rotated axis: {o:?}");
+        let q = |v: f64| I16F16::from_f64(v);
+        let f = SafeController::new(SsmParams { pfl: Some(Pfl { axis: [q(0.6), q(0.8)], along_mps: q(0.29), across_mps: q(0.063) }), ..params::<I16F16>() });
+        let qc = Sensed { separation_m: q(0.0), tool_x_m: q(0.0), tool_y_m: q(0.0), age_s: q(0.0), nearest_x_m: q(0.1), nearest_y_m: q(0.0), sectors_m: [q(0.0); SECTORS] };
+        let o = f.limit(q(0.2), q(-0.15), q(0.0), q(0.0), Some(&qc));
+        let (ox, oy) = (o.vx.to_f64(), o.vy.to_f64());
+        assert!((ox * 0.8 - oy * 0.6).abs() <= 0.063 && (ox * 0.6 + oy * 0.8).abs() <= 0.29, "I16F16 across: {ox} {oy}");
+    }
+
+    /// PFL speeds that are not positive numbers are no PFL at all (never a free pass).
+    #[test]
+    fn a_broken_pfl_configuration_is_none() {
+        let contact = dir([0.0; SECTORS]);
+        for (a, b, axis) in [(f64::NAN, 0.063, [1.0, 0.0]), (0.29, f64::NAN, [1.0, 0.0]), (0.29, -1.0, [1.0, 0.0]), (0.29, 0.063, [f64::NAN, 0.0]), (0.0, 0.0, [1.0, 0.0]), (0.29, 0.063, [0.1, 0.0]), (0.29, 0.063, [1.0, 1.0])] {
+            let c = SafeController::new(SsmParams { pfl: Some(Pfl { axis, along_mps: a, across_mps: b }), ..params::<f64>() });
+            let o = c.limit(0.1, 0.0, 0.0, 0.0, Some(&contact));
+            assert_eq!((o.vx, o.vy, o.state), (0.0, 0.0, SafeState::ProtectiveStop), "{a} {b} {axis:?}");
+        }
     }
 }
