@@ -46,7 +46,9 @@ pub mod avoid {
     }
 
     /// The scene's run with the `f64` reference engine on the synthetic camera.
-    pub fn run_reference(scene: Avoid) -> (Avoid, PathResult) {
+    pub fn run_reference(mut scene: Avoid) -> (Avoid, PathResult) {
+        // `[avoid.pfl]`: the module's speeds computed as `flinch avoid` does before a run.
+        flinch_harness::pfl::resolve_pfl(&mut scene).unwrap();
         let setup = Setup::new(&scene, None).unwrap();
         let res = simulate(&scene, &setup, Engine::Reference).unwrap();
         (scene, res)

@@ -17,7 +17,7 @@ pub use flinch_plant as plant;
 pub use flinch_sim as sim;
 pub use flinch_sim::verdict;
 pub use flinch_solver as solver;
-pub use flinch_studies::{bench, body_design, check, design, sample, sweep, validate};
+pub use flinch_studies::{bench, body_design, check, design, pfl, sample, sweep, validate};
 
 /// The robot from its URDF (`flinch-kinematics`), and `flinch robot` (`cli`, in `flinch-studies`).
 pub mod kinematics {

@@ -445,7 +445,11 @@ fn main() -> ExitCode {
         Command::Sweep(a) => flinch_harness::sweep::cli::run(a),
         Command::Sample(a) => flinch_harness::sample::cli::run(a),
         Command::Bench(a) => bench_cmd(a),
-        Command::Avoid(a) => avoid_inputs(a).and_then(|_| flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input)).and_then(|sc| match flinch_harness::avoid::run_scene(a, sc) {
+        Command::Avoid(a) => avoid_inputs(a)
+            .and_then(|_| flinch_harness::avoid::scene::Avoid::load(&a.scene).map_err(Failure::bad_input))
+            // `[avoid.pfl]`: the module's PFL speeds computed from its scene before the run.
+            .and_then(|mut sc| flinch_harness::pfl::resolve_pfl(&mut sc).map(|_| sc).map_err(Failure::bad_input))
+            .and_then(|sc| match flinch_harness::avoid::run_scene(a, sc) {
             Ok(v) => match v.code() {
                 0 => Ok(true),
                 1 => Ok(false),

@@ -38,12 +38,14 @@
 //! The frame carries the separation per [`SECTORS`] sectors of 45 degrees round the tool
 //! ([`Sensed::sectors_m`], sector `k` from `45 k` to `45 (k + 1)` degrees counter-clockwise from
 //! +x, [`sector_of`]). A point sensed in sector `k` at capture may since have moved by
-//! `r = |p - p_capture| + K age` (the bound above); while `r <= s_k sin 22.5 deg` its direction
-//! from the tool is still within 45 degrees of the sector's centre, and the fastest the command
-//! `v` approaches any point of the sector is `u_k = |v|` when `v` points within 45 degrees of the
-//! centre `c_k`, else `((v . c_k) + |v x c_k|) / sqrt 2` (the cone's nearest edge), and 0 when
-//! that is negative: moving away is not limited. Where `r` is larger the sector's points may lie in
-//! any direction: `u_k = |v|`. The command passes the SSM bound when `u_k <= v_max(s_k - r)` in every
+//! `r = |p - p_capture| + K age` (the bound above), so its direction from the tool may have turned
+//! by `delta`, `sin delta = r / s_k` (`s_k` from the tool's surface, smaller than from its centre:
+//! `delta` over-estimated); it lies within `beta = 22.5 deg + delta` of the sector's centre `c_k`.
+//! The fastest the command `v` approaches any point of the sector is then `u_k = |v|` when `v`
+//! points within `beta` of `c_k`, else `|v| cos(phi - beta) = (v . c_k) cos beta + |v x c_k| sin
+//! beta` (the cone's nearer edge), and 0 when that is negative: moving away is not limited. Where
+//! `r >= s_k` the point may lie in any direction: `u_k = |v|`. The command passes the SSM bound
+//! when `u_k <= v_max(s_k - r)` in every
 //! sector; otherwise it is scaled by the smallest `v_max(s_k - r) / u_k`.
 //!
 //! # Power and force limiting (ISO/TS 15066, 5.5.5) beside it
@@ -61,7 +63,6 @@
 //! without overflow, so a command of thousands of m/s from extreme but valid gains, or a non-finite
 //! one, ends at or below the cap, or at zero.
 
-use core::cmp::Ordering;
 
 use super::num::Real;
 
@@ -234,11 +235,10 @@ pub struct SafeController<R> {
     half: R,
     /// The sector centres in `R`.
     centres: [[R; 2]; SECTORS],
-    /// `sin 22.5 deg`: a sector's cone holds while the motion since capture is below this times its
-    /// separation.
+    /// `cos 22.5 deg`, `sin 22.5 deg`: the sectors' half-width.
+    c22: R,
+    /// See `c22`.
     s22: R,
-    /// `1 / sqrt 2`.
-    inv_sqrt2: R,
     /// The PFL speeds at 63/64 of their value (`None`: SSM alone, or a PFL speed not positive).
     pfl: Option<Pfl<R>>,
 }
@@ -280,8 +280,8 @@ impl<R: Real> SafeController<R> {
             side: 0,
             lean_tol: params.speed_cap_mps.div(R::from_int(64)),
             centres: CENTRES.map(|c| [R::from_f64(c[0]), R::from_f64(c[1])]),
+            c22: R::from_f64(C22),
             s22: R::from_f64(S22),
-            inv_sqrt2: R::from_f64(core::f64::consts::FRAC_1_SQRT_2),
             pfl: params.pfl.and_then(|p| {
                 let k = R::from_int(63).div(R::from_int(64));
                 // Only positive speeds and a finite axis make a PFL regime; anything else is none.
@@ -439,20 +439,28 @@ impl<R: Real> SafeController<R> {
         }
         // The SSM scale: the approach towards each sector within its bound.
         let mut k_ssm = R::ONE;
-        for (c, &sk) in self.centres.iter().zip(f.sectors_m.iter()) {
-            let sk = sk.sub(r);
+        for (c, &s0) in self.centres.iter().zip(f.sectors_m.iter()) {
             // NaN-safe: a NaN separation gives a zero limit.
-            let l = self.speed_limit(sk);
+            let l = self.speed_limit(s0.sub(r));
             if l >= speed {
                 continue;
             }
-            let u = if r <= sk.mul(self.s22) {
+            // The sector's points may have turned by `delta` since capture, `sin delta = r / s_k`
+            // (`s_k` at capture, from the tool's surface: smaller than from its centre, so
+            // `delta` is over-estimated): each now lies within `beta = 22.5 deg + delta` of the
+            // centre.
+            let u = if s0 > R::ZERO && r < s0 {
+                let sd = r.div(s0);
+                let cd = R::ONE.sub(sd.mul(sd)).sqrt();
+                let (cb, sb) = (self.c22.mul(cd).sub(self.s22.mul(sd)), self.s22.mul(cd).add(self.c22.mul(sd)));
                 let dot = vx.mul(c[0]).add(vy.mul(c[1]));
                 let cross = vx.mul(c[1]).sub(vy.mul(c[0])).abs();
-                if dot >= cross {
+                // The command within `beta` of the centre (`sin(beta - phi) >= 0`): straight at
+                // some point of the sector; else the cone's nearer edge, `|v| cos(phi - beta)`.
+                if sb.mul(dot) >= cb.mul(cross) {
                     speed
                 } else {
-                    let e = dot.add(cross).mul(self.inv_sqrt2);
+                    let e = dot.mul(cb).add(cross.mul(sb));
                     if e > R::ZERO {
                         e
                     } else {
@@ -460,6 +468,7 @@ impl<R: Real> SafeController<R> {
                     }
                 }
             } else {
+                // Moved as far as it was (or a NaN): any direction.
                 speed
             };
             if u > l {
@@ -835,7 +844,7 @@ mod tests {
 
     /// The bound holds for every point the frame could have shown, wherever it moved since capture
     /// (at most `K age`) and wherever the tool moved: `S_p(v . n) <= s` for the point's true
-    /// direction `n` and separation `s` now, over 20,000 random frames, points and commands.
+    /// direction `n` and separation `s` now, over 200,000 random frames, points and commands.
     #[test]
     fn the_directional_bound_holds_for_every_point_a_frame_could_hold() {
         let c = SafeController::new(params::<f64>());
@@ -846,14 +855,14 @@ mod tests {
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         let (k, per) = (c.approach_speed_mps(), 0.01 + 0.1 / 2.0);
-        for _ in 0..20_000 {
+        for _ in 0..200_000 {
             // One point, sensed at capture in its sector, the others far.
             let a = rnd() * core::f64::consts::TAU;
-            let d = w + 0.2 + rnd() * 0.3;
+            let d = w + 0.05 + rnd() * 0.6;
             let q = [d * a.cos(), d * a.sin()];
             let mut sep = [10.0; SECTORS];
             sep[sector_of(q[0], q[1])] = d - w;
-            let age = rnd() * 0.1;
+            let age = rnd() * 0.25;
             let sensed = Sensed { separation_m: d - w, tool_x_m: 0.0, tool_y_m: 0.0, age_s: age, nearest_x_m: q[0], nearest_y_m: q[1], sectors_m: sep };
             // The tool moved since capture, the point moved up to K age.
             let (tb, tm) = (rnd() * core::f64::consts::TAU, rnd() * 0.01);

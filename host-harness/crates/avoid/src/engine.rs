@@ -3,7 +3,7 @@
 //! firmware's [`Receiver`], the board's number type, the lookup-table Gaussian, the weights
 //! watchdog), both behind the firmware's speed and separation monitor with the steering barrier.
 
-use flinch_firmware::avoidance::{self as fw, Controller, Gains, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Steer, Watchdog};
+use flinch_firmware::avoidance::{self as fw, Controller, Gains, Pfl, Real, Receiver, RxStats, SafeController, SafeState, Sensed, SsmParams, Steer, Watchdog};
 use flinch_firmware::avoidance::{num::I16F16, BoardReal};
 use flinch_hal_sim::serial::SimSerial;
 
@@ -70,6 +70,7 @@ fn state_name(s: SafeState) -> &'static str {
         SafeState::Slow => "slow",
         SafeState::ProtectiveStop => "protective_stop",
         SafeState::NoData => "no_data",
+        SafeState::Pfl => "pfl",
     }
 }
 
@@ -88,6 +89,25 @@ pub fn ssm_params<R: Real>(scene: &Avoid) -> SsmParams<R> {
         stopping_time_s: R::from_f64(s.stopping_time_s),
         margin_m: R::from_f64(s.intrusion_used_m(scene.camera.m_per_px) + s.sensor_uncertainty_m + s.robot_uncertainty_m + scene.clearance_m),
         speed_cap_mps: R::from_f64(scene.speed_mps),
+        whole_body_only: s.whole_body_only,
+        pfl: pfl_params(scene),
+    }
+}
+
+/// The PFL speeds of a scene's `[avoid.pfl]` once resolved (`None` without it, or while it is not
+/// resolved: [`check_pfl_resolved`] refuses such a run).
+pub fn pfl_params<R: Real>(scene: &Avoid) -> Option<Pfl<R>> {
+    let p = scene.pfl.as_ref()?;
+    let r = p.resolved.as_ref()?;
+    Some(Pfl { axis: [R::from_f64(p.axis[0]), R::from_f64(p.axis[1])], along_mps: R::from_f64(r.along_mps), across_mps: R::from_f64(r.across_mps) })
+}
+
+/// A scene with `[avoid.pfl]` runs only with its speeds computed (`flinch_studies::body_design::
+/// resolve_pfl`): never silently as SSM alone, never with made-up speeds.
+pub fn check_pfl_resolved(scene: &Avoid) -> Result<(), String> {
+    match &scene.pfl {
+        Some(p) if p.resolved.is_none() => Err(format!("avoid.pfl: the PFL speeds of the module scene {} are not computed (the caller must resolve them first: flinch_studies::body_design::resolve_pfl)", p.module)),
+        _ => Ok(()),
     }
 }
 
@@ -113,8 +133,12 @@ pub fn safe_controller<R: Real>(scene: &Avoid) -> Result<Option<SafeController<R
     let Some(p) = ssm::<R>(scene) else { return Ok(None) };
     let (w, h) = scene.extent_m();
     let q = R::from_f64;
+    // With PFL the monitor lets the tool pass a person along the module's axis at up to the module's
+    // speed, so the barrier keeps only the clearance asked (it still goes round where it can); SSM
+    // alone: where the monitor allows the cap.
+    let barrier = if p.pfl.is_some() { scene.clearance_m } else { steer_barrier_m(scene)? };
     Ok(Some(SafeController::new(p).with_steer(Steer {
-        barrier_m: q(steer_barrier_m(scene)?),
+        barrier_m: q(barrier),
         band_m: q(STEER_BAND_M),
         view_m: [R::ZERO, R::ZERO, q(w), q(h)],
         edge_margin_m: q(scene.robot.wrist_radius_m),
@@ -133,6 +157,7 @@ fn monitored<R: Real>(safe: &mut Option<SafeController<R>>, v: [R; 2], p: [f64; 
                 age_s: q(s.age_s),
                 nearest_x_m: q(s.nearest_x_m),
                 nearest_y_m: q(s.nearest_y_m),
+                sectors_m: s.sectors_m.map(q),
             });
             let (x, y) = (q(p[0]), q(p[1]));
             let (vx, vy) = c.steer(v[0], v[1], x, y, sn.as_ref());

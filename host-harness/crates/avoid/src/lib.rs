@@ -126,17 +126,16 @@ pub struct AvoidMetrics {
     /// outcome is then `reached_unverified` or `stopped_unverified`, never `reached`).
     pub verdict_basis: &'static str,
     /// Why it stopped before the goal, if it did: `stalled`, `no_path`, `no_room`, `blocked`,
-    /// `stale_weights`, `timeout`, `left_view` or `non_finite_command` (with `fault`).
+    /// `stale_weights`, `timeout`, `left_view`, `contact_stop` (a contact within the PFL speeds:
+    /// the module's switch stopped the robot) or `non_finite_command` (with `fault`).
     pub reason: Option<&'static str>,
     /// Why `reason` is null.
     pub reason_null_reason: Option<&'static str>,
     /// The tool entered the operator's true footprint.
     pub collided: bool,
-    /// `status` is `reached`: the goal was reached, never inside the operator, the clearance and
-    /// the SSM bound kept at every step, judged against the frames' ground truth. False for a run
-    /// that got to the goal but was `too_close`, a `collision`, an `ssm_violation` or
-    /// `reached_unverified`: whether the tool got to the goal at all is `time_to_goal_s`.
-    pub reached_goal: bool,
+    /// The tool got to the goal (a plain fact, whatever the verdict: `status` says whether the
+    /// run was safe; only `status` = `reached` is a goal reached safely).
+    pub goal_reached: bool,
     /// Time at which the goal was reached, s.
     pub time_to_goal_s: Option<f64>,
     /// Why `time_to_goal_s` is null.
@@ -182,6 +181,64 @@ pub struct AvoidMetrics {
     pub final_m: Option<[f64; 2]>,
     /// Receiver counters (MCU engine only).
     pub rx: Option<RxCounts>,
+    /// The PFL speeds the monitor and the verdict used, with their provenance; null without
+    /// `[avoid.pfl]` (SSM alone, no contact permitted).
+    pub pfl: Option<PflSummary>,
+    /// Why `pfl` is null.
+    pub pfl_null_reason: Option<&'static str>,
+    /// Control steps beyond the SSM bound but within the PFL speeds, count.
+    pub steps_in_pfl: usize,
+    /// Largest commanded speed on such a step, m/s.
+    pub max_speed_in_pfl_mps: f64,
+    /// Contacts at a tool velocity within the PFL speeds, count (each ends the run: `reason`
+    /// `contact_stop`).
+    pub contacts_within_pfl: usize,
+    /// The tool's speed at the contact, m/s (0 without one; the person's own speed is not in it).
+    pub max_contact_speed_mps: f64,
+}
+
+/// The PFL speeds of `[avoid.pfl]` (ISO/TS 15066 5.5.5, Annex A) and where they come from.
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct PflSummary {
+    /// Along the module's axis: the largest speed at which a contact with the module stays within
+    /// Table A.2's limits and the stroke holds (`flinch design --body-region`'s `speed_safe_mps`),
+    /// the smallest over the regions, m/s.
+    pub pfl_speed_along_axis_mps: f64,
+    /// The region that set it.
+    pub along_region: String,
+    /// Across the axis: a rigid tool's speed (the module does not yield there), m/s.
+    pub pfl_speed_across_axis_mps: f64,
+    /// The region that set it.
+    pub across_region: String,
+    /// The module's axis in the cell's plane (unit), [x, y].
+    pub axis: [f64; 2],
+    /// Table A.2's force limit for `along_region` and `contact`, N.
+    pub force_limit_n: f64,
+    /// "transient" or "quasi_static" (the module scene's contact).
+    pub contact: String,
+    /// The module scene as the avoidance scene names it.
+    pub module: String,
+    /// SHA-256 of the module scene's text, hex.
+    pub module_sha256: String,
+}
+
+impl PflSummary {
+    /// Of a scene whose PFL is resolved.
+    pub fn of(scene: &scene::Avoid) -> Option<Self> {
+        let p = scene.pfl.as_ref()?;
+        let r = p.resolved.as_ref()?;
+        Some(PflSummary {
+            pfl_speed_along_axis_mps: r.along_mps,
+            along_region: r.along_region.clone(),
+            pfl_speed_across_axis_mps: r.across_mps,
+            across_region: r.across_region.clone(),
+            axis: p.axis,
+            force_limit_n: r.along_force_limit_n,
+            contact: r.contact.clone(),
+            module: p.module.clone(),
+            module_sha256: r.module_sha256.clone(),
+        })
+    }
 }
 
 impl AvoidMetrics {
@@ -204,7 +261,7 @@ impl AvoidMetrics {
             reason,
             reason_null_reason: reason.is_none().then_some("reached the goal"),
             collided: res.min_signed_distance_m < 0.0,
-            reached_goal: res.status.ok(),
+            goal_reached: res.time_to_goal_s.is_some(),
             time_to_goal_s: res.time_to_goal_s,
             time_to_goal_null_reason: res.time_to_goal_s.is_none().then_some("the goal was not reached"),
             min_signed_distance_m: res.min_signed_distance_m,
@@ -236,6 +293,12 @@ impl AvoidMetrics {
                 old_session: s.old_session,
                 backlog: s.backlog,
             }),
+            pfl: res.pfl.clone(),
+            pfl_null_reason: res.pfl.is_none().then_some("the scene has no [avoid.pfl]: no contact permitted, SSM alone"),
+            steps_in_pfl: res.steps_in_pfl,
+            max_speed_in_pfl_mps: res.max_speed_in_pfl_mps,
+            contacts_within_pfl: res.contacts_within_pfl,
+            max_contact_speed_mps: res.max_contact_speed_mps,
         }
     }
 }
@@ -348,6 +411,25 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
             );
         } else {
             println!("  monitor           OFF (the thesis's law alone; latency {} s)", scene.latency_s);
+        }
+        match &res.pfl {
+            Some(p) => println!(
+                "  PFL (5.5.5)       {:.3} m/s along the module's axis [{:.3}, {:.3}] ({}, {:.0} N, {}), {:.3} m/s across it (rigid tool, {}); module {} sha256 {}...; {} steps in PFL (max {:.3} m/s), {} contacts within it",
+                p.pfl_speed_along_axis_mps,
+                p.axis[0],
+                p.axis[1],
+                p.along_region,
+                p.force_limit_n,
+                p.contact,
+                p.pfl_speed_across_axis_mps,
+                p.across_region,
+                p.module,
+                p.module_sha256.get(..12).unwrap_or(""),
+                res.steps_in_pfl,
+                res.max_speed_in_pfl_mps,
+                res.contacts_within_pfl
+            ),
+            None => println!("  PFL (5.5.5)       none: no contact permitted (no [avoid.pfl])"),
         }
         println!(
             "  robot removal     {}; raised plane {}",

@@ -69,6 +69,9 @@ pub struct Frame {
     /// The separation the sensor sees from the goal (the tool's surface there), m; `None` when the
     /// source does not measure it.
     pub goal_separation_m: Option<f64>,
+    /// The separation per direction ([`SECTORS`] sectors of 45 degrees round the tool, from its
+    /// surface), m: what the monitor's directional bound reads.
+    pub sectors_m: [f64; SECTORS],
 }
 
 /// The synthetic camera: the scene rendered at every frame, captured when asked.
@@ -76,8 +79,8 @@ pub struct Synthetic(pub Rng);
 
 impl FrameSource for Synthetic {
     fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<Frame>, String> {
-        let (field, separation_m, nearest_m, goal) = fit_and_sense_full(scene, setup, tool, &scene.operator_shape_at(t_s), scene.hand_at(t_s), &mut self.0);
-        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: t_s, goal_separation_m: Some(goal) }))
+        let (field, separation_m, nearest_m, goal, sectors_m) = fit_and_sense_sectors(scene, setup, tool, &scene.operator_shape_at(t_s), scene.hand_at(t_s), &mut self.0);
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: t_s, goal_separation_m: Some(goal), sectors_m }))
     }
 }
 
@@ -104,17 +107,22 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     let mut rows = Vec::with_capacity(steps.min(1 << 20));
     // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
     // capture). Each reaches the controller `latency_s` after capture.
-    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2], [f64; 2], Option<f64>)> = std::collections::VecDeque::new();
-    let Some(Frame { field: f0, separation_m: sep0, nearest_m: near0, goal_separation_m: goal0, .. }) = source.frame(scene, setup, 0.0, p)? else {
+    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2], [f64; 2], Option<f64>, [f64; SECTORS])> = std::collections::VecDeque::new();
+    let Some(Frame { field: f0, separation_m: sep0, nearest_m: near0, goal_separation_m: goal0, sectors_m: sec0, .. }) = source.frame(scene, setup, 0.0, p)? else {
         return Err("no camera frame at t = 0".into());
     };
     let mut field = f0.clone();
     // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
     let delay = frame_delay_s(scene)?;
-    in_flight.push_back((delay, 0.0, f0, sep0, p, near0, goal0));
+    in_flight.push_back((delay, 0.0, f0, sep0, p, near0, goal0, sec0));
     // The verdict: the SSM bound at the true separation, and the swept distance's Lipschitz term.
     let verdict = SsmVerdict::new(scene);
     let (mut ssm_violations, mut over_max, mut first_violation) = (0usize, 0.0f64, None);
+    // Power and force limiting: the steps it carried, and the contacts within it.
+    check_pfl_resolved(scene)?;
+    let pfl = pfl_params::<f64>(scene);
+    let (mut steps_in_pfl, mut max_in_pfl, mut contacts_within_pfl, mut contact_speed) = (0usize, 0.0f64, 0usize, 0.0f64);
+    let mut pfl_contact = false;
     // `no_room` is the monitor's call, on the first frame it sees.
     let monitor = ssm::<f64>(scene).map(SafeController::new);
     let mut frames = 1;
@@ -140,31 +148,34 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         let t_prev = t - dt;
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
-            if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc, goal_separation_m: gs }) = source.frame(scene, setup, t_prev, p)? {
+            if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc, goal_separation_m: gs, sectors_m: sec }) = source.frame(scene, setup, t_prev, p)? {
                 // The separation was measured from the tool where it is now (`p`), so the monitor's
                 // correction for the tool's motion since counts from `p` too; counting from the tool
                 // at a recorded frame's (earlier) capture would be optimistic by up to v (t - tc)
                 // when the tool turned back in between (review finding).
-                in_flight.push_back((tc + delay, tc, f, sep, p, near, gs));
+                in_flight.push_back((tc + delay, tc, f, sep, p, near, gs, sec));
                 frames += 1;
             }
             next_frame += scene.frame_period_s;
         }
         let mut no_room = false;
         while in_flight.front().is_some_and(|f| f.0 <= t_prev + 1e-12) {
-            let Some((_, tc, f, sep, at, near, gs)) = in_flight.pop_front() else { break };
+            let Some((_, tc, f, sep, at, near, gs, sec)) = in_flight.pop_front() else { break };
             if sensed.is_none() {
                 if let Some(m) = &monitor {
-                    // At rest and with a fresh frame the protective separation is `S_p(0)`: below
-                    // it at the start, or at the goal, no path can keep it.
-                    no_room = m.speed_limit(sep) <= 0.0 || gs.is_some_and(|g| m.speed_limit(g) <= 0.0);
+                    // At rest and with a fresh frame the protective separation is `S_p(0)`: with
+                    // the goal inside it no path can keep it (unless contact is permitted: PFL).
+                    // A start inside it is not refused: moving away from the person is not
+                    // limited (ISO/TS 15066 5.5.4.2.3), and where every direction is blocked the
+                    // monitor holds the tool in a protective stop.
+                    no_room = pfl.is_none() && gs.is_some_and(|g| m.speed_limit(g) <= 0.0);
                 }
             }
             engine.new_field(&f, seq, now)?;
             seq = seq.wrapping_add(1);
             field = f;
             capture_t = tc;
-            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1] });
+            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1], sectors_m: sec });
         }
         if let Some(sn) = sensed.as_mut() {
             // Counted from capture: latency plus the time since it arrived.
@@ -200,11 +211,26 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
             time_inside += dt;
         }
         // The verdict on the command: the SSM bound at the true separation when it was given.
+        // ISO/TS 15066 5.5.4.2.3: the speed towards the person; moving away is not limited.
         let bound = verdict.bound_at_mps(s_start, v_obstacle);
-        if speed > bound + SSM_TOL_MPS {
-            ssm_violations += 1;
-            over_max = over_max.max(speed - bound);
-            first_violation.get_or_insert(t);
+        let towards = approach_speed_mps(scene, t_prev, points[points.len() - 1], [vx, vy]);
+        let in_pfl = pfl.as_ref().is_some_and(|p| within_pfl(p, [vx, vy]));
+        if towards > bound + SSM_TOL_MPS {
+            if in_pfl {
+                steps_in_pfl += 1;
+                max_in_pfl = max_in_pfl.max(speed);
+            } else {
+                ssm_violations += 1;
+                over_max = over_max.max(towards - bound);
+                first_violation.get_or_insert(t);
+            }
+        }
+        if swept < 0.0 && in_pfl && min_s >= 0.0 {
+            // The first contact, within the PFL speeds: the module yields, its switch fires, the
+            // robot stops (the firmware's latch); the run ends here, a stop.
+            contacts_within_pfl += 1;
+            contact_speed = speed;
+            pfl_contact = true;
         }
         if speed > 1e-3 {
             if let Some(l) = last_v {
@@ -217,6 +243,12 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         points.push(p);
         signed.push(sd);
         rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: cmd.limit_mps, state: cmd.state, swept_separation_m: swept, ssm_bound_mps: bound });
+        if pfl_contact {
+            best = Snapshot { t_s: t, tool_m: p, hand_m: hand, field: field.clone() };
+            min_s = min_s.min(swept);
+            ended = Some(Reason::ContactStop);
+            break;
+        }
         if swept < min_s {
             min_s = swept;
             best = Snapshot { t_s: t, tool_m: p, hand_m: hand, field: field.clone() };
@@ -257,13 +289,16 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
             r.state = "stopped";
         }
     }
-    let collided = min_s < 0.0;
+    // A contact within the PFL speeds is the one permitted contact (it ended the run); any other
+    // entry into a person is a collision.
+    let collided = min_s < 0.0 && !pfl_contact;
     // Stopped runs are judged against contact only: a person may walk up to a stopped robot.
     let status = match (collided, ended) {
         (true, e) => Status::Collision(e),
         (false, Some(Reason::NonFiniteCommand)) => Status::Fault,
         (false, e) if ssm_violations > 0 => Status::SsmViolation(e),
-        (false, None) if min_s < scene.clearance_m => Status::TooClose,
+        // With PFL every step inside the clearance was judged against the PFL speeds.
+        (false, None) if min_s < scene.clearance_m && pfl.is_none() => Status::TooClose,
         (false, None) => Status::Reached,
         (false, Some(r)) => Status::Stopped(r),
     };
@@ -291,5 +326,10 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         dt_s: dt,
         rx: engine.rx_stats(),
         snapshot: best,
+        steps_in_pfl,
+        max_speed_in_pfl_mps: max_in_pfl,
+        contacts_within_pfl,
+        max_contact_speed_mps: contact_speed,
+        pfl: crate::PflSummary::of(scene),
     })
 }

@@ -47,7 +47,7 @@ use std::path::{Path, PathBuf};
 
 use crate::camera::{reproject, Cell, Pinhole, PlaneRaster};
 use crate::depth::{DepthImage, HeightMap};
-use crate::path::{Frame, FrameSource, Setup, NOTHING_SENSED_M};
+use crate::path::{Frame, FrameSource, Setup};
 use crate::rbf::{filter_weights, Field};
 use crate::scene::Avoid;
 
@@ -260,8 +260,7 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
             }
         }
     }
-    let mut best = f64::INFINITY;
-    let mut nearest = [tool[0] + NOTHING_SENSED_M, tool[1]];
+    let mut acc = crate::sensing::Nearest::new(tool, plane.m_per_px);
     let mut unknown = 0;
     let mut m = Vec::with_capacity(w * h);
     for (k, cell) in cells.iter().enumerate() {
@@ -273,21 +272,20 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
             }
         };
         if obstacle {
-            let q = plane.centre(k);
-            let d2 = (q[0] - tool[0]).powi(2) + (q[1] - tool[1]).powi(2);
-            if d2 < best {
-                (best, nearest) = (d2, q);
-            }
+            acc.add(plane.centre(k));
         }
         m.push(height);
     }
-    let from_centre = if best.is_finite() { (best.sqrt() - 0.5 * plane.m_per_px).max(0.0) } else { NOTHING_SENSED_M };
+    let (from_centre, nearest) = acc.nearest();
     // A cell filled with floor may hide an obstacle's edge: a null strip up to two cells wide is
     // filled from both sides, so a black rim or finger there reads as floor and the nearest seen
     // obstacle can be up to two cell diagonals farther than the true one. The separation the monitor
     // gets is shortened by that reach whenever the fill painted floor (review finding 6a).
     let fill_reach = if filled_floor > 0 { FILL_REACH_CELLS * plane.m_per_px } else { 0.0 };
     let sep = (from_centre - robot.wrist_radius_m - fill_reach).max(0.0);
+    // Per direction; where the fill painted floor the hidden edge may lie in any direction: the
+    // shortest separation in every sector.
+    let sectors = if filled_floor > 0 { [sep; crate::sensing::SECTORS] } else { acc.sectors().map(|d| (d - robot.wrist_radius_m).max(0.0)) };
     let mut map = HeightMap { width: w, height: h, m };
     crate::depth::raise(&mut map, scene.fit.offset_m);
     let mut wts = setup.fitter.weights(&map);
@@ -297,7 +295,7 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
         }
     }
     filter_weights(&mut wts);
-    let info = FrameInfo { unknown_cells: unknown, filled_cells: filled, robot_points: rep.robot_points, below_plane_points: rep.below_plane_points };
+    let info = FrameInfo { unknown_cells: unknown, filled_cells: filled, robot_points: rep.robot_points, below_plane_points: rep.below_plane_points, sectors_m: sectors };
     (Field::new(&setup.fitter.grid, wts, scene.fit.eval_sigma_factor), sep, nearest, info)
 }
 
@@ -316,6 +314,9 @@ pub struct FrameInfo {
     pub robot_points: usize,
     /// Points dropped as lower than the sense height under the plane (measurement errors).
     pub below_plane_points: usize,
+    /// The separation per direction from the tool's surface (the monitor's sectors), m: the
+    /// shortest one in every sector when the fill painted floor.
+    pub sectors_m: [f64; crate::sensing::SECTORS],
 }
 
 /// Whether the line of sight from the floor at `q` to the camera passes through the robot (with the
@@ -357,7 +358,7 @@ impl FrameSource for RecordedSource {
         s.max_unknown_fraction = s.max_unknown_fraction.max(info.unknown_cells as f64 / cells);
         s.max_filled_cells = s.max_filled_cells.max(info.filled_cells);
         s.below_plane_points += info.below_plane_points;
-        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc, goal_separation_m: None }))
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc, goal_separation_m: None, sectors_m: info.sectors_m }))
     }
 }
 

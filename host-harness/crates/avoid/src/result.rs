@@ -38,7 +38,8 @@ pub struct StepRow {
     /// Lower bound of the signed distance over the step's whole segment (the obstacles moving
     /// meanwhile), m: [`swept_min_m`].
     pub swept_separation_m: f64,
-    /// The SSM bound at the TRUE separation at the start of the step ([`SsmVerdict`]), m/s.
+    /// The SSM bound at the TRUE separation at the start of the step ([`SsmVerdict`]), m/s: on the
+    /// tool's speed towards the person (ISO/TS 15066 5.5.4.2.3), [`approach_speed_mps`].
     pub ssm_bound_mps: f64,
 }
 
@@ -96,4 +97,16 @@ pub struct PathResult {
     pub rx: Option<RxStats>,
     /// Scene at the minimum clearance.
     pub snapshot: Snapshot,
+    /// Steps beyond the SSM bound but within the PFL speeds (`[avoid.pfl]`), count.
+    pub steps_in_pfl: usize,
+    /// Largest commanded speed on such a step, m/s (0 when none).
+    pub max_speed_in_pfl_mps: f64,
+    /// Contacts (the tool's surface reaching a person) at a tool velocity within the PFL speeds,
+    /// count: each ends the run in a stop (the module's switch fires; a person resets).
+    pub contacts_within_pfl: usize,
+    /// The tool's speed at the first contact, m/s (0 when none; the person's own speed is not in
+    /// it).
+    pub max_contact_speed_mps: f64,
+    /// The PFL speeds used and their provenance (`None` without `[avoid.pfl]`).
+    pub pfl: Option<crate::PflSummary>,
 }

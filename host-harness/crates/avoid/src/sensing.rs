@@ -16,6 +16,60 @@ pub fn fit_frame(scene: &Avoid, setup: &Setup, tool: [f64; 2], hand: [f64; 2], r
 /// No obstacle pixel in view: the separation reported, m.
 pub const NOTHING_SENSED_M: f64 = 10.0;
 
+/// The directional separation's sectors (the firmware monitor's, ISO/TS 15066 5.5.4.2.3).
+pub use flinch_firmware::avoidance::SECTORS;
+
+/// The nearest obstacle pixel seen from a point, overall and per sector of 45 degrees
+/// ([`flinch_firmware::avoidance::sector_of`]), accumulated pixel by pixel. A pixel counts in the
+/// sector of its centre and in those of its four corners (a pixel across a sector boundary is in
+/// both), at the distance of its centre less half a pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct Nearest {
+    from: [f64; 2],
+    half_px: f64,
+    best_d2: f64,
+    at: [f64; 2],
+    sectors_d2: [f64; SECTORS],
+}
+
+impl Nearest {
+    /// Nothing seen yet from `from`, pixels of `m_per_px`.
+    pub fn new(from: [f64; 2], m_per_px: f64) -> Self {
+        Nearest { from, half_px: 0.5 * m_per_px, best_d2: f64::INFINITY, at: [from[0] + NOTHING_SENSED_M, from[1]], sectors_d2: [f64::INFINITY; SECTORS] }
+    }
+    /// An obstacle pixel centred at `q`.
+    pub fn add(&mut self, q: [f64; 2]) {
+        let (dx, dy) = (q[0] - self.from[0], q[1] - self.from[1]);
+        let d2 = dx * dx + dy * dy;
+        if d2 < self.best_d2 {
+            (self.best_d2, self.at) = (d2, q);
+        }
+        let h = self.half_px;
+        for (ox, oy) in [(0.0, 0.0), (-h, -h), (h, -h), (-h, h), (h, h)] {
+            let k = flinch_firmware::avoidance::sector_of(dx + ox, dy + oy);
+            if d2 < self.sectors_d2[k] {
+                self.sectors_d2[k] = d2;
+            }
+        }
+    }
+    /// The distance from the point to the nearest pixel less half a pixel (at least 0;
+    /// [`NOTHING_SENSED_M`] when none), and its centre, m.
+    pub fn nearest(&self) -> (f64, [f64; 2]) {
+        (self.dist(self.best_d2), self.at)
+    }
+    /// The same per sector, m.
+    pub fn sectors(&self) -> [f64; SECTORS] {
+        self.sectors_d2.map(|d2| self.dist(d2))
+    }
+    fn dist(&self, d2: f64) -> f64 {
+        if d2.is_finite() {
+            (d2.sqrt() - self.half_px).max(0.0)
+        } else {
+            NOTHING_SENSED_M
+        }
+    }
+}
+
 /// The field fitted to one frame, and the separation the sensor sees: the distance from the tool's
 /// surface (the wrist disc) to the nearest pixel of the height map (after robot removal, before the
 /// raise) higher than `safety.sense_height_m`, less half a pixel; about [`NOTHING_SENSED_M`] when
@@ -43,6 +97,12 @@ pub(crate) fn fit_and_sense_with(scene: &Avoid, setup: &Setup, tool: [f64; 2], o
 
 /// [`fit_and_sense_with`], and the separation sensed from the goal (the tool's surface there), m.
 pub(crate) fn fit_and_sense_full(scene: &Avoid, setup: &Setup, tool: [f64; 2], op: &crate::depth::OperatorShape, hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2], f64) {
+    let (f, sep, near, goal, _) = fit_and_sense_sectors(scene, setup, tool, op, hand, rng);
+    (f, sep, near, goal)
+}
+
+/// [`fit_and_sense_full`], and the separation per sector from the tool's surface, m.
+pub(crate) fn fit_and_sense_sectors(scene: &Avoid, setup: &Setup, tool: [f64; 2], op: &crate::depth::OperatorShape, hand: [f64; 2], rng: &mut Rng) -> (Field, f64, [f64; 2], f64, [f64; SECTORS]) {
     let cam = scene.camera();
     let robot = scene.robot_shape();
     let img = render(&cam, Some((&robot, tool)), Some((op, hand)), rng);
@@ -53,13 +113,15 @@ pub(crate) fn fit_and_sense_full(scene: &Avoid, setup: &Setup, tool: [f64; 2], o
     } else {
         preprocess(&img, &cam, 0.0, Some((&setup.calibration, tool)))
     };
-    let (from_centre, nearest) = if scene.robot.removal == "model" {
-        sensed_nearest(&img, &cam, &robot, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
+    let acc = if scene.robot.removal == "model" {
+        sensed_acc(&img, &cam, &robot, tool, tool, scene.robot.removal_margin_m, scene.safety.sense_height_m)
     } else {
-        nearest_obstacle_at(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
+        nearest_acc(&map, cam.m_per_px, tool, scene.safety.sense_height_m)
     };
+    let (from_centre, nearest) = acc.nearest();
     // From the tool's surface, as the signed distance is measured.
     let sep = (from_centre - robot.wrist_radius_m).max(0.0);
+    let sectors = acc.sectors().map(|d| (d - robot.wrist_radius_m).max(0.0));
     let goal_from_centre = if scene.robot.removal == "model" {
         sensed_nearest_from(&img, &cam, &robot, tool, scene.goal_m, scene.robot.removal_margin_m, scene.safety.sense_height_m).0
     } else {
@@ -74,7 +136,7 @@ pub(crate) fn fit_and_sense_full(scene: &Avoid, setup: &Setup, tool: [f64; 2], o
         }
     }
     filter_weights(&mut w);
-    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep, nearest, goal_sep)
+    (Field::new(&setup.fitter.grid, w, scene.fit.eval_sigma_factor), sep, nearest, goal_sep, sectors)
 }
 
 /// Robot removal by the robot-only height model: a pixel is cleared only when the robot, at the
@@ -112,8 +174,12 @@ pub fn sensed_nearest(img: &crate::depth::DepthImage, cam: &crate::depth::Camera
 
 /// [`sensed_nearest`] measured from the point `from` (the robot removed at `tool`).
 pub fn sensed_nearest_from(img: &crate::depth::DepthImage, cam: &crate::depth::Camera, robot: &crate::depth::RobotShape, tool: [f64; 2], from: [f64; 2], margin_m: f64, sense_m: f64) -> (f64, [f64; 2]) {
-    let mut best = f64::INFINITY;
-    let mut at = [from[0] + NOTHING_SENSED_M, from[1]];
+    sensed_acc(img, cam, robot, tool, from, margin_m, sense_m).nearest()
+}
+
+/// The pixels [`sensed_nearest_from`] counts, accumulated from `from`.
+pub fn sensed_acc(img: &crate::depth::DepthImage, cam: &crate::depth::Camera, robot: &crate::depth::RobotShape, tool: [f64; 2], from: [f64; 2], margin_m: f64, sense_m: f64) -> Nearest {
+    let mut acc = Nearest::new(from, cam.m_per_px);
     let w = img.width;
     for (k, &d) in img.mm.iter().enumerate() {
         if d == 0 {
@@ -125,16 +191,9 @@ pub fn sensed_nearest_from(img: &crate::depth::DepthImage, cam: &crate::depth::C
         if h <= sense_m || (hr > 0.0 && h <= hr + margin_m) {
             continue;
         }
-        let d2 = (p[0] - from[0]).powi(2) + (p[1] - from[1]).powi(2);
-        if d2 < best {
-            (best, at) = (d2, p);
-        }
+        acc.add(p);
     }
-    if best.is_finite() {
-        ((best.sqrt() - 0.5 * cam.m_per_px).max(0.0), at)
-    } else {
-        (NOTHING_SENSED_M, at)
-    }
+    acc
 }
 
 /// Distance from `p` to the nearest pixel above `height_m`, less half a pixel, m.
@@ -144,20 +203,16 @@ pub fn nearest_obstacle(map: &crate::depth::HeightMap, m_per_px: f64, p: [f64; 2
 
 /// [`nearest_obstacle`] and the nearest pixel's centre, m.
 pub fn nearest_obstacle_at(map: &crate::depth::HeightMap, m_per_px: f64, p: [f64; 2], height_m: f64) -> (f64, [f64; 2]) {
-    let mut best = f64::INFINITY;
-    let mut at = [p[0] + NOTHING_SENSED_M, p[1]];
+    nearest_acc(map, m_per_px, p, height_m).nearest()
+}
+
+/// The pixels above `height_m`, accumulated from `p`.
+pub fn nearest_acc(map: &crate::depth::HeightMap, m_per_px: f64, p: [f64; 2], height_m: f64) -> Nearest {
+    let mut acc = Nearest::new(p, m_per_px);
     for (k, v) in map.m.iter().enumerate() {
         if *v > height_m {
-            let q = [((k % map.width) as f64 + 0.5) * m_per_px, ((k / map.width) as f64 + 0.5) * m_per_px];
-            let d2 = (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
-            if d2 < best {
-                (best, at) = (d2, q);
-            }
+            acc.add([((k % map.width) as f64 + 0.5) * m_per_px, ((k / map.width) as f64 + 0.5) * m_per_px]);
         }
     }
-    if best.is_finite() {
-        ((best.sqrt() - 0.5 * m_per_px).max(0.0), at)
-    } else {
-        (NOTHING_SENSED_M, at)
-    }
+    acc
 }

@@ -49,6 +49,33 @@ impl SsmVerdict {
 /// scales to at most its limit; this absorbs rounding only).
 pub const SSM_TOL_MPS: f64 = 1e-6;
 
+/// The step of the one-sided difference in [`approach_speed_mps`], m.
+pub const APPROACH_STEP_M: f64 = 1e-5;
+
+/// The tool's speed towards the person at `p` (time `t_s`), commanded `v`, m/s (0 when moving
+/// away): ISO/TS 15066 5.5.4.2.3's directed `v_r`. The one-sided rate at which the true signed
+/// distance falls along `v`: where two points of the footprint are equally near, the larger of
+/// their approach speeds (the derivative of a minimum along a direction is the minimum of the
+/// derivatives). A finite difference over [`APPROACH_STEP_M`]: on a curved boundary it is off by
+/// at most that step over the curvature radius (a 40 mm hand: 0.03 %).
+pub fn approach_speed_mps(scene: &Avoid, t_s: f64, p: [f64; 2], v: [f64; 2]) -> f64 {
+    let speed = v[0].hypot(v[1]);
+    if !(speed > 0.0) {
+        return 0.0;
+    }
+    let h = APPROACH_STEP_M;
+    let q = [p[0] + h * v[0] / speed, p[1] + h * v[1] / speed];
+    let fall = (scene.signed_distance_m(t_s, p) - scene.signed_distance_m(t_s, q)) / h;
+    (fall * speed).clamp(0.0, speed)
+}
+
+/// Within the PFL speeds of `pfl` (the module's axis, along and across), to rounding.
+pub fn within_pfl(pfl: &flinch_firmware::avoidance::Pfl<f64>, v: [f64; 2]) -> bool {
+    let along = (v[0] * pfl.axis[0] + v[1] * pfl.axis[1]).abs();
+    let across = (v[0] * pfl.axis[1] - v[1] * pfl.axis[0]).abs();
+    along <= pfl.along_mps + SSM_TOL_MPS && across <= pfl.across_mps + SSM_TOL_MPS
+}
+
 /// The swept distance's resolution: over each control step the signed distance is bounded from
 /// below to within this of the true minimum over the step's segment, m.
 pub const SWEPT_TOL_M: f64 = 1e-4;
@@ -131,14 +158,19 @@ pub enum Reason {
     Timeout,
     /// The tool left the camera's view (the sensed workspace): stopped there.
     LeftView,
-    /// With the monitor on, the first frame shows the start or the goal inside the protective
+    /// With the monitor on and no PFL, the first frame shows the goal inside the protective
     /// separation at rest (`S_p(0)`, the clearance included): no path can keep it, so the tool
     /// does not move at all (instead of waiting in a protective stop or stalling to the timeout).
+    /// (A start inside it is not refused: moving away is not limited.)
     NoRoom,
     /// The command source gave a non-finite command (NaN or infinite): a fault, not a stop (with
     /// the monitor on it never reaches the drive; in `--thesis` mode nothing stands in between).
     /// The tool is held where it was.
     NonFiniteCommand,
+    /// The tool touched a person at a velocity within the PFL speeds (`[avoid.pfl]`): the
+    /// module's switch fires and the firmware latches the stop; a person resets it (ISO 13849-1
+    /// 5.2.2). Safe, and the work stops.
+    ContactStop,
 }
 
 impl Reason {
@@ -153,6 +185,7 @@ impl Reason {
             Reason::LeftView => "left_view",
             Reason::NoRoom => "no_room",
             Reason::NonFiniteCommand => "non_finite_command",
+            Reason::ContactStop => "contact_stop",
         }
     }
 }

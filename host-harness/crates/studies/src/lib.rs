@@ -13,6 +13,7 @@
 
 pub mod bench;
 pub mod body_design;
+pub mod pfl;
 pub mod check;
 pub mod design;
 pub mod robot;

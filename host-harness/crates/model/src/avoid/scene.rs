@@ -67,6 +67,48 @@ pub struct Avoid {
     pub operator: OperatorCfg,
     /// The pinhole camera of recorded frames (`flinch avoid --depth`), if any.
     pub depth_camera: Option<super::depth_camera::DepthCameraCfg>,
+    /// Power and force limiting beside the monitor (`[avoid.pfl]`), if the scene allows contact.
+    pub pfl: Option<PflCfg>,
+}
+
+/// `[avoid.pfl]`: power and force limiting (ISO/TS 15066 5.5.5) beside speed and separation
+/// monitoring. The speeds come from the module scene by the computation of `flinch design
+/// --body-region` ([`PflCfg::resolved`], filled in by `flinch_studies::body_design::resolve_pfl`
+/// before a run; a run refuses a scene whose PFL is not resolved).
+#[derive(Clone, Debug)]
+pub struct PflCfg {
+    /// The module scene (a `[target] kind = "body_region"` scene: its module, robot, dead time,
+    /// contact kind and area), as written, and resolved against the avoidance scene's directory.
+    pub module: String,
+    /// See `module`: the path the run reads.
+    pub module_path: std::path::PathBuf,
+    /// The body regions that may be touched (ISO/TS 15066 Table A.2 names); the speeds are the
+    /// smallest over them.
+    pub body_regions: Vec<String>,
+    /// The module's axis in the cell's plane (normalised by the loader): it yields along it only.
+    pub axis: [f64; 2],
+    /// The speeds, once computed.
+    pub resolved: Option<PflResolved>,
+}
+
+/// The PFL speeds of a module on its robot and their provenance: what the board receives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PflResolved {
+    /// Along the module's axis, with the module: the smallest over the regions of the largest speed
+    /// at which the run is safe (body limits and stroke), m/s.
+    pub along_mps: f64,
+    /// The region that set `along_mps`.
+    pub along_region: String,
+    /// Across the axis: a rigid tool's speed (the module does not yield there), m/s.
+    pub across_mps: f64,
+    /// The region that set `across_mps`.
+    pub across_region: String,
+    /// The force limit of `along_region` (ISO/TS 15066 Table A.2, the contact kind's), N.
+    pub along_force_limit_n: f64,
+    /// "transient" or "quasi_static": the module scene's contact.
+    pub contact: String,
+    /// SHA-256 of the module scene's text, hex.
+    pub module_sha256: String,
 }
 
 
@@ -92,6 +134,9 @@ pub struct SafetyCfg {
     /// A pixel higher than this above the plane, after robot removal, is an obstacle, m. Anything
     /// thinner is not seen: the intrusion distance the monitor uses grows with it (ISO 13855, 6.2).
     pub sense_height_m: f64,
+    /// Only a whole (walking) body can approach, never a reaching hand or arm: ISO 13855 6.2's
+    /// 1.6 m/s beyond 0.5 m applies. False (the default): `K = max(2.0 m/s, v_h)` everywhere.
+    pub whole_body_only: bool,
 }
 
 impl SafetyCfg {
@@ -232,6 +277,8 @@ impl Avoid {
         self.safety.mode = "off".into();
         self.robot.removal = "calibration".into();
         self.fit.remove_plane = false;
+        // The thesis has no power and force limiting: its law is judged on contact alone.
+        self.pfl = None;
     }
 
     /// Image extent on the plane, m.

@@ -67,6 +67,7 @@ pub fn key_tables() -> &'static [KeyTable] {
         KeyTable { path: "avoid.operator", when: AVOID_SCENE, keys: avoid::OPERATOR_KEYS },
         KeyTable { path: "avoid.operator.keyframes[]", when: AVOID_SCENE, keys: avoid::KEYFRAME_KEYS },
         KeyTable { path: "avoid.depth_camera", when: AVOID_SCENE, keys: avoid::DEPTH_CAMERA_KEYS },
+        KeyTable { path: "avoid.pfl", when: AVOID_SCENE, keys: avoid::PFL_KEYS },
         KeyTable { path: "avoid.operator.obstacles[]", when: "avoidance scene, kind = \"disc\"", keys: avoid::DISC_KEYS },
         KeyTable { path: "avoid.operator.obstacles[]", when: "avoidance scene, kind = \"box\"", keys: avoid::BOX_KEYS },
         KeyTable { path: "avoid.operator.obstacles[].keyframes[]", when: AVOID_SCENE, keys: avoid::OBSTACLE_KEYFRAME_KEYS },

@@ -26,7 +26,7 @@ pub(crate) const fn part(name: &'static str, doc: &'static str) -> Key {
 }
 
 /// Keys holding `[x, y]` (two numbers, each in the key's range), not one number.
-pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m", "position_m", "center_m", "size_m"];
+pub const POINTS: &[&str] = &["start_m", "goal_m", "base_m", "entry_m", "hand_m", "position_m", "center_m", "size_m", "axis"];
 
 pub(crate) const START: Key = point("start_m", "[x, y] start of the tool");
 
@@ -157,6 +157,8 @@ pub(crate) const ROBOT: Key = Key::of("robot", Ty::Table("the robot as the camer
 
 pub(crate) const OPERATOR: Key = Key::of("operator", Ty::Table("the operator and its motion"), "[avoid.operator]");
 
+pub(crate) const PFL: Key = Key::of("pfl", Ty::Table("power and force limiting beside the monitor (ISO/TS 15066 5.5.5)"), "[avoid.pfl]").optional("no contact permitted: SSM alone");
+
 pub(crate) const DEPTH_CAMERA: Key = Key::of("depth_camera", Ty::Table("the pinhole camera of recorded depth frames (flinch avoid --depth)"), "[avoid.depth_camera]").optional("no recorded input (--depth is refused)");
 
 /// `[avoid.depth_camera]`: the pinhole camera that took the recorded frames of `flinch avoid --depth`
@@ -176,7 +178,7 @@ pub const DEPTH_CAMERA_KEYS: &[Key] = &[
 
 /// `[avoid]`'s numbers.
 pub const KEYS: &[Key] = &[
-    START, GOAL, SPEED, K_REP, REPULSION, DT, FRAME, MAX_TIME, GOAL_TOL, CAPTURE, LATCH, SLOW, STOP, STALL_WINDOW, STALL_MOVE, PROGRESS_WINDOW, PROGRESS, LATENCY, CLEARANCE, BAUD, SAFETY, CAMERA, FIT, ROBOT, OPERATOR, DEPTH_CAMERA,
+    START, GOAL, SPEED, K_REP, REPULSION, DT, FRAME, MAX_TIME, GOAL_TOL, CAPTURE, LATCH, SLOW, STOP, STALL_WINDOW, STALL_MOVE, PROGRESS_WINDOW, PROGRESS, LATENCY, CLEARANCE, BAUD, SAFETY, CAMERA, FIT, ROBOT, OPERATOR, DEPTH_CAMERA, PFL,
 ];
 
 /// The repulsion laws, as `avoid::scene::Avoid::repulsion_law` reads them.
@@ -209,7 +211,28 @@ pub const SAFETY_KEYS: &[Key] = &[
     Key::number("sensor_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_d: a few pixels; 1 m bounds it", "Z_d").default(0.01),
     Key::number("robot_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_r: millimetres for an industrial arm; 1 m bounds it", "Z_r").default(0.005),
     Key::number("sense_height_m", "m", Incl(0.001), Incl(1.0), "above the depth noise (mm), below a person's hand over the plane; d of ISO 13855 sets the intrusion distance the monitor adds", "obstacle above this height").default(0.014),
+    WHOLE_BODY,
 ];
+
+pub(crate) const WHOLE_BODY: Key = Key::of(
+    "whole_body_only",
+    Ty::Bool,
+    "only a whole walking body can approach (no hand or arm can reach in): K may fall to v_h beyond 0.5 m (ISO 13855:2010 6.2); otherwise K = max(2.0 m/s, v_h) at every distance",
+)
+.optional("false");
+
+pub(crate) const PFL_MODULE: Key = Key::of(
+    "module",
+    Ty::Text,
+    "the module scene (relative to this file): a [target] kind = \"body_region\" scene whose module, robot, dead time, contact and area give the PFL speeds, computed as flinch design --body-region does",
+);
+
+pub(crate) const PFL_REGIONS: Key = Key::of("body_regions", Ty::List(crate::body::REGION_NAMES), "the body regions that may be touched (ISO/TS 15066 Table A.2); the PFL speeds are the smallest over them; face and skull are refused (no contact permitted)");
+
+pub(crate) const PFL_AXIS: Key = Key::number("axis", "", Incl(-1.0), Incl(1.0), "a direction in the plane, normalised by the loader: the module yields along it (a 1-D decoupler), as rigid as without it across it", "[x, y] of the module's axis in the cell's frame");
+
+/// `[avoid.pfl]`.
+pub const PFL_KEYS: &[Key] = &[PFL_MODULE, PFL_REGIONS, PFL_AXIS];
 
 pub(crate) const WIDTH: Key = Key::integer("width_px", 8, 2000, "depth cameras have 320-1280 columns; the thesis's image is 210 px", "image columns");
 

@@ -1,10 +1,10 @@
 //! Reads `[avoid]` into `crate::avoid::scene::Avoid`, table by table, every problem at once; the
 //! entry points (`parse`, `Avoid::load`, `Avoid::parse`) and the safety table's defaults.
 
-use crate::scene::check::{Ctx, SceneError, SceneIssue, Tab};
+use crate::scene::check::{num, Ctx, SceneError, SceneIssue, Tab};
 use crate::avoid::depth_camera::DepthCameraCfg;
 use crate::avoid::shapes::{Obstacle, ObstacleKeyframe};
-use crate::avoid::scene::{Avoid, CameraCfg, FitCfg, Keyframe, OperatorCfg, RobotCfg, SafetyCfg};
+use crate::avoid::scene::{Avoid, CameraCfg, FitCfg, Keyframe, OperatorCfg, PflCfg, RobotCfg, SafetyCfg};
 use std::path::Path;
 use super::{keys::*, values::*, checks::*};
 
@@ -80,6 +80,11 @@ pub(crate) fn read_avoid(cx: &mut Ctx, t: &Tab) -> Option<Avoid> {
         Some(None) => Some(None),
         None => None,
     };
+    let pfl = match cx.maybe_table(t, &PFL) {
+        Some(Some(p)) => pfl(cx, &p).map(Some),
+        Some(None) => Some(None),
+        None => None,
+    };
     let scene = Avoid {
         start_m: start_m?,
         goal_m: goal_m?,
@@ -107,6 +112,7 @@ pub(crate) fn read_avoid(cx: &mut Ctx, t: &Tab) -> Option<Avoid> {
         robot: robot?,
         operator: operator?,
         depth_camera: depth_camera?,
+        pfl: pfl?,
     };
     let tabs = Tabs { avoid: t, camera: camera_t.as_ref()?, fit: fit_t.as_ref()?, robot: robot_t.as_ref()?, operator: operator_t.as_ref()? };
     if cx.issues.is_empty() {
@@ -129,8 +135,10 @@ pub fn default_safety() -> SafetyCfg {
 pub(crate) fn safety(cx: &mut Ctx, t: &Tab) -> Option<SafetyCfg> {
     cx.check_keys(t, SAFETY_KEYS, "");
     let mode = choice_or(cx, t, &MODE, "ssm");
-    let v: Vec<Option<f64>> = SAFETY_KEYS[1..].iter().map(|k| cx.number(t, k)).collect();
-    let g = |name: &str| SAFETY_KEYS[1..].iter().position(|k| k.name == name).and_then(|i| v[i]);
+    // The number keys (between `mode` and `whole_body_only`).
+    let numbers = &SAFETY_KEYS[1..SAFETY_KEYS.len() - 1];
+    let v: Vec<Option<f64>> = numbers.iter().map(|k| cx.number(t, k)).collect();
+    let g = |name: &str| numbers.iter().position(|k| k.name == name).and_then(|i| v[i]);
     Some(SafetyCfg {
         mode: mode?,
         human_speed_mps: g("human_speed_mps")?,
@@ -140,7 +148,35 @@ pub(crate) fn safety(cx: &mut Ctx, t: &Tab) -> Option<SafetyCfg> {
         sensor_uncertainty_m: g("sensor_uncertainty_m")?,
         robot_uncertainty_m: g("robot_uncertainty_m")?,
         sense_height_m: g("sense_height_m")?,
+        whole_body_only: cx.boolean(t, &WHOLE_BODY)?.unwrap_or(false),
     })
+}
+
+/// `[avoid.pfl]`: the module scene resolved against the scene file's directory, the regions (face
+/// and skull refused: ISO/TS 15066 Table A.2 permits no contact there), the axis normalised.
+pub(crate) fn pfl(cx: &mut Ctx, t: &Tab) -> Option<PflCfg> {
+    cx.check_keys(t, PFL_KEYS, "");
+    let module = cx.string(t, &PFL_MODULE);
+    let regions = cx.list(t, &PFL_REGIONS);
+    let axis = xy(cx, t, &PFL_AXIS);
+    let regions: Vec<String> = regions?.into_iter().map(|i| crate::body::REGION_NAMES[i].to_string()).collect();
+    if regions.is_empty() {
+        cx.bad(t, PFL_REGIONS.name, "must name at least one region that may be touched (for example [\"hand\"]); without any, leave [avoid.pfl] out".into());
+        return None;
+    }
+    if let Some(r) = regions.iter().find(|r| matches!(r.as_str(), "face" | "skull")) {
+        cx.bad(t, PFL_REGIONS.name, format!("{r:?}: ISO/TS 15066 Table A.2 permits no contact with the face or the skull; a cell where they can be reached needs SSM alone there"));
+        return None;
+    }
+    let axis = axis?;
+    let n = axis[0].hypot(axis[1]);
+    if !(n >= 1e-3) {
+        cx.bad(t, PFL_AXIS.name, format!("must be a direction (length at least 0.001), got [{}, {}]", num(axis[0]), num(axis[1])));
+        return None;
+    }
+    let module = module?;
+    let module_path = std::path::Path::new(cx.file).parent().map_or_else(|| std::path::PathBuf::from(&module), |d| d.join(&module));
+    Some(PflCfg { module, module_path, body_regions: regions, axis: [axis[0] / n, axis[1] / n], resolved: None })
 }
 
 pub(crate) fn camera(cx: &mut Ctx, t: &Tab) -> Option<CameraCfg> {
