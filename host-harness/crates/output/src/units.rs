@@ -17,7 +17,7 @@ pub const NAMED: &[(&str, &str)] = &[
     // avoid: counts.
     ("heading_reversals", "1"), ("stalls", "1"), ("frames", "1"), ("good", "1"), ("bad_crc", "1"), ("bad_header", "1"), ("short", "1"), ("stale", "1"),
     ("skipped_bytes", "1"), ("overrun_bytes", "1"), ("new_sessions", "1"), ("old_session", "1"), ("backlog", "1"),
-    ("ssm_violations", "1"),
+    ("ssm_violations", "1"), ("steps_in_pfl", "1"), ("contacts_within_pfl", "1"),
     // hil: the phase is a fraction of the scan cycle.
     ("phase", "1"),
     // --measured: each comparison states its unit in its own `unit` field.
