@@ -26,6 +26,10 @@
 //! the register trace shows where the bench acted. Scenario: reset, arm, an edge on channel A (EXTI0)
 //! stops, obstacle gone, reset, re-arm, an edge on channel B (EXTI4) stops, end. The bench reports
 //! over semihosting and exits QEMU; xtask compares the trace with `firmware/qemu/board-edge.txt`.
+//! Other modes (semihosting argument): `panic`, `overflow`, `config` (the faults), and `serial`
+//! (`cargo xtask board-serial`): the operator and the obstacle around the host's weights frames,
+//! acting on the velocity frames' statuses, so that the frames show `stopped: latched` while the
+//! firmware holds the robot and every other status after a reset press (`serial` below).
 
 use crate::hw::{gpio, ESC_PIN, ESC_PORT, K1_PIN, K1_PORT, K2_PIN, K2_PORT, PI, SUPPLY_PIN, SUPPLY_PORT};
 use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
@@ -242,6 +246,7 @@ fn obstacle_gone<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32) {
 #[derive(Copy, Clone, PartialEq, Eq)]
 enum Mode {
     Edges,
+    Serial,
     Panic,
     Overflow,
     Config,
@@ -261,6 +266,8 @@ fn mode() -> Mode {
         Mode::Overflow
     } else if has(b"config") {
         Mode::Config
+    } else if has(b"serial") {
+        Mode::Serial
     } else {
         Mode::Edges
     }
@@ -300,6 +307,9 @@ pub fn fault_report(what: &str) -> ! {
 pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     let mut w = World { idle, a_tripped: false, b_tripped: false, reset: false, lsi_on: true, lsi_next: None };
     let mode = mode();
+    if mode == Mode::Serial {
+        serial(&mut w, &now);
+    }
     run(&mut w, &now, 200_000); // latched after the reset: nothing happens untouched
     if mode != Mode::Edges {
         arm(&mut w, &now, "not armed within 2 s of the reset press");
@@ -378,6 +388,78 @@ pub fn run_scenario(now: impl Fn() -> u32, idle: impl FnMut()) -> ! {
     report_worst();
     let (used, painted) = stack_used();
     hprintln!("bench: stack used={} B of the board ELF (painted {} B; main, the drain, the bench and every interrupt)", used, painted);
+    hprintln!("bench: PASS");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+// ---- The serial conversation (`cargo xtask board-serial`): the operator and the obstacle around
+// the host's weights frames, so that the velocity frames show `stopped: latched` and every other
+// status after a reset press -------------------------------------------------------------------------
+/// The last velocity frame the step queued: its status code (`u32::MAX`: none yet) and the frames
+/// applied (`board_avoid.rs`, qemu-io only).
+static VEL_STATUS: AtomicU32 = AtomicU32::new(u32::MAX);
+static VEL_GOOD: AtomicU32 = AtomicU32::new(0);
+/// Velocity frames queued while the status was `stopped: latched`.
+static VEL_LATCHED: AtomicU32 = AtomicU32::new(0);
+const ST_OK: u32 = 0;
+const ST_STALE: u32 = 2;
+const ST_LATCHED: u32 = 4;
+/// How long the bench waits for the host's next frame, firmware time.
+const HOST_WAIT_US: u32 = 60_000_000;
+
+/// From the step: the velocity frame it queued.
+#[inline(always)]
+pub fn velocity_sent(status: u32, good: u32) {
+    VEL_STATUS.store(status, Relaxed);
+    VEL_GOOD.store(good, Relaxed);
+    if status == ST_LATCHED {
+        VEL_LATCHED.fetch_add(1, Relaxed);
+    }
+}
+
+/// Run until the last velocity frame had `status` and at least `good` frames applied, at most
+/// `HOST_WAIT_US`; `what` is the verdict on time-out.
+fn until_velocity<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32, status: u32, good: u32, what: &str) {
+    let start = now();
+    while now().wrapping_sub(start) < HOST_WAIT_US {
+        w.step(now());
+        if VEL_STATUS.load(Relaxed) == status && VEL_GOOD.load(Relaxed) >= good {
+            return;
+        }
+    }
+    fail(what);
+}
+
+/// The serial mode: the start latch (the host reads `stopped: latched`), a reset press, the host's
+/// frames 1 to 3 and the line silent until `stopped: stale`; then the obstacle trips the switch (the
+/// collision latch: `stopped: latched`), the host's frame 4 is taken while latched, the obstacle
+/// goes and a reset press releases the latch (the weights of frame 4 are stale by then); the host's
+/// frame 5 must give `ok`. The host (xtask) checks the frames, the bench the stop outputs.
+fn serial<F: FnMut()>(w: &mut World<F>, now: &impl Fn() -> u32) -> ! {
+    run(w, now, 300_000); // the start latch: frames say `stopped: latched`
+    if k1_high() || VEL_LATCHED.load(Relaxed) == 0 {
+        fail("serial: not held, or no `stopped: latched` frame, before the reset press");
+    }
+    arm(w, now, "serial: not armed within 2 s of the reset press");
+    hprintln!("bench: serial: armed after the reset press");
+    until_velocity(w, now, ST_STALE, 2, "serial: the host's frames 1 and 3 never aged to `stopped: stale`");
+    obstacle(w, now, Channel::A, [3, 4]);
+    let before = VEL_LATCHED.load(Relaxed);
+    until_velocity(w, now, ST_LATCHED, 3, "serial: the host's frame 4 was not taken while latched");
+    // Held for 500 ms more with frame 4 applied: it is stale (330 ms) when the latch is released.
+    run(w, now, 500_000);
+    if !both_stopped() || VEL_LATCHED.load(Relaxed).wrapping_sub(before) < 30 {
+        fail("serial: the collision latch did not hold with `stopped: latched` frames");
+    }
+    hprintln!("bench: serial: tripped, {} frames said `stopped: latched`", VEL_LATCHED.load(Relaxed).wrapping_sub(before));
+    obstacle_gone(w, now);
+    arm(w, now, "serial: not re-armed within 2 s of the second reset press");
+    hprintln!("bench: serial: re-armed after the second reset press");
+    until_velocity(w, now, ST_OK, 4, "serial: no `ok` after the release and the host's frame 5");
+    run(w, now, 200_000);
     hprintln!("bench: PASS");
     debug::exit(debug::EXIT_SUCCESS);
     loop {
