@@ -158,7 +158,6 @@ pub fn board_serial() -> Result<String, String> {
         let f = wait(&mut stream, "frame 5 in use after the release", &|f| f.seq == 5)?;
         let line = velocity_line("frame 5 (empty field) after the release", &f, false);
         lines.push(format!("{line}, vx_umps={} vy_umps={} good={} refused={}", f.vx_umps, f.vy_umps, f.good, f.refused));
-        drop(wait);
         lines.push(format!("latched frames with a command or a moved position: {moved_while_latched}"));
         Ok(lines)
     })();

@@ -3,7 +3,7 @@
 //!
 //! Kept in the library (not in the board binary) so that the host tests the whole step, the status
 //! and the velocity frame; the board binary (`src/bin/support/board_avoid.rs`) only moves bytes between the
-//! USART and this type and runs [`Link::step`] on a timer.
+//! USART and this type and runs [`Link::step_with`] on a timer, with the detection firmware's latch.
 //!
 //! Each step: the receiver is ticked and serviced (at most `budget_bytes` parsed), the field and its
 //! gradient are sampled at the tool, the command of eq 74-78 is formed with the weights-age watchdog
