@@ -1,14 +1,14 @@
 //! The board's avoidance over its serial port in QEMU: weights frames in, velocity frames out.
 
 use crate::common::{read_expected, target_dir, TARGET};
-use crate::firmware::qemu_clock_dir;
+use crate::firmware::qemu_io_dir;
 use std::fs;
 use std::process::{Command, Stdio};
 use std::thread::sleep;
 use std::time::{Duration, Instant};
 
 /// How long the whole serial conversation may take (QEMU's virtual clock follows the host's).
-const SERIAL_TIMEOUT: Duration = Duration::from_secs(60);
+const SERIAL_TIMEOUT: Duration = Duration::from_secs(120);
 
 /// A 5 x 5 weights frame over the 1.05 m work plane (centres 0.21 m apart from 0.105 m, sigma
 /// 0.105 m), every weight `w_m`: the shipped demo's grid size; 0.5 m puts the field at the tool far
@@ -36,11 +36,14 @@ fn velocity_line(what: &str, f: &flinch_firmware::avoidance::link::VelocityFrame
     }
 }
 
-/// The board's avoidance over its serial port: the `qemu-clock` board ELF on netduinoplus2, USART1
-/// connected to a Unix socket this function listens on. Weights frames go in, the board's velocity
-/// frames come back and are decoded; the conversation waits for the board's answer before each
-/// next frame, so the lines compared do not depend on the host's timing. Compared with
-/// `firmware/qemu/board-serial.txt`; a mismatch, a missing frame or a timeout fails.
+/// The board's avoidance over its serial port: the `qemu-io` board ELF (the board's code; its GPIO
+/// played by the bench, `board_bench.rs`, in its `serial` mode, which presses reset and moves the
+/// obstacle, as the production ELF cannot be released in QEMU: its inputs read 0) on netduinoplus2,
+/// USART1 connected to a Unix socket this function listens on. Weights frames go in, the board's
+/// velocity frames come back and are decoded; the conversation waits for the board's answer before
+/// each next frame, and the bench waits for the frames' statuses before it acts, so the lines
+/// compared do not depend on the host's timing. Compared with `firmware/qemu/board-serial.txt`; a
+/// mismatch, a missing frame, a bench failure or a timeout fails.
 pub fn board_serial() -> Result<String, String> {
     use flinch_firmware::avoidance::link::{decode_velocity, Status, VelocityFrame, VEL_LEN, VEL_SYNC0, VEL_SYNC1};
     use std::io::{Read, Write};
@@ -49,16 +52,19 @@ pub fn board_serial() -> Result<String, String> {
     let _ = fs::remove_file(&sock);
     let listener = UnixListener::bind(&sock).map_err(|e| format!("binding {}: {e}", sock.display()))?;
     let log = target_dir().join("board-serial.log");
-    let elf = qemu_clock_dir().join(TARGET).join("release").join("board");
+    let out_path = target_dir().join("board-serial.out");
+    let out_file = fs::File::create(&out_path).map_err(|e| format!("{}: {e}", out_path.display()))?;
+    let elf = qemu_io_dir().join(TARGET).join("release").join("board");
     let mut child = Command::new("qemu-system-arm")
-        .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none", "-chardev"])
+        .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native,arg=board,arg=serial", "-icount", "shift=3", "-chardev"])
         .arg(format!("socket,id=s0,path={}", sock.display()))
         .args(["-serial", "chardev:s0", "-d", "unimp,guest_errors", "-D"])
         .arg(&log)
         .arg("-kernel")
         .arg(&elf)
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
+        .stdout(out_file)
         .stderr(Stdio::null())
         .spawn()
         .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
@@ -81,6 +87,9 @@ pub fn board_serial() -> Result<String, String> {
         stream.set_read_timeout(Some(Duration::from_millis(100))).map_err(|e| e.to_string())?;
         let mut buf: Vec<u8> = Vec::new();
         let mut frames = 0usize;
+        // Every latched frame since the trip must hold the tool where the first one had it.
+        let mut held_at: Option<(i32, i32)> = None;
+        let mut moved_while_latched = 0usize;
         // The next velocity frame that satisfies `want` (frames before it are read and dropped).
         let mut wait = |stream: &mut std::os::unix::net::UnixStream, what: &str, want: &dyn Fn(&VelocityFrame) -> bool| -> Result<VelocityFrame, String> {
             loop {
@@ -89,6 +98,14 @@ pub fn board_serial() -> Result<String, String> {
                         if let Some(f) = decode_velocity(&buf[..VEL_LEN]) {
                             buf.drain(..VEL_LEN);
                             frames += 1;
+                            if f.status == Status::StoppedLatched {
+                                if f.vx_umps != 0 || f.vy_umps != 0 || held_at.is_some_and(|p| p != (f.x_um, f.y_um)) {
+                                    moved_while_latched += 1;
+                                }
+                                held_at.get_or_insert((f.x_um, f.y_um));
+                            } else {
+                                held_at = None;
+                            }
                             if want(&f) {
                                 return Ok(f);
                             }
@@ -111,7 +128,9 @@ pub fn board_serial() -> Result<String, String> {
         };
         let mut lines = Vec::new();
         let f = wait(&mut stream, "the first velocity frame", &|_| true)?;
-        lines.push(velocity_line("before any weights frame", &f, true));
+        lines.push(velocity_line("the start latch, before the reset press", &f, true));
+        let f = wait(&mut stream, "the latch released by the bench's reset press", &|f| f.status != Status::StoppedLatched)?;
+        lines.push(velocity_line("armed after the reset press, before any weights frame", &f, true));
         stream.write_all(&weights_frame(1, 0.5)).map_err(|e| e.to_string())?;
         let f = wait(&mut stream, "frame 1 in use", &|f| f.seq == 1)?;
         lines.push(velocity_line("frame 1 (field 0.5 m weights: the hand over the tool)", &f, true));
@@ -127,14 +146,40 @@ pub fn board_serial() -> Result<String, String> {
         lines.push(velocity_line("the line silent, the weights ageing", &f, false));
         let f = wait(&mut stream, "the weights stale", &|f| f.status == Status::StoppedStale)?;
         lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("the line still silent", &f, false), f.vx_umps, f.vy_umps));
+        let f = wait(&mut stream, "the bench's obstacle tripping the switch", &|f| f.status == Status::StoppedLatched)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("the obstacle trips the switch (the collision latch)", &f, false), f.vx_umps, f.vy_umps));
+        stream.write_all(&weights_frame(4, 0.0)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 4 in use while latched", &|f| f.seq == 4)?;
+        let line = velocity_line("frame 4 (empty field) while latched", &f, false);
+        lines.push(format!("{line}, vx_umps={} vy_umps={} good={} refused={}", f.vx_umps, f.vy_umps, f.good, f.refused));
+        let f = wait(&mut stream, "the latch released by the bench's second reset press", &|f| f.status != Status::StoppedLatched)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("released by a reset press, frame 4 aged meanwhile", &f, false), f.vx_umps, f.vy_umps));
+        stream.write_all(&weights_frame(5, 0.0)).map_err(|e| e.to_string())?;
+        let f = wait(&mut stream, "frame 5 in use after the release", &|f| f.seq == 5)?;
+        let line = velocity_line("frame 5 (empty field) after the release", &f, false);
+        lines.push(format!("{line}, vx_umps={} vy_umps={} good={} refused={}", f.vx_umps, f.vy_umps, f.good, f.refused));
+        lines.push(format!("latched frames with a command or a moved position: {moved_while_latched}"));
         Ok(lines)
     })();
+    // The bench ends the run itself once it has seen `ok` after the release.
+    let mut status = None;
+    while result.is_ok() && start.elapsed() < SERIAL_TIMEOUT {
+        if let Ok(Some(s)) = child.try_wait() {
+            status = Some(s);
+            break;
+        }
+        sleep(Duration::from_millis(20));
+    }
     let _ = child.kill();
     let _ = child.wait();
     let _ = fs::remove_file(&sock);
     let got = result?;
-    for l in &got {
+    let bench = fs::read_to_string(&out_path).unwrap_or_default();
+    for l in bench.lines().chain(got.iter().map(|l| l.as_str())) {
         println!("board serial: {l}");
+    }
+    if !status.is_some_and(|s| s.success()) || !bench.contains("bench: PASS") {
+        return Err(format!("the board bench (serial) did not pass ({status:?}):\n{bench}"));
     }
     let want = read_expected("firmware/qemu/board-serial.txt")?;
     if got != want {
@@ -144,7 +189,7 @@ pub fn board_serial() -> Result<String, String> {
             want.join("\n")
         ));
     }
-    Ok(format!("board ELF (qemu-clock) on netduinoplus2: weights frames over USART1, {} velocity frames as in firmware/qemu/board-serial.txt", got.len()))
+    Ok(format!("board ELF (qemu-io, bench mode serial) on netduinoplus2: weights frames over USART1, {} velocity lines as in firmware/qemu/board-serial.txt (ok/slowed/stale after a reset press, stopped: latched while latched)", got.len()))
 }
 
 /// USART1 traffic for a QEMU run: a Unix socket QEMU connects to as its serial chardev, and a thread

@@ -1,5 +1,5 @@
 //! Building the firmware: the target check, the release build (its flash CRC patched), the
-//! `qemu-io` and `qemu-clock` board builds, and the firmware clippy stage.
+//! `qemu-io` board build (its feature implies `qemu-clock`), and the firmware clippy stage.
 
 use crate::common::{cargo, elf_path, repo_root, target_dir, TARGET};
 use crate::flash::{flash_image, patch_flash_crc};
@@ -69,14 +69,6 @@ pub fn build_board_qemu_io() -> Result<(), String> {
     Ok(())
 }
 
-/// The `qemu-clock` build of the board binary: the production board with only its clock constants
-/// as QEMU's netduinoplus2 runs them (core 168 MHz, timers 1 GHz), so that its milliseconds are
-/// QEMU's. Its own target directory.
-pub fn build_board_qemu_clock() -> Result<(), String> {
-    let elf = build_board_with("qemu-clock", &qemu_clock_dir())?;
-    patch_flash_crc(&elf, Seed::QemuBench).map(|_| ())
-}
-
 /// The board binary built with the cargo feature `feature` into its own target directory `dir`
 /// (inside firmware/, for its .cargo/config.toml); returns the ELF's path (its CRC not yet patched).
 fn build_board_with(feature: &str, dir: &Path) -> Result<PathBuf, String> {
@@ -91,10 +83,6 @@ fn build_board_with(feature: &str, dir: &Path) -> Result<PathBuf, String> {
     } else {
         Err(format!("cargo build --release --target {TARGET} --bin board --features {feature} exited with {status}"))
     }
-}
-
-pub fn qemu_clock_dir() -> PathBuf {
-    target_dir().join("board-qemu-clock")
 }
 
 pub fn qemu_io_dir() -> PathBuf {

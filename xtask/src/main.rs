@@ -46,9 +46,11 @@
 //!   firmware/ flashes an image that arms.
 //! * `cargo xtask python`: the stage "python" alone (a skip is a failure here).
 //! * `cargo xtask host-tests`: the stage "host tests" alone (the test binaries side by side).
-//! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-clock` board ELF
-//!   on netduinoplus2, weights frames over USART1 from a Unix socket, its velocity frames checked
-//!   against `firmware/qemu/board-serial.txt`.
+//! * `cargo xtask board-serial`: the stage "board serial in QEMU" alone: the `qemu-io` board ELF
+//!   on netduinoplus2 (its bench in mode `serial` presses reset and trips the switch), weights
+//!   frames over USART1 from a Unix socket, its velocity frames checked against
+//!   `firmware/qemu/board-serial.txt` (`ok`/`slowed`/`stopped: stale` after a reset press,
+//!   `stopped: latched` while latched).
 //! * `cargo xtask board-qemu`: build and run the board ELF on QEMU's netduinoplus2 (the stages
 //!   "board ELF in QEMU": boot trace, vectors, a one-byte-corrupted flash image that must stop, the
 //!   first latched fault ending the IWDG feeds; "board ELF edge in QEMU": the `qemu-io` build's edges
@@ -81,7 +83,7 @@ use avoid_budget::{check_avoid_board, check_avoid_budget, check_avoid_cost, run_
 use board::{check_board_corrupt, check_board_edge, check_board_faults, check_board_log, check_board_vectors, run_board_edge, run_board_qemu};
 use board_serial::board_serial;
 use common::{elf_path, ensure_flip_link, seconds, which, Outcome, Timed, TARGET};
-use firmware::{build_board_qemu_clock, build_board_qemu_io, build_firmware, firmware_clippy, target_installed};
+use firmware::{build_board_qemu_io, build_firmware, firmware_clippy, target_installed};
 use host::{host_tests, loader_fuzz, no_fontconfig};
 use python::python_stage;
 use qemu::{check_icount, check_qemu_output, check_stack, run_qemu, ICOUNT_BEST_LIMIT, ICOUNT_WORST_LIMIT, STACK_LIMIT};
@@ -103,7 +105,7 @@ fn main() -> ExitCode {
             check_qemu_output(&out).and_then(|_| check_icount(&out.stdout)).and_then(|_| check_stack(&out.stdout).map(|_| ()))
         }),
         Some("board-serial") => single(|| {
-            build_board_qemu_clock()?;
+            build_board_qemu_io()?;
             board_serial().map(|m| println!("{m}"))
         }),
         Some("board-qemu") => single(|| {
@@ -342,7 +344,7 @@ fn test() -> ExitCode {
             if which("qemu-system-arm").is_none() {
                 Outcome::Skip("qemu-system-arm not found".into())
             } else {
-                match build_board_qemu_clock().and_then(|()| board_serial()) {
+                match build_board_qemu_io().and_then(|()| board_serial()) {
                     Ok(m) => Outcome::Pass(m),
                     Err(e) => Outcome::Fail(e),
                 }

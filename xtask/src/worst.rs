@@ -2,12 +2,19 @@
 //! longest run of each piece of work measured in the `qemu-io` edge run (`board_bench.rs`,
 //! `report_worst`), which carries USART1 traffic, both channels, the EDM, the clock check, the
 //! periodic self-tests and the avoidance step. Instruction counts under `-icount` are a proxy for
-//! time (QEMU charges no cycles, no wait states, no exception entry); they are converted with the
-//! bounds of `hal-sim/src/latency.rs` (4 cycles an instruction, 12 an exception entry, 16 MHz).
+//! time (QEMU charges no cycles, no wait states, no exception entry, and its DWT cycle counter reads
+//! 0); they are converted with the bounds of `hal-sim/src/latency.rs` (4 cycles an instruction, 12
+//! an exception entry, the board's 16 MHz HSI). Exception entries counted on the tick-to-output
+//! path: the tick, the same-priority handler it waits for, both edges, and one per USART byte in
+//! the window (a masked section is thread mode or inside one of these: no entry of its own).
 
 /// SysTick counts an instruction: the 168 MHz core clock under `-icount shift=3` (8 ns each).
 const COUNTS_PER_INSTRUCTION_X1000: u64 = 1_344;
-/// Asserted bounds, instructions (the figures measured, firmware/README.md, with about a quarter on top).
+/// Asserted bounds, instructions. The largest measured (firmware/README.md, "The board's own worst
+/// case", `cargo xtask board-qemu`, three runs after the USART entry calibration): edge to stop 57, tick to
+/// output 4,649; the bounds leave 29 % and 22 % of themselves as margin for the run-to-run spread
+/// (which USART path and how many bytes fall into the window) and small code changes. Exceeding
+/// either fails the stage; the stage prints the margin left.
 pub const BOARD_EDGE_TO_STOP_LIMIT: u32 = 80;
 pub const BOARD_TICK_TO_OUTPUT_LIMIT: u32 = 6_000;
 /// One byte at 115,200 baud 8N1 (10 bits), seconds.
@@ -53,13 +60,17 @@ pub fn board_worst(out: &str) -> Result<BoardWorst, String> {
             .ok_or_else(|| format!("no {k}= in {line:?}"))
     };
     // The USART entry that took one byte: on the part a byte comes every 87 us, one an entry.
+    // Each byte's entry also costs the instructions outside its measured window (`usart_entry`, the
+    // bench's calibration), which the sections it preempted no longer carry.
+    let usart_entry = instructions(field("usart_entry")?);
     let (tick, book, tim5, usart) = (instructions(field("tick")?), instructions(field("book")?), instructions(field("tim5")?), instructions(field("usart_1")?));
     let (edge_end, edge_stop) = (instructions(field("edge_end")?), instructions(field("edge_stop")?));
     let masked = instructions(field("mask_step")?.max(field("mask_drain")?).max(field("mask_diag")?));
     let irqs = field("usart_irqs")?;
-    if tick == 0 || book == 0 || tim5 == 0 || edge_end == 0 || edge_stop == 0 || masked == 0 || usart == 0 || irqs == 0 {
+    if tick == 0 || book == 0 || tim5 == 0 || edge_end == 0 || edge_stop == 0 || masked == 0 || usart == 0 || irqs == 0 || usart_entry == 0 {
         return Err(format!("a part was not measured (no USART traffic, no edge, no masked section?): {line}"));
     }
+    let usart = usart + usart_entry;
     let same = book.max(tim5);
     let mut k = 1u32;
     let mut w = BoardWorst { edge_to_stop: edge_stop, tick_to_output: 0, entries: 0, usart_bytes: 0, parts: String::new() };
@@ -74,7 +85,7 @@ pub fn board_worst(out: &str) -> Result<BoardWorst, String> {
     }
     w.usart_bytes = k;
     w.parts = format!(
-        "tick {tick} + same-priority {same} (bookkeeping {book}, LSI capture {tim5}) + 2 edges x {edge_end} + masked {masked} + {k} USART bytes x {usart}"
+        "tick {tick} + same-priority {same} (bookkeeping {book}, LSI capture {tim5}) + 2 edges x {edge_end} + masked {masked} + {k} USART bytes x {usart} (of which {usart_entry} outside the handler's measured window)"
     );
     Ok(w)
 }
@@ -88,12 +99,18 @@ pub fn check_board_worst(out: &str) -> Result<String, String> {
     if w.tick_to_output > BOARD_TICK_TO_OUTPUT_LIMIT {
         return Err(format!("board tick-to-output {} > {BOARD_TICK_TO_OUTPUT_LIMIT} instructions ({})", w.tick_to_output, w.parts));
     }
+    let margin = |m: u32, limit: u32| 100.0 * f64::from(limit - m) / f64::from(limit);
+    let bound = BoardWorst { edge_to_stop: BOARD_EDGE_TO_STOP_LIMIT, tick_to_output: BOARD_TICK_TO_OUTPUT_LIMIT, ..w.clone() };
     Ok(format!(
-        "board ELF (qemu-io, -icount proxy): edge-to-stop {} instructions (<= {BOARD_EDGE_TO_STOP_LIMIT}) = {:.2} us at 16 MHz; tick-to-output {} instructions (<= {BOARD_TICK_TO_OUTPUT_LIMIT}) = {:.2} us with {} exception entries ({})",
+        "board ELF (qemu-io, -icount proxy: instructions, not cycles; at 16 MHz, <= 4 cycles an instruction + 12 an exception entry): edge-to-stop {} instructions (<= {BOARD_EDGE_TO_STOP_LIMIT}, margin {:.0} %) = {:.2} us (bound {:.2} us), 1 exception entry; tick-to-output {} instructions (<= {BOARD_TICK_TO_OUTPUT_LIMIT}, margin {:.0} %) = {:.2} us (the bound at as many entries {:.2} us) with {} exception entries ({})",
         w.edge_to_stop,
+        margin(w.edge_to_stop, BOARD_EDGE_TO_STOP_LIMIT),
         w.edge_to_stop_s() * 1e6,
+        bound.edge_to_stop_s() * 1e6,
         w.tick_to_output,
+        margin(w.tick_to_output, BOARD_TICK_TO_OUTPUT_LIMIT),
         w.tick_to_output_s() * 1e6,
+        bound.tick_to_output_s() * 1e6,
         w.entries,
         w.parts
     ))
@@ -106,10 +123,10 @@ mod tests {
     #[test]
     fn the_parts_add_up_and_a_missing_one_fails() {
         let line = |usart: u32| {
-            format!("bench: worst counts tick=1344 book=672 tim5=134 usart=9999 usart_1={usart} edge_end=134 edge_stop=67 mask_step=2688 mask_drain=134 mask_diag=269 usart_irqs=50 (x)\n")
+            format!("bench: worst counts tick=1344 book=672 tim5=134 usart=9999 usart_1={usart} edge_end=134 edge_stop=67 mask_step=2688 mask_drain=134 mask_diag=269 usart_irqs=50 usart_entry=26 (x)\n")
         };
-        let w = board_worst(&line(134)).unwrap();
-        // 1000 + 500 + 2 x 100 + 2000 + k x 100 with k bytes in the window.
+        let w = board_worst(&line(107)).unwrap();
+        // 1000 + 500 + 2 x 100 + 2000 + k x (80 + 20) with k bytes in the window.
         assert_eq!(w.edge_to_stop, 50);
         assert_eq!(w.tick_to_output, 3_700 + w.usart_bytes * 100);
         assert!(w.usart_bytes >= 1 && (w.tick_to_output_s() / BYTE_S) < f64::from(w.usart_bytes) + 1.0);

@@ -3,7 +3,7 @@
 //!
 //! Kept in the library (not in the board binary) so that the host tests the whole step, the status
 //! and the velocity frame; the board binary (`src/bin/support/board_avoid.rs`) only moves bytes between the
-//! USART and this type and runs [`Link::step`] on a timer.
+//! USART and this type and runs [`Link::step_with`] on a timer, with the detection firmware's latch.
 //!
 //! Each step: the receiver is ticked and serviced (at most `budget_bytes` parsed), the field and its
 //! gradient are sampled at the tool, the command of eq 74-78 is formed with the weights-age watchdog
@@ -16,6 +16,11 @@
 //! | `slowed` | the weights older than `slow_after_ms`, or the field above `slow_height_m` | scaled down |
 //! | `stopped: stale` | no good frame yet, or the weights at least `stop_after_ms` old | zero |
 //! | `stopped: no path` | the field at the tool at or above `stop_height_m`, or no command away from the goal (a local minimum) | zero |
+//! | `stopped: latched` | the detection firmware holds the robot stopped ([`Link::step_with`] with `latched`: on the board every state but armed, i.e. the collision latch after a trip, a fault, the start latch after a reset, and the self-test after a reset press); before every other status | zero |
+//!
+//! While latched the receiver still takes and applies frames (so the weights are current when the
+//! latch is released) and the step number counts on, but the command is zero and the dead-reckoned
+//! position does not move: the robot is held, whatever the field says.
 //!
 //! The tool position is dead-reckoned from the commands (eq 79, `p += v dt`: the robot is assumed
 //! to follow the command), from `start_m`. The velocity frame reports it, so the host can check it
@@ -27,7 +32,7 @@
 //! |---|---|---|
 //! | 0 | 2 | sync `5A A5` (the weights frame's reversed) |
 //! | 2 | 1 | version 1 |
-//! | 3 | 1 | status: 0 `ok`, 1 `slowed`, 2 `stopped: stale`, 3 `stopped: no path` |
+//! | 3 | 1 | status: 0 `ok`, 1 `slowed`, 2 `stopped: stale`, 3 `stopped: no path`, 4 `stopped: latched` (a reader that does not know a code refuses the frame: [`decode_velocity`]) |
 //! | 4 | 4 | step number u32 (wrapping) |
 //! | 8 | 4 | `seq` of the weights in use u32 (0: none) |
 //! | 12 | 4 | `vx`, i32 micrometres per second |
@@ -65,6 +70,9 @@ pub enum Status {
     StoppedStale = 2,
     /// Zero: the field at the tool at or above the stop height, or no command away from the goal.
     StoppedNoPath = 3,
+    /// Zero: the detection firmware holds the robot stopped (its collision latch, a fault, the start
+    /// latch, the self-test); only a person's reset press at the module ends it.
+    StoppedLatched = 4,
 }
 
 impl Status {
@@ -75,6 +83,7 @@ impl Status {
             Status::Slowed => "slowed",
             Status::StoppedStale => "stopped: stale",
             Status::StoppedNoPath => "stopped: no path",
+            Status::StoppedLatched => "stopped: latched",
         }
     }
 
@@ -85,6 +94,7 @@ impl Status {
             1 => Some(Status::Slowed),
             2 => Some(Status::StoppedStale),
             3 => Some(Status::StoppedNoPath),
+            4 => Some(Status::StoppedLatched),
             _ => None,
         }
     }
@@ -196,8 +206,17 @@ impl<R: Real> Link<R> {
         &mut self.rx
     }
 
-    /// One control step at `now_ms` (wrap-safe: only differences of it are used).
+    /// One control step at `now_ms` (wrap-safe: only differences of it are used), the robot not
+    /// held by the detection firmware: [`Link::step_with`] with `latched` false.
     pub fn step(&mut self, now_ms: u32) -> Velocity<R> {
+        self.step_with(now_ms, false)
+    }
+
+    /// One control step at `now_ms`; `latched`: the detection firmware holds the robot stopped (on
+    /// the board: any state but armed). Latched, the command is zero, the status
+    /// [`Status::StoppedLatched`] (before every other) and the dead-reckoned position stays where it
+    /// is; the receiver is still serviced, so the weights are current when the latch is released.
+    pub fn step_with(&mut self, now_ms: u32, latched: bool) -> Velocity<R> {
         self.rx.tick(now_ms);
         self.rx.service(now_ms);
         self.step = self.step.wrapping_add(1);
@@ -219,7 +238,9 @@ impl<R: Real> Link<R> {
         // 1 mm/s: below it a command away from the goal is no motion (a local minimum).
         let crawl = R::from_f32(0.001);
         // NaN-safe: anything not comparable stops (a factor that is not > 0 is stale).
-        let status = if factor.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Greater) {
+        let status = if latched {
+            Status::StoppedLatched
+        } else if factor.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Greater) {
             Status::StoppedStale
         } else if height.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Greater) {
             Status::StoppedNoPath
@@ -233,7 +254,7 @@ impl<R: Real> Link<R> {
         } else {
             Status::Ok
         };
-        if matches!(status, Status::StoppedStale | Status::StoppedNoPath) {
+        if matches!(status, Status::StoppedStale | Status::StoppedNoPath | Status::StoppedLatched) {
             vx = R::ZERO;
             vy = R::ZERO;
         }
@@ -457,6 +478,49 @@ mod tests {
         feed(&mut l, &bad, 360);
         let v = l.step(370);
         assert_eq!((v.status, v.refused, v.good), (Status::StoppedStale, 1, 2));
+    }
+
+    #[test]
+    fn a_latched_step_is_zero_and_holds_the_position_and_release_resumes() {
+        let mut l = Link::new(cfg());
+        // Fresh weights of an empty field, the goal 0.7 m away: unlatched this is `ok` at the cap.
+        feed(&mut l, &frame(1, 0.0), 0);
+        let v = l.step(10);
+        assert_eq!(v.status, Status::Ok, "{v:?}");
+        let held = l.step_with(20, false);
+        // Latched: zero, `stopped: latched`, the position where it was, every step; frames still taken.
+        let mut step = held.step;
+        let mut at = None;
+        for k in 0..20u32 {
+            let now = 30 + 10 * k;
+            if k % 3 == 0 {
+                feed(&mut l, &frame(2 + k, 0.0), now - 5);
+            }
+            let v = l.step_with(now, true);
+            step += 1;
+            assert_eq!((v.status, v.vx, v.vy, v.step), (Status::StoppedLatched, 0.0, 0.0, step), "{v:?}");
+            let p = *at.get_or_insert((v.x, v.y));
+            assert_eq!((v.x, v.y), p, "the position moved while latched");
+            assert!(v.x > held.x, "{v:?}");
+        }
+        // Before every other status: with no weights at all, and with a field above the stop height.
+        let mut fresh = Link::new(cfg());
+        assert_eq!(fresh.step_with(0, true).status, Status::StoppedLatched);
+        feed(&mut fresh, &frame(1, 0.5), 5);
+        assert_eq!(fresh.step_with(10, true).status, Status::StoppedLatched);
+        // Released: the newest frame (seq 20, taken while latched at 205 ms) is in use and the step
+        // resumes from the held position.
+        let v = l.step_with(240, false);
+        assert_eq!((v.status, v.seq), (Status::Ok, 20), "{v:?}");
+        assert_eq!(Some((v.x, v.y)), at);
+        assert!((v.vx - 0.25).abs() < 1e-4, "{v:?}");
+        let w = l.step(250);
+        assert!(w.x > v.x, "the position does not move after the release: {v:?} {w:?}");
+        // The frame carries it.
+        let d = decode_velocity(&encode_velocity(&l.step_with(260, true))).unwrap();
+        assert_eq!((d.status, d.vx_umps, d.vy_umps), (Status::StoppedLatched, 0, 0));
+        assert_eq!(Status::from_code(4), Some(Status::StoppedLatched));
+        assert_eq!(Status::StoppedLatched.name(), "stopped: latched");
     }
 
     #[test]

@@ -81,6 +81,12 @@ mod board_avoid;
 #[path = "support/board_hw.rs"]
 mod hw;
 
+// Whether the firmware holds the robot stopped, for the velocity frames (a leaf: board.rs writes it,
+// board_avoid.rs reads it).
+#[cfg(target_os = "none")]
+#[path = "support/board_held.rs"]
+mod held;
+
 #[cfg(target_os = "none")]
 #[path = "support/board_pins.rs"]
 mod pins;
@@ -127,7 +133,7 @@ mod board {
     use crate::startup::{not_qemu, SELF_NOT_QEMU};
     use crate::startup::{early_outputs_low, flash_crc_ok, integrity_failed, ram_test, OptionRegs, BOR_BUSY_SPINS, SELF_BOR, SELF_FLASH, SELF_RAM};
     use crate::log_drain::LogDrain;
-    use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering::Relaxed};
+    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering::Relaxed};
     use cortex_m::peripheral::scb::SystemHandler;
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m::peripheral::NVIC;
@@ -138,7 +144,7 @@ mod board {
     use flinch_firmware::backup;
     use flinch_firmware::{
         Boot, EventLog, BudgetConfig, ClockCheck, Config, DualSwitch, Edm, Firmware, Micros, Outputs, ResetCause,
-        State, SwitchKind,
+        SwitchKind,
     };
 
     const EXTI0_IRQ: u16 = 6; // RM0090 Table 61
@@ -401,34 +407,10 @@ mod board {
             fw.on_edge();
         }
         retained_store(fw.retained());
-        publish_state(fw.state());
+        crate::held::publish(fw.state());
         #[cfg(feature = "qemu-io")]
         crate::bench::note(&crate::bench::W_BOOK, t0, true);
     }
-
-    /// The firmware's state for the rest of the board (the avoidance's velocity frames): 0 armed,
-    /// 1 self-test, 2 tripped (the collision latch), 3 a fault or the start latch after a reset.
-    /// Written by the tick and the bookkeeping, read anywhere.
-    static STATE: AtomicU8 = AtomicU8::new(3);
-
-    fn publish_state(s: State) {
-        let code = match s {
-            State::Armed => 0,
-            State::SelfTest(_) => 1,
-            State::Tripped => 2,
-            State::Fault(_) => 3,
-        };
-        STATE.store(code, Relaxed);
-    }
-
-    /// The stop is latched: tripped (the collision latch), a fault, or the start latch after a
-    /// reset; only a person's reset press ends it. For `board_avoid.rs` (the velocity frame's
-    /// "stopped: latched", issue 29): readable from any interrupt, lock-free.
-    #[allow(dead_code)] // read by the avoidance once its frame carries the status
-    pub(crate) fn stop_latched() -> bool {
-        STATE.load(Relaxed) >= 2
-    }
-
 
     #[exception]
     fn SysTick() {
@@ -444,7 +426,7 @@ mod board {
         }
         crate::diag::TICKS.fetch_add(1, Relaxed);
         retained_store(fw.retained());
-        publish_state(fw.state());
+        crate::held::publish(fw.state());
         // Every tick counts for the avoidance step's deadline (and pends the step).
         let step_on_time = super::board_avoid::on_tick();
         // Feed the watchdog only if the tick ran, the firmware is healthy and armed or healthy and
