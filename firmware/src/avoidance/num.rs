@@ -11,6 +11,11 @@ pub trait Real: Copy + PartialOrd {
     const ZERO: Self;
     /// 1.
     const ONE: Self;
+    /// Division in hardware (the floats on an FPU): the speed and separation monitor then bounds
+    /// the speed towards each sector (a division per sector); the fixed-point types (a 64-bit
+    /// software division each) bound the whole speed by the nearest sector instead (one division
+    /// a step, more conservative: `safe.rs`).
+    const HW_DIV: bool;
     /// Nearest representable value (saturating; NaN maps to zero).
     fn from_f32(v: f32) -> Self;
     /// Nearest representable value of an `f64` (saturating; NaN maps to zero).
@@ -83,6 +88,7 @@ macro_rules! impl_fixed {
         impl Real for $t {
             const ZERO: Self = <$t>::ZERO;
             const ONE: Self = <$t>::from_bits(1 << <$t>::FRAC_NBITS);
+            const HW_DIV: bool = false;
             #[inline]
             fn from_f32(v: f32) -> Self {
                 if v.is_nan() {
@@ -201,6 +207,7 @@ macro_rules! impl_float {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
+            const HW_DIV: bool = true;
             #[inline]
             fn from_f32(v: f32) -> Self {
                 if v.is_nan() {

@@ -38,15 +38,20 @@
 //! The frame carries the separation per [`SECTORS`] sectors of 45 degrees round the tool
 //! ([`Sensed::sectors_m`], sector `k` from `45 k` to `45 (k + 1)` degrees counter-clockwise from
 //! +x, [`sector_of`]). A point sensed in sector `k` at capture may since have moved by
-//! `r = |p - p_capture| + K age` (the bound above), so its direction from the tool may have turned
-//! by `delta`, `sin delta = r / s_k` (`s_k` from the tool's surface, smaller than from its centre:
-//! `delta` over-estimated); it lies within `beta = 22.5 deg + delta` of the sector's centre `c_k`.
-//! The fastest the command `v` approaches any point of the sector is then `u_k = |v|` when `v`
-//! points within `beta` of `c_k`, else `|v| cos(phi - beta) = (v . c_k) cos beta + |v x c_k| sin
-//! beta` (the cone's nearer edge), and 0 when that is negative: moving away is not limited. Where
+//! `r = |p - p_capture| + K age` (the bound above), relative to the tool: a point `q_0` of the
+//! sector at capture is now `q = q_0 + e`, `|e| <= r` (seen from the tool now). With
+//! `u_0` the fastest `v` approaches a direction of the sector (`|v|` within 22.5 degrees of its
+//! centre `c_k`, else `(v . c_k) cos 22.5 deg + |v x c_k| sin 22.5 deg`, negative when moving away),
+//! `v . q <= |q_0| u_0 + |v| r` and `|q| >= |q_0| - r`, so the speed towards it now is at most
+//! `u_k = (s_k u_0 + |v| r) / (s_k - r)` (decreasing in `|q_0|`, which is at least `s_k`), never
+//! more than `|v|`, and 0 when the numerator is not positive: moving away is not limited. Where
 //! `r >= s_k` the point may lie in any direction: `u_k = |v|`. The command passes the SSM bound
-//! when `u_k <= v_max(s_k - r)` in every
-//! sector; otherwise it is scaled by the smallest `v_max(s_k - r) / u_k`.
+//! when `u_k <= v_max(s_k - r)` in every sector; otherwise it is scaled by the smallest
+//! `v_max(s_k - r) / u_k`. That costs a division a sector: the floats (hardware division) do it; the
+//! fixed-point types ([`Real::HW_DIV`] false: a software division each) bound the whole speed by
+//! the nearest sector (`u_k = |v|`, one division a step), as before the directions were used, and
+//! apply no PFL: within the 5,000-instruction step budget only so (`firmware/avoid-cost`); the
+//! board's `f32` does both.
 //!
 //! # Power and force limiting (ISO/TS 15066, 5.5.5) beside it
 //!
@@ -241,6 +246,8 @@ pub struct SafeController<R> {
     s22: R,
     /// The PFL speeds at 63/64 of their value (`None`: SSM alone, or a PFL speed not positive).
     pfl: Option<Pfl<R>>,
+    /// `1 / cap`, 1/(m/s) (saturating in fixed point: a smaller factor, a lower limit).
+    inv_cap: R,
 }
 
 impl<R: Real> SafeController<R> {
@@ -282,6 +289,7 @@ impl<R: Real> SafeController<R> {
             centres: CENTRES.map(|c| [R::from_f64(c[0]), R::from_f64(c[1])]),
             c22: R::from_f64(C22),
             s22: R::from_f64(S22),
+            inv_cap: R::ONE.div(params.speed_cap_mps),
             pfl: params.pfl.and_then(|p| {
                 let k = R::from_int(63).div(R::from_int(64));
                 // Only positive speeds and a finite axis make a PFL regime; anything else is none.
@@ -425,72 +433,83 @@ impl<R: Real> SafeController<R> {
         let s = f.separation_m.sub(r);
         let omni = self.speed_limit(s);
         let pfl_omni = match self.pfl {
+            _ if !R::HW_DIV => R::ZERO,
             Some(p) if p.along_mps < p.across_mps => p.along_mps,
             Some(p) => p.across_mps,
             None => R::ZERO,
         };
         let any_dir = if omni > pfl_omni { omni } else { pfl_omni };
-        let Some((vx, vy, capped)) = self.capped(vx, vy) else { return stop(SafeState::ProtectiveStop, s) };
-        let speed = self.norm_bound(vx, vy);
+        let Some((vx, vy, capped, speed)) = self.capped(vx, vy) else { return stop(SafeState::ProtectiveStop, s) };
         if !(speed > R::ZERO) {
             // No motion asked: nothing to limit; a protective stop when no direction is free.
             let state = if any_dir > R::ZERO { SafeState::Run } else { SafeState::ProtectiveStop };
             return SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: any_dir, separation_m: s, state };
         }
-        // The SSM scale: the approach towards each sector within its bound.
+        // The SSM scale: the approach towards each sector within its bound. One division a
+        // sector at most (none for a sector the command moves away from), `1 / speed` once.
         let mut k_ssm = R::ONE;
-        for (c, &s0) in self.centres.iter().zip(f.sectors_m.iter()) {
+        let mut inv_speed: Option<R> = None;
+        // Fixed point: the whole speed within the nearest separation's bound (one division a
+        // step, in budget: docs/avoidance.md); never less safe than the directions.
+        let sectors: &[R] = if R::HW_DIV { &f.sectors_m } else { &[] };
+        if !R::HW_DIV && omni < speed {
+            // A capped command's length bound is the cap (to rounding): no division then.
+            k_ssm = omni.mul(if capped { self.inv_cap } else { R::ONE.div(speed) });
+        }
+        for (c, &s0) in self.centres.iter().zip(sectors.iter()) {
             // NaN-safe: a NaN separation gives a zero limit.
             let l = self.speed_limit(s0.sub(r));
             if l >= speed {
                 continue;
             }
-            // The sector's points may have turned by `delta` since capture, `sin delta = r / s_k`
-            // (`s_k` at capture, from the tool's surface: smaller than from its centre, so
-            // `delta` is over-estimated): each now lies within `beta = 22.5 deg + delta` of the
-            // centre.
-            let u = if s0 > R::ZERO && r < s0 {
-                let sd = r.div(s0);
-                let cd = R::ONE.sub(sd.mul(sd)).sqrt();
-                let (cb, sb) = (self.c22.mul(cd).sub(self.s22.mul(sd)), self.s22.mul(cd).add(self.c22.mul(sd)));
+            // `l / u` for the sector's fastest approach `u` (module docs): `u = |v|`, or
+            // `(s_k u_0 + |v| r) / (s_k - r)` where that is smaller, 0 when it is not positive.
+            let mut full = true;
+            let mut q = R::ZERO;
+            if s0 > r {
                 let dot = vx.mul(c[0]).add(vy.mul(c[1]));
                 let cross = vx.mul(c[1]).sub(vy.mul(c[0])).abs();
-                // The command within `beta` of the centre (`sin(beta - phi) >= 0`): straight at
-                // some point of the sector; else the cone's nearer edge, `|v| cos(phi - beta)`.
-                if sb.mul(dot) >= cb.mul(cross) {
-                    speed
-                } else {
-                    let e = dot.mul(cb).add(cross.mul(sb));
-                    if e > R::ZERO {
-                        e
-                    } else {
-                        R::ZERO
-                    }
+                // Within 22.5 degrees of the centre: straight at a point of the sector.
+                let u0 = if self.s22.mul(dot) >= self.c22.mul(cross) { speed } else { dot.mul(self.c22).add(cross.mul(self.s22)) };
+                let num = s0.mul(u0).add(speed.mul(r));
+                if !(num > R::ZERO) {
+                    // Moving away from every point the sector can hold now.
+                    continue;
                 }
-            } else {
-                // Moved as far as it was (or a NaN): any direction.
-                speed
-            };
-            if u > l {
-                let q = if l > R::ZERO { l.div(u) } else { R::ZERO };
-                if q < k_ssm {
-                    k_ssm = q;
+                let den = s0.sub(r);
+                if num < speed.mul(den) {
+                    full = false;
+                    q = l.mul(den).div(num);
                 }
+            }
+            if full {
+                let inv = *inv_speed.get_or_insert_with(|| R::ONE.div(speed));
+                q = l.mul(inv);
+            }
+            if q < k_ssm {
+                k_ssm = q;
             }
         }
         // The PFL scale: along and across the module's axis within their speeds.
+        // Only where the SSM bound cuts, and a division only where PFL could allow more.
+        // Fixed point: SSM alone (no division a step for PFL; docs/avoidance.md, the budget).
         let k_pfl = match self.pfl {
-            Some(p) => {
+            Some(p) if k_ssm < R::ONE && R::HW_DIV => {
                 let along = vx.mul(p.axis[0]).add(vy.mul(p.axis[1])).abs();
                 let across = vx.mul(p.axis[1]).sub(vy.mul(p.axis[0])).abs();
-                let (a, b) = (ratio(along, p.along_mps), ratio(across, p.across_mps));
-                if a < b {
-                    a
+                // `lim / x <= k_ssm` when `lim <= x k_ssm`: PFL gives no more than SSM there.
+                if p.along_mps <= along.mul(k_ssm) || p.across_mps <= across.mul(k_ssm) {
+                    R::ZERO
                 } else {
-                    b
+                    let (a, b) = (ratio(along, p.along_mps), ratio(across, p.across_mps));
+                    if a < b {
+                        a
+                    } else {
+                        b
+                    }
                 }
             }
-            None => R::ZERO,
+            _ => R::ZERO,
         };
         let (k, state) = if k_ssm >= R::ONE {
             (R::ONE, if capped { SafeState::Slow } else { SafeState::Run })
@@ -510,35 +529,35 @@ impl<R: Real> SafeController<R> {
         }
     }
 
-    /// The command within the cap: `(vx, vy, scaled)`; `None` when it is not finite. A command
-    /// whose length bound is within the cap passes unchanged; otherwise it is scaled to the bound,
-    /// its speed between 89.4 % of the cap and the cap.
-    fn capped(&self, vx: R, vy: R) -> Option<(R, R, bool)> {
+    /// The command within the cap: `(vx, vy, scaled, length bound)`; `None` when it is not
+    /// finite. A command whose length bound is within the cap passes unchanged; otherwise it is
+    /// scaled to the bound, its speed between 89.4 % of the cap and the cap (its length bound the
+    /// cap, to rounding).
+    fn capped(&self, vx: R, vy: R) -> Option<(R, R, bool, R)> {
         let cap = self.params.speed_cap_mps;
         // `speed` may saturate in fixed point; it is then far above the cap.
         let speed = self.norm_bound(vx, vy);
         if speed <= cap {
-            return Some((vx, vy, false));
+            return Some((vx, vy, false, speed));
         }
         let (ax, ay) = (vx.abs(), vy.abs());
         let m = if ax > ay { ax } else { ay };
         if speed > R::ZERO && m > R::ZERO {
             // Unit components `v / m` in [-1, 1] (no overflow), the bound over `m` in [1, 1.5]:
             // the result's bound is the cap (to rounding).
-            // Up to 1 m/s a component (every command of a cruise speed), one division: `1 / m`
-            // has at least as many significant bits as the number type's fraction (it saturates in
-            // I8F24 below 1/128 m/s: both components then get the same smaller factor, the
-            // direction is kept and the result stays under the cap). Above it, two divisions.
-            let (ux, uy) = if m <= R::ONE {
-                let inv = R::ONE.div(m);
-                (vx.mul(inv), vy.mul(inv))
-            } else {
-                (vx.div(m), vy.div(m))
-            };
+            // Up to 1 m/s a component (every command of a cruise speed), one division (below).
+            // Above it, two.
+            if m <= R::ONE {
+                // `m (1 + min / (2 m)) = max + min / 2 = speed`: one division, `cap / speed`
+                // at most 1, every component at most 1 m/s: no overflow.
+                let k = cap.div(speed);
+                return Some((vx.mul(k), vy.mul(k), true, cap));
+            }
+            let (ux, uy) = (vx.div(m), vy.div(m));
             let (bx, by) = (ux.abs(), uy.abs());
             let r = R::ONE.add(if bx < by { bx } else { by }.mul(self.half));
             let k = cap.div(r);
-            Some((ux.mul(k), uy.mul(k), true))
+            Some((ux.mul(k), uy.mul(k), true, cap))
         } else {
             // Not comparable (NaN) or a NaN cap: stop.
             None
@@ -831,6 +850,21 @@ mod tests {
         assert!(sp > towards.vx.hypot(towards.vy) && sp < 0.25, "{sp}");
     }
 
+    /// The fixed-point types bound the whole speed by the nearest sector (no division a sector):
+    /// moving away from a close person is cut as moving towards it (never less safe).
+    #[test]
+    fn fixed_point_bounds_the_whole_speed_by_the_nearest_sector() {
+        let q = |v: f64| I16F16::from_f64(v);
+        let c = SafeController::new(params::<I16F16>());
+        let mut sec = [q(10.0); SECTORS];
+        sec[3] = q(0.25);
+        sec[4] = q(0.25);
+        let behind = Sensed { separation_m: q(0.25), tool_x_m: q(0.0), tool_y_m: q(0.0), age_s: q(0.0), nearest_x_m: q(-0.3), nearest_y_m: q(0.0), sectors_m: sec };
+        let away = c.limit(q(0.2), q(0.0), q(0.0), q(0.0), Some(&behind));
+        assert_eq!(away.state, SafeState::Slow);
+        assert!(away.vx.to_f64() <= c.speed_limit(q(0.25)).to_f64() + 1e-4, "{}", away.vx.to_f64());
+    }
+
     /// The nearest point is not the only one: a person 0.245 m behind and another 0.25 m ahead.
     /// Moving away from the nearer one must still respect the farther one in front.
     #[test]
@@ -907,12 +941,18 @@ mod tests {
         let r = SafeController::new(SsmParams { pfl: Some(Pfl { axis: a, along_mps: 0.29, across_mps: 0.063 }), ..params::<f64>() });
         let o = r.limit(0.12, 0.16, 0.0, 0.0, Some(&contact));
         assert!((o.vx - 0.12).abs() < 1e-12 && (o.vy - 0.16).abs() < 1e-12, "along the rotated axis: {o:?}");
+        // The board's f32: the across component cut to the rigid speed, the along one kept.
+        let g = SafeController::new(SsmParams { pfl: Some(Pfl { axis: [0.6f32, 0.8], along_mps: 0.29, across_mps: 0.063 }), ..params::<f32>() });
+        let gc = Sensed { separation_m: 0.0f32, tool_x_m: 0.0, tool_y_m: 0.0, age_s: 0.0, nearest_x_m: 0.1, nearest_y_m: 0.0, sectors_m: [0.0; SECTORS] };
+        let o = g.limit(0.2, -0.15, 0.0, 0.0, Some(&gc));
+        let (ox, oy) = (f64::from(o.vx), f64::from(o.vy));
+        assert!((ox * 0.8 - oy * 0.6).abs() <= 0.063 && (ox * 0.6 + oy * 0.8).abs() <= 0.29 && ox > 0.0, "f32 across: {ox} {oy}");
+        // Fixed point applies no PFL (the step budget): in contact it stops.
         let q = |v: f64| I16F16::from_f64(v);
         let f = SafeController::new(SsmParams { pfl: Some(Pfl { axis: [q(0.6), q(0.8)], along_mps: q(0.29), across_mps: q(0.063) }), ..params::<I16F16>() });
         let qc = Sensed { separation_m: q(0.0), tool_x_m: q(0.0), tool_y_m: q(0.0), age_s: q(0.0), nearest_x_m: q(0.1), nearest_y_m: q(0.0), sectors_m: [q(0.0); SECTORS] };
-        let o = f.limit(q(0.2), q(-0.15), q(0.0), q(0.0), Some(&qc));
-        let (ox, oy) = (o.vx.to_f64(), o.vy.to_f64());
-        assert!((ox * 0.8 - oy * 0.6).abs() <= 0.063 && (ox * 0.6 + oy * 0.8).abs() <= 0.29, "I16F16 across: {ox} {oy}");
+        let o = f.limit(q(0.12), q(0.16), q(0.0), q(0.0), Some(&qc));
+        assert_eq!((o.vx.to_f64(), o.vy.to_f64(), o.state), (0.0, 0.0, SafeState::ProtectiveStop));
     }
 
     /// PFL speeds that are not positive numbers are no PFL at all (never a free pass).
