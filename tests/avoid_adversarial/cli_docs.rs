@@ -96,16 +96,22 @@ fn the_last_csv_row_is_stopped_only_when_the_tool_stood_still() {
     }
 }
 
-/// Follow-up to issue 9 (item 3): `reached_goal` says what it reports: `status` is `reached`, not
-/// merely "the tool got to the goal" (a run that crossed the operator and then arrived reports
-/// `false`, and `time_to_goal_s` says it arrived).
+/// Issue 29 (item 4): `goal_reached` is the plain fact (the tool got to the goal, with
+/// `time_to_goal_s`), whatever the verdict; `status` is the verdict (a run that crossed the
+/// operator and then arrived is `collision` with `goal_reached` true). It replaced `reached_goal`,
+/// which meant `status` = `reached` under a name that said something else.
 #[test]
-fn reached_goal_is_documented_as_what_it_reports() {
+fn goal_reached_is_the_plain_fact_and_status_the_verdict() {
     let schema: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(scene_path("../docs/schema/avoid.json")).unwrap()).unwrap();
-    let d = schema["properties"]["reached_goal"]["description"].as_str().unwrap().to_string();
-    assert!(d.contains("`status` is `reached`"), "{d}");
-    assert!(d.contains("time_to_goal_s"), "{d}");
-    let (scene, r) = thesis("avoid_wall.toml");
-    let m = avoid::metrics_json(&r, Engine::Reference, scene.safety.on());
-    assert_eq!(m["reached_goal"], m["status"] == "reached", "{m}");
+    assert!(schema["properties"]["reached_goal"].is_null(), "renamed");
+    let d = schema["properties"]["goal_reached"]["description"].as_str().unwrap().to_string();
+    assert!(d.contains("plain fact") && d.contains("`status`"), "{d}");
+    for name in ["avoid_wall.toml", "avoid_empty_diagonal.toml", "avoid_head_on.toml"] {
+        let (scene, r) = thesis(name);
+        let m = avoid::metrics_json(&r, Engine::Reference, scene.safety.on());
+        assert_eq!(m["goal_reached"], !m["time_to_goal_s"].is_null(), "{name}: {m}");
+        if m["status"] == "reached" {
+            assert_eq!(m["goal_reached"], true, "{name}");
+        }
+    }
 }

@@ -84,7 +84,7 @@ fn ssm_verdict_uses_the_true_separation() {
     let json = avoid::metrics_json(&r, Engine::Reference, true);
     assert_eq!(json["ssm_violations"].as_u64(), Some(r.ssm_violations as u64));
     assert!(json["max_speed_over_ssm_mps"].as_f64().unwrap() > 0.0);
-    assert_eq!(json["reached_goal"], false);
+    assert_ne!(json["status"], "reached");
     let args = flinch_tests::avoid::args(scene_path("avoid_moving_hand_wide.toml"));
     assert_eq!(avoid::run_scene(&args, s).map(|v| v.code()), Ok(1), "exit 1");
     // At ISO 13855's 2.0 m/s: within the bound at every step.
@@ -181,13 +181,20 @@ fn swept_bound_is_conservative_and_tight() {
     assert!(d <= -(0.01 + w) + 1e-12 && d >= -(0.01 + w) - SWEPT_TOL_M, "{d}");
 }
 
-/// Item 3: no room. The goal under the hand, or the start already inside the protective
-/// separation at rest: the tool does not move at all and the run says `no_room` at the first
+/// Item 3: no room. The goal under the hand (inside the protective separation at rest, and no
+/// PFL): the tool does not move at all and the run says `no_room` at the first
 /// frame, instead of waiting in a protective stop or stalling until the timeout. The thesis's law
 /// (no monitor) has no such stop.
 #[test]
 fn no_room_stops_at_once() {
-    for name in ["avoid_goal_covered.toml", "avoid_hand_at_tool.toml"] {
+    // Issue 29: a start inside S_p(0) is no longer `no_room` (moving away from the person is not
+    // limited): the hand at the tool either lets it leave directly away, or holds it in a
+    // protective stop, never towards the hand (`safe` checks every step's speed towards it).
+    let (scene, r) = run("avoid_hand_at_tool.toml");
+    safe("avoid_hand_at_tool.toml", &scene, &r);
+    assert_ne!(r.status.reason(), Some(Reason::NoRoom));
+    assert!(r.min_signed_distance_m >= r.signed_distance_m[0] - 1e-9, "never closer than where it started: {}", r.min_signed_distance_m);
+    for name in ["avoid_goal_covered.toml"] {
         let (scene, r) = run(name);
         safe(name, &scene, &r);
         assert_eq!(r.status, Status::Stopped(Reason::NoRoom), "{name}");
@@ -242,7 +249,7 @@ fn a_non_finite_command_is_a_fault() {
     let m = avoid::metrics_json(&r, Engine::Reference, false);
     assert_eq!(m["status"], "fault", "{m}");
     assert_eq!(m["reason"], "non_finite_command", "{m}");
-    assert_eq!(m["reached_goal"], false);
+    assert_ne!(m["status"], "reached");
     assert!(!r.status.ok());
     // The tool did not move on a command it could not carry out; every reported number is finite.
     assert!(r.points.iter().all(|p| p[0].is_finite() && p[1].is_finite()), "{:?}", r.points.last());
