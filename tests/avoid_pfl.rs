@@ -172,3 +172,34 @@ fn pfl_keys_are_checked_and_never_silently_dropped() {
     t.thesis_mode();
     assert!(t.pfl.is_none());
 }
+
+/// Issue 29 item 3: the whole arm. A person (1 m tall) standing between the tool's path and the
+/// robot's base, beyond the camera's view (the plane ends at y = 1.05 m), where the link sweeps as
+/// the tool crosses: the monitor, which sees only the view, lets the tool go, the link enters them,
+/// and the run is a collision (exit 1), never `reached`, whatever the tool's own clearance. A part
+/// lower than the link's underside at the same place passes beneath it.
+#[test]
+fn the_arm_sweeping_into_a_standing_person_is_a_collision() {
+    let mut s = Avoid::load(&scene_path("avoid_thesis_reach.toml")).unwrap();
+    s.operator.keyframes = vec![Keyframe { t_s: 0.0, hand_m: [0.50, 0.06] }];
+    s.operator.entry_m = [0.50, 0.0];
+    s.operator.obstacles.push(flinch_harness::avoid::depth::Obstacle {
+        kind: "disc".into(),
+        center_m: [0.55, 1.15],
+        keyframes: vec![],
+        radius_m: 0.08,
+        size_m: [0.0; 2],
+        height_m: 1.0,
+    });
+    let r = run(&s, Engine::Reference);
+    assert!(r.link_min_signed_distance_m < 0.0, "the link sweeps into the person: {}", r.link_min_signed_distance_m);
+    assert!(matches!(r.status, Status::Collision(_)), "{:?}", r.status);
+    assert_eq!(r.status.verdict().code(), 1);
+    let m = flinch_harness::avoid::metrics_json(&r, Engine::Reference, true);
+    assert_eq!((m["status"].as_str(), m["collided"].as_bool()), (Some("collision"), Some(true)), "{m}");
+    // Lower than the link's underside (0.33 m): beneath it, not touched.
+    s.operator.obstacles[0].height_m = 0.2;
+    let r = run(&s, Engine::Reference);
+    assert!(r.link_min_signed_distance_m.is_infinite(), "{}", r.link_min_signed_distance_m);
+    assert!(!matches!(r.status, Status::Collision(_)), "{:?}", r.status);
+}

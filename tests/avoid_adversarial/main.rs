@@ -89,7 +89,8 @@ pub(crate) fn honest(name: &str, scene: &Avoid, r: &PathResult) {
         }
         Status::Stopped(_) => assert!(r.min_signed_distance_m >= 0.0, "{name}: stopped is only for runs never inside"),
         Status::Collision(_) => {
-            assert!(r.min_signed_distance_m < 0.0 && r.time_inside_s > 0.0, "{name}: collision needs a penetration");
+            let tool = r.min_signed_distance_m < 0.0 && r.time_inside_s > 0.0;
+            assert!(tool || r.link_min_signed_distance_m < 0.0, "{name}: collision needs a penetration, by the tool or the link");
         }
         Status::SsmViolation(_) => assert!(r.min_signed_distance_m >= 0.0 && r.ssm_violations > 0, "{name}: ssm_violation is for runs never inside"),
         // No synthetic run is unverified (only recorded frames are), and no shipped law gives a
@@ -97,7 +98,7 @@ pub(crate) fn honest(name: &str, scene: &Avoid, r: &PathResult) {
         Status::Fault | Status::Unverified(_) => panic!("{name}: {:?}", r.status),
     }
     assert_eq!(r.verdict_basis, flinch_harness::avoid::path::VerdictBasis::SceneModel, "{name}");
-    if r.min_signed_distance_m < 0.0 {
+    if r.min_signed_distance_m < 0.0 || r.link_min_signed_distance_m < 0.0 {
         assert!(matches!(r.status, Status::Collision(_)), "{name}: inside but {:?}", r.status);
     } else if r.ssm_violations > 0 {
         assert!(matches!(r.status, Status::SsmViolation(_)), "{name}: over the SSM bound but {:?}", r.status);

@@ -131,7 +131,8 @@ pub struct AvoidMetrics {
     pub reason: Option<&'static str>,
     /// Why `reason` is null.
     pub reason_null_reason: Option<&'static str>,
-    /// The tool entered the operator's true footprint.
+    /// The tool entered the operator's true footprint, or the robot's link entered a person or
+    /// an obstacle tall enough to reach it.
     pub collided: bool,
     /// The tool got to the goal (a plain fact, whatever the verdict: `status` says whether the
     /// run was safe; only `status` = `reached` is a goal reached safely).
@@ -190,6 +191,12 @@ pub struct AvoidMetrics {
     pub steps_in_pfl: usize,
     /// Largest commanded speed on such a step, m/s.
     pub max_speed_in_pfl_mps: f64,
+    /// Smallest signed distance from the robot's link (base to tool, 3-D: a part lower than the
+    /// link's underside passes beneath it) to a person or obstacle, over every step, m (negative:
+    /// the arm entered it, a `collision`); null when nothing reaches the link's height.
+    pub link_min_signed_distance_m: Option<f64>,
+    /// Why `link_min_signed_distance_m` is null.
+    pub link_min_signed_distance_null_reason: Option<&'static str>,
     /// Contacts at a tool velocity within the PFL speeds, count (each ends the run: `reason`
     /// `contact_stop`).
     pub contacts_within_pfl: usize,
@@ -260,7 +267,7 @@ impl AvoidMetrics {
             verdict_basis: res.verdict_basis.name(),
             reason,
             reason_null_reason: reason.is_none().then_some("reached the goal"),
-            collided: res.min_signed_distance_m < 0.0,
+            collided: res.min_signed_distance_m < 0.0 || res.link_min_signed_distance_m < 0.0,
             goal_reached: res.time_to_goal_s.is_some(),
             time_to_goal_s: res.time_to_goal_s,
             time_to_goal_null_reason: res.time_to_goal_s.is_none().then_some("the goal was not reached"),
@@ -299,6 +306,8 @@ impl AvoidMetrics {
             max_speed_in_pfl_mps: res.max_speed_in_pfl_mps,
             contacts_within_pfl: res.contacts_within_pfl,
             max_contact_speed_mps: res.max_contact_speed_mps,
+            link_min_signed_distance_m: res.link_min_signed_distance_m.is_finite().then_some(res.link_min_signed_distance_m),
+            link_min_signed_distance_null_reason: (!res.link_min_signed_distance_m.is_finite()).then_some("no person or obstacle reaches the height of the link's underside"),
         }
     }
 }
@@ -450,8 +459,15 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
             path::Status::Reached => "reached the goal, never inside the operator".to_string(),
             path::Status::Stopped(r) => format!("stopped before the goal: {}", r.name()),
             path::Status::TooClose => format!("TOO CLOSE: reached the goal but came closer to the operator than clearance_m = {} m", res.clearance_m),
-            path::Status::Collision(None) => "COLLISION: the tool entered the operator (then reached the goal)".to_string(),
-            path::Status::Collision(Some(r)) => format!("COLLISION: the tool entered the operator (then stopped: {})", r.name()),
+            path::Status::Collision(e) => format!(
+                "COLLISION: {} (then {})",
+                match (res.min_signed_distance_m < 0.0, res.link_min_signed_distance_m < 0.0) {
+                    (true, true) => "the tool and the robot's link entered the operator",
+                    (false, true) => "the robot's link entered a person or an obstacle (the tool did not)",
+                    _ => "the tool entered the operator",
+                },
+                e.map_or("reached the goal".to_string(), |r| format!("stopped: {}", r.name()))
+            ),
             path::Status::Fault => "FAULT: the command source gave a non-finite command (NaN or infinite); the tool was held where it was".to_string(),
             path::Status::Unverified(None) => "UNVERIFIED: the tool reached the goal on recorded frames, but the verdict was judged against the scene file's model operator, not against the people in the recording: the clearance and the SSM bound are not known to have been kept".to_string(),
             path::Status::Unverified(Some(r)) => format!("UNVERIFIED: stopped before the goal ({}) on recorded frames; the verdict was judged against the scene file's model operator, not against the people in the recording: not known to be safe", r.name()),
@@ -474,6 +490,9 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
         match res.time_to_goal_s {
             Some(t) => println!("  time to goal      {t:.3} s"),
             None => println!("  time to goal      not reached (final {:?})", res.points.last()),
+        }
+        if res.link_min_signed_distance_m.is_finite() {
+            println!("  robot's link      {:.1} mm from the nearest person or obstacle that reaches its height (negative = inside)", res.link_min_signed_distance_m * 1e3);
         }
         println!(
             "  min signed dist.  {:.1} mm from the tool's surface (at t = {:.2} s; clearance asked {:.0} mm; negative = inside the operator, {:.2} s inside)",

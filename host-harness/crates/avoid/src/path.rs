@@ -123,6 +123,9 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     let pfl = pfl_params::<f64>(scene);
     let (mut steps_in_pfl, mut max_in_pfl, mut contacts_within_pfl, mut contact_speed) = (0usize, 0.0f64, 0usize, 0.0f64);
     let mut pfl_contact = false;
+    // The robot's link (issue 29 item 3): its distance to the people at every step.
+    let mut link_prev = scene.link_signed_distance_m(0.0, p);
+    let mut link_min = link_prev;
     // `no_room` is the monitor's call, on the first frame it sees.
     let monitor = ssm::<f64>(scene).map(SafeController::new);
     let mut frames = 1;
@@ -225,6 +228,14 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
                 first_violation.get_or_insert(t);
             }
         }
+        // The link between the step's ends: each of its points moves no more than the tool, the
+        // obstacles no more than `v_obstacle`: the swept bound of one part.
+        let link_now = scene.link_signed_distance_m(t, p);
+        let l_step = (p[0] - points[points.len() - 1][0]).hypot(p[1] - points[points.len() - 1][1]) + v_obstacle * dt;
+        if link_now.is_finite() || link_prev.is_finite() {
+            link_min = link_min.min(0.5 * (link_prev + link_now - l_step)).min(link_prev).min(link_now);
+        }
+        link_prev = link_now;
         if swept < 0.0 && in_pfl && min_s >= 0.0 {
             // The first contact, within the PFL speeds: the module yields, its switch fires, the
             // robot stops (the firmware's latch); the run ends here, a stop.
@@ -291,7 +302,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     }
     // A contact within the PFL speeds is the one permitted contact (it ended the run); any other
     // entry into a person is a collision.
-    let collided = min_s < 0.0 && !pfl_contact;
+    let collided = (min_s < 0.0 && !pfl_contact) || link_min < 0.0;
     // Stopped runs are judged against contact only: a person may walk up to a stopped robot.
     let status = match (collided, ended) {
         (true, e) => Status::Collision(e),
@@ -331,5 +342,6 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         contacts_within_pfl,
         max_contact_speed_mps: contact_speed,
         pfl: crate::PflSummary::of(scene),
+        link_min_signed_distance_m: link_min,
     })
 }

@@ -109,4 +109,8 @@ pub struct PathResult {
     pub max_contact_speed_mps: f64,
     /// The PFL speeds used and their provenance (`None` without `[avoid.pfl]`).
     pub pfl: Option<crate::PflSummary>,
+    /// Smallest signed distance from the robot's link to a person or obstacle tall enough to reach
+    /// it (3-D, `flinch_model::avoid::link`), over every step's sweep (a lower bound), m; infinite
+    /// when nothing reaches the link's height. Below 0: the arm entered a person, a collision.
+    pub link_min_signed_distance_m: f64,
 }

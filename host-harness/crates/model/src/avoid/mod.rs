@@ -4,5 +4,6 @@
 //! `flinch-avoid`.
 
 pub mod depth_camera;
+pub mod link;
 pub mod scene;
 pub mod shapes;

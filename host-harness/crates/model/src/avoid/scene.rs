@@ -337,6 +337,13 @@ impl Avoid {
         self.operator_shape_at(t).signed_distance(self.hand_at(t), p) - self.robot.wrist_radius_m
     }
 
+    /// Signed plan distance from the robot's link (base to the tool at `p`, 3-D: only parts that
+    /// reach its underside count) to the operator and the obstacles at time `t`, m (negative
+    /// inside; infinite when nothing reaches its height): `super::link`.
+    pub fn link_signed_distance_m(&self, t: f64, p: [f64; 2]) -> f64 {
+        super::link::link_signed_distance(&self.robot_shape(), p, &self.operator_shape_at(t), self.hand_at(t))
+    }
+
     /// Hand position at time `t`.
     pub fn hand_at(&self, t: f64) -> [f64; 2] {
         let k = &self.operator.keyframes;
