@@ -27,6 +27,7 @@ pub mod verdict;
 use std::path::PathBuf;
 
 use path::{Engine, PathResult, Setup};
+pub use result::PflSummary;
 
 /// `flinch avoid`: simulate an avoidance scene and report the path.
 #[derive(clap::Args, Debug)]
@@ -202,50 +203,6 @@ pub struct AvoidMetrics {
     pub contacts_within_pfl: usize,
     /// The tool's speed at the contact, m/s (0 without one; the person's own speed is not in it).
     pub max_contact_speed_mps: f64,
-}
-
-/// The PFL speeds of `[avoid.pfl]` (ISO/TS 15066 5.5.5, Annex A) and where they come from.
-#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
-pub struct PflSummary {
-    /// Along the module's axis: the largest speed at which a contact with the module stays within
-    /// Table A.2's limits and the stroke holds (`flinch design --body-region`'s `speed_safe_mps`),
-    /// the smallest over the regions, m/s.
-    pub pfl_speed_along_axis_mps: f64,
-    /// The region that set it.
-    pub along_region: String,
-    /// Across the axis: a rigid tool's speed (the module does not yield there), m/s.
-    pub pfl_speed_across_axis_mps: f64,
-    /// The region that set it.
-    pub across_region: String,
-    /// The module's axis in the cell's plane (unit), [x, y].
-    pub axis: [f64; 2],
-    /// Table A.2's force limit for `along_region` and `contact`, N.
-    pub force_limit_n: f64,
-    /// "transient" or "quasi_static" (the module scene's contact).
-    pub contact: String,
-    /// The module scene as the avoidance scene names it.
-    pub module: String,
-    /// SHA-256 of the module scene's text, hex.
-    pub module_sha256: String,
-}
-
-impl PflSummary {
-    /// Of a scene whose PFL is resolved.
-    pub fn of(scene: &scene::Avoid) -> Option<Self> {
-        let p = scene.pfl.as_ref()?;
-        let r = p.resolved.as_ref()?;
-        Some(PflSummary {
-            pfl_speed_along_axis_mps: r.along_mps,
-            along_region: r.along_region.clone(),
-            pfl_speed_across_axis_mps: r.across_mps,
-            across_region: r.across_region.clone(),
-            axis: p.axis,
-            force_limit_n: r.along_force_limit_n,
-            contact: r.contact.clone(),
-            module: p.module.clone(),
-            module_sha256: r.module_sha256.clone(),
-        })
-    }
 }
 
 impl AvoidMetrics {

@@ -341,7 +341,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         max_speed_in_pfl_mps: max_in_pfl,
         contacts_within_pfl,
         max_contact_speed_mps: contact_speed,
-        pfl: crate::PflSummary::of(scene),
+        pfl: crate::result::PflSummary::of(scene),
         link_min_signed_distance_m: link_min,
     })
 }
