@@ -45,17 +45,6 @@ pub use frame::{encode_frame, frame_len, FrameHeader};
 pub use gauss::{Gauss, GaussLibm, GaussLut, GaussMicromath};
 pub use link::{Link, LinkConfig, Status, Velocity};
 
-/// The number type the board's avoidance step runs in. `f32` on the Cortex-M4F (it has an FPU): in
-/// QEMU's instruction count the `f32` step with the lookup-table Gaussian is the cheapest variant
-/// and on the host its path is the closest to the `f64` reference (docs/avoidance.md, "Speed
-/// against accuracy"). The cargo feature `avoid-fixed` selects `I16F16` for parts without an FPU
-/// (every avoidance type is generic over [`Real`], so nothing else changes).
-#[cfg(not(feature = "avoid-fixed"))]
-pub type BoardReal = f32;
-/// The number type the board's avoidance step runs in: `I16F16` (feature `avoid-fixed`, for parts
-/// without an FPU).
-#[cfg(feature = "avoid-fixed")]
-pub type BoardReal = num::I16F16;
-pub use num::Real;
+pub use num::{BoardReal, Real};
 pub use receiver::{Receiver, RxStats};
 pub use safe::{sector_of, Pfl, SafeCommand, SafeController, SafeState, Sensed, SsmParams, Steer, SECTORS};

@@ -17,8 +17,8 @@
 use super::gauss::Gauss;
 use super::num::Real;
 
-/// Truncation radius of the Gaussian, in standard deviations.
-pub const TRUNC_SIGMAS: f64 = 4.0;
+/// Truncation radius of the Gaussian, in standard deviations (defined with the Gaussian).
+pub use super::gauss::TRUNC_SIGMAS;
 /// Largest grid side the firmware accepts (the thesis's 30 x 30).
 pub const MAX_AXIS: usize = 30;
 /// Largest number of centres (`MAX_AXIS^2`).

@@ -1,11 +1,13 @@
 //! The Gaussian basis `exp(-t^2 / 2)` of eq 66, with `t = |x - xi| / sigma` along one axis.
 //!
 //! A grid of Gaussians is separable, `phi(x, y) = g(tx) g(ty)`, so the step only needs the 1-D
-//! function. All implementations truncate at [`TRUNC_SIGMAS`](super::field::TRUNC_SIGMAS) standard
+//! function. All implementations truncate at [`TRUNC_SIGMAS`] standard
 //! deviations (`exp(-8) = 3.4e-4` of the peak at 4 sigma): that compact support is what lets the step
 //! visit only the few centres near the tool.
 
-use super::field::TRUNC_SIGMAS;
+/// Truncation radius of the Gaussian, in standard deviations (the field visits only the centres
+/// within it: `field.rs`).
+pub const TRUNC_SIGMAS: f64 = 4.0;
 use super::num::Real;
 
 /// A 1-D Gaussian `g(t) = exp(-t^2/2)` for `t >= 0`, zero at and beyond the truncation.

@@ -130,8 +130,8 @@ pub const BOARD_PERIOD_MS: u32 = 10;
 /// (`scenes/avoid_*.toml`: k_a 0.25 m/s, the thesis's vortex) on the 1.05 m work plane; replace
 /// with the cell's. The one copy: the board (`src/bin/support/board_avoid.rs`) runs it and the
 /// step's instruction count (`avoid-cost`, its `avoid_board` lines) measures it.
-pub fn board_config() -> LinkConfig<super::BoardReal> {
-    let r = super::BoardReal::from_f32;
+pub fn board_config() -> LinkConfig<super::num::BoardReal> {
+    let r = super::num::BoardReal::from_f32;
     LinkConfig {
         gains: Gains {
             repulsion: Repulsion::Vortex { sign: 0 },

@@ -5,6 +5,19 @@
 
 pub use fixed::types::{I16F16, I20F12, I8F24};
 
+/// The number type the board's avoidance step runs in. `f32` on the Cortex-M4F (it has an FPU): in
+/// QEMU's instruction count the `f32` step with the lookup-table Gaussian is the cheapest variant
+/// and on the host its path is the closest to the `f64` reference (docs/avoidance.md, "Speed
+/// against accuracy"). The cargo feature `avoid-fixed` selects `I16F16` for parts without an FPU
+/// (every avoidance type is generic over [`Real`], so nothing else changes). Defined here, beside
+/// the types, so that `link.rs` need not import the module root (no import circle).
+#[cfg(not(feature = "avoid-fixed"))]
+pub type BoardReal = f32;
+/// The number type the board's avoidance step runs in: `I16F16` (feature `avoid-fixed`, for parts
+/// without an FPU).
+#[cfg(feature = "avoid-fixed")]
+pub type BoardReal = I16F16;
+
 /// A real number as the avoidance step needs it: saturating arithmetic, no panics.
 pub trait Real: Copy + PartialOrd {
     /// 0.
