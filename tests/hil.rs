@@ -257,7 +257,7 @@ fn fault_specs_parse_and_bad_ones_say_what_is_allowed() {
 #[test]
 fn the_firmware_latency_is_the_measured_worst_case_not_zero() {
     // A controller sample inside the board's latency after the switch: with a zero latency it
-    // would see the stop there; with the board's (15.0 us) it cannot, and braking comes one scan
+    // would see the stop there; with the board's (20.75 us) it cannot, and braking comes one scan
     // cycle later.
     let sc = bistable();
     let t_sw = sim::run(&sc, false).unwrap().0.t_detect.unwrap();

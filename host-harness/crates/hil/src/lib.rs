@@ -21,9 +21,9 @@
 //!
 //! # What the robot sees
 //!
-//! The stop output reaches the controller `hal_sim::latency::edge_to_stop_s()` (15.0 us, the board
+//! The stop output reaches the controller `hal_sim::latency::edge_to_stop_s()` (20.75 us, the board
 //! ELF's measured worst case at its clock; QEMU's instruction count is the proxy for cycles) after
-//! the edge, or `tick_to_output_s()` (1,175.75 us) after a tick that confirms a filtered trip. The robot
+//! the edge, or `tick_to_output_s()` (1,518 us) after a tick that confirms a filtered trip. The robot
 //! controller model samples it once per scan cycle, at `phase * scan_cycle + k * scan_cycle`, and
 //! the robot starts its controlled stop its reaction time after the first sample that sees it: the
 //! dead time is what comes out, the firmware latency + a wait between 0 and one scan cycle (Ch.
