@@ -218,6 +218,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         let bound = verdict.bound_at_mps(s_start, v_obstacle);
         let towards = approach_speed_mps(scene, t_prev, points[points.len() - 1], [vx, vy]);
         let in_pfl = pfl.as_ref().is_some_and(|p| within_pfl(p, [vx, vy]));
+        let beyond_ssm = (towards > bound + SSM_TOL_MPS).then_some(in_pfl);
         if towards > bound + SSM_TOL_MPS {
             if in_pfl {
                 steps_in_pfl += 1;
@@ -253,7 +254,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         }
         points.push(p);
         signed.push(sd);
-        rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: cmd.limit_mps, state: cmd.state, swept_separation_m: swept, ssm_bound_mps: bound });
+        rows.push(StepRow { t_s: t, p_m: p, v_mps: [vx, vy], separation_m: sd, speed_limit_mps: cmd.limit_mps, state: cmd.state, swept_separation_m: swept, ssm_bound_mps: bound, beyond_ssm });
         if pfl_contact {
             best = Snapshot { t_s: t, tool_m: p, hand_m: hand, field: field.clone() };
             min_s = min_s.min(swept);

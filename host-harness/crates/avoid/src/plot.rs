@@ -48,11 +48,12 @@ where
     let (w, h) = scene.extent_m();
     let snap = &res.snapshot;
     let title = format!(
-        "{}{}: min {:.0} mm, {} steps over SSM | f* (sigma' {:.2} sigma) at t = {:.2} s",
+        "{}{}: min {:.0} mm, {} steps over SSM{} | f* (sigma' {:.2} sigma) at t = {:.2} s",
         res.status.name(),
         res.status.reason().map_or(String::new(), |r| format!(" ({})", r.name())),
         res.min_signed_distance_m * 1e3,
         res.ssm_violations,
+        if res.pfl.is_some() { format!(" and PFL, {} within PFL", res.steps_in_pfl) } else { String::new() },
         scene.fit.eval_sigma_factor,
         snap.t_s
     );
@@ -173,21 +174,25 @@ where
         .map_err(e)?
         .label("tool path")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(2)));
-    // Where the run's own verdict failed: steps faster than the SSM bound at the true separation
-    // (red crosses at the step's start), and steps whose swept segment entered an obstacle (red
-    // dots at the step's end).
-    let over: Vec<(f64, f64)> = res
-        .rows
-        .iter()
-        .enumerate()
-        .filter(|(_, w)| w.v_mps[0].hypot(w.v_mps[1]) > w.ssm_bound_mps + crate::path::SSM_TOL_MPS)
-        .map(|(k, _)| (res.points[k][0], res.points[k][1]))
-        .collect();
+    // Steps carried by PFL (beyond the SSM bound, within the PFL speeds: small yellow dots), where
+    // the run's own verdict failed: steps faster towards the person than the SSM bound at the true
+    // separation allows and beyond PFL (red crosses at the step's start), and steps whose swept
+    // segment entered an obstacle (red dots at the step's end).
+    let yellow = RGBColor(250, 220, 40);
+    let pfl: Vec<(f64, f64)> = res.rows.iter().enumerate().filter(|(_, w)| w.beyond_ssm == Some(true)).map(|(k, _)| (res.points[k][0], res.points[k][1])).collect();
+    if !pfl.is_empty() {
+        chart
+            .draw_series(pfl.into_iter().map(|p| Circle::new(p, 2, yellow.filled())))
+            .map_err(e)?
+            .label("step beyond the SSM bound, within PFL (allowed)")
+            .legend(move |(x, y)| Circle::new((x + 9, y), 2, yellow.filled()));
+    }
+    let over: Vec<(f64, f64)> = res.rows.iter().enumerate().filter(|(_, w)| w.beyond_ssm == Some(false)).map(|(k, _)| (res.points[k][0], res.points[k][1])).collect();
     if !over.is_empty() {
         chart
             .draw_series(over.into_iter().map(|p| Cross::new(p, 5, red.stroke_width(2))))
             .map_err(e)?
-            .label("over the SSM bound (true separation)")
+            .label("over the SSM bound and beyond PFL (true separation)")
             .legend(move |(x, y)| Cross::new((x + 9, y), 5, red.stroke_width(2)));
     }
     let inside: Vec<(f64, f64)> = res.rows.iter().filter(|w| w.swept_separation_m < 0.0).map(|w| (w.p_m[0], w.p_m[1])).collect();
@@ -201,6 +206,23 @@ where
     chart.draw_series(std::iter::once(Circle::new((scene.start_m[0], scene.start_m[1]), 6, GREEN.filled()))).map_err(e)?.label("start").legend(|(x, y)| Circle::new((x + 9, y), 5, GREEN.filled()));
     chart.draw_series(std::iter::once(Cross::new((scene.goal_m[0], scene.goal_m[1]), 8, MAGENTA.stroke_width(3)))).map_err(e)?.label("goal").legend(|(x, y)| Cross::new((x + 9, y), 5, MAGENTA.stroke_width(2)));
     chart.draw_series(std::iter::once(Circle::new((snap.tool_m[0], snap.tool_m[1]), 5, WHITE.stroke_width(2)))).map_err(e)?;
+    // The robot at the snapshot (issue 29 item 3): its link from the base to the tool, clipped to
+    // the view (the base may stand beyond it), and its wrist disc to scale.
+    let robot = RGBColor(215, 215, 215);
+    if let Some((a, b)) = clip_to_view(scene.robot.base_m, snap.tool_m, w, h) {
+        chart
+            .draw_series(std::iter::once(PathElement::new(vec![(a[0], a[1]), (b[0], b[1])], robot.mix(0.6).stroke_width(5))))
+            .map_err(e)?
+            .label(format!("robot link ({:.0} mm wide) and wrist at min clearance", scene.robot.link_width_m * 1e3))
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RGBColor(110, 110, 110).stroke_width(5)));
+    }
+    let wrist: Vec<(f64, f64)> = (0..=48)
+        .map(|k| {
+            let a = k as f64 / 48.0 * std::f64::consts::TAU;
+            (snap.tool_m[0] + scene.robot.wrist_radius_m * a.cos(), snap.tool_m[1] + scene.robot.wrist_radius_m * a.sin())
+        })
+        .collect();
+    chart.draw_series(std::iter::once(PathElement::new(wrist, robot.stroke_width(2)))).map_err(e)?;
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))
@@ -210,4 +232,38 @@ where
         .map_err(e)?;
     root.present().map_err(e)?;
     Ok(())
+}
+
+/// The part of the segment `a`-`b` inside the view `[0, w] x [0, h]` (Liang-Barsky), if any.
+fn clip_to_view(a: [f64; 2], b: [f64; 2], w: f64, h: f64) -> Option<([f64; 2], [f64; 2])> {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [(-dx, a[0]), (dx, w - a[0]), (-dy, a[1]), (dy, h - a[1])] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    (t0 <= t1).then(|| ([a[0] + t0 * dx, a[1] + t0 * dy], [a[0] + t1 * dx, a[1] + t1 * dy]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::clip_to_view;
+
+    #[test]
+    fn the_link_is_clipped_to_the_view() {
+        let (a, b) = clip_to_view([0.5, 1.5], [0.5, 0.5], 1.0, 1.0).unwrap();
+        assert_eq!((a, b), ([0.5, 1.0], [0.5, 0.5]));
+        assert!(clip_to_view([2.0, 2.0], [3.0, 3.0], 1.0, 1.0).is_none());
+        assert_eq!(clip_to_view([0.2, 0.2], [0.4, 0.4], 1.0, 1.0), Some(([0.2, 0.2], [0.4, 0.4])));
+    }
 }

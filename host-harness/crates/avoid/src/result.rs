@@ -41,6 +41,9 @@ pub struct StepRow {
     /// The SSM bound at the TRUE separation at the start of the step ([`SsmVerdict`]), m/s: on the
     /// tool's speed towards the person (ISO/TS 15066 5.5.4.2.3), [`approach_speed_mps`].
     pub ssm_bound_mps: f64,
+    /// The verdict on the step: `Some(true)` beyond the SSM bound but within the PFL speeds,
+    /// `Some(false)` beyond both (an `ssm_violation`), `None` within the SSM bound.
+    pub beyond_ssm: Option<bool>,
 }
 
 /// Near the operator, for `max_speed_near_operator_mps`: signed distance below this, m.
