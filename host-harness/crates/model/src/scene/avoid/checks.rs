@@ -45,11 +45,19 @@ pub(crate) fn cross_checks(cx: &mut Ctx, s: &Avoid, tabs: &Tabs) {
     if s.stop_height_m <= s.slow_height_m {
         cx.bad(tabs.avoid, STOP.name, format!("must be above slow_height_m = {} m (the speed falls from 1 at slow_height_m to 0 at stop_height_m), got {}", num(s.slow_height_m), num(s.stop_height_m)));
     }
-    // Start and goal inside the image.
+    // Start and goal inside the image, and inside the edge margin the steering keeps the tool's
+    // centre from the view's edges (robot.wrist_radius_m, issue 29 item 7): a start or goal in the
+    // margin is a run that cannot start cleanly or end at all.
     let (ew, eh) = s.extent_m();
+    let m = s.robot.wrist_radius_m;
     for (key, p) in [(&START, s.start_m), (&GOAL, s.goal_m)] {
         if !(0.0..=ew).contains(&p[0]) || !(0.0..=eh).contains(&p[1]) {
             cx.bad(tabs.avoid, key.name, format!("must be inside the image, [0, {}] x [0, {}] m (width_px x m_per_px, height_px x m_per_px), got [{}, {}]", approx(ew), approx(eh), num(p[0]), num(p[1])));
+        } else if !(m..=ew - m).contains(&p[0]) || !(m..=eh - m).contains(&p[1]) {
+            cx.bad(tabs.avoid, key.name, format!(
+                "must be at least robot.wrist_radius_m = {} m inside the image's edges (the steering keeps the tool's centre that far in: the edge margin), [{}, {}] x [{}, {}] m, got [{}, {}]",
+                num(m), approx(m), approx(ew - m), approx(m), approx(eh - m), num(p[0]), num(p[1])
+            ));
         }
     }
     // Obstacles inside the image (a moving one's every key frame).

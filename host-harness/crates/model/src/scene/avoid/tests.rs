@@ -97,3 +97,15 @@ fn work_caps_refuse_what_would_crash_or_hang() {
         assert!(e.contains(key), "{to}: {e}");
     }
 }
+
+/// Issue 29 item 7: a start or a goal inside the edge margin (the steering keeps the tool's centre
+/// `robot.wrist_radius_m` inside the view) is refused by name, the margin and the allowed box said;
+/// on the margin's inner edge it is accepted.
+#[test]
+fn start_or_goal_in_the_edge_margin_is_refused() {
+    let e = refused("start_m = [0.12, 0.50]", "start_m = [0.02, 0.50]");
+    assert!(e.contains("avoid.start_m") && e.contains("wrist_radius_m = 0.045") && e.contains("edge margin"), "{e}");
+    let e = refused("goal_m = [0.93, 0.50]", "goal_m = [0.93, 1.04]");
+    assert!(e.contains("avoid.goal_m") && e.contains("[0.045, 1.005]"), "{e}");
+    check(&SHIPPED.replace("goal_m = [0.93, 0.50]", "goal_m = [1.005, 0.50]"), "x").unwrap();
+}
