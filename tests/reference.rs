@@ -267,6 +267,7 @@ scenes! {
     robot_viper_standin => "robot_viper_standin.toml";
     body_hand => "body_hand.toml";
     body_hand_free => "body_hand_free.toml";
+    body_hand_rigid => "body_hand_rigid.toml";
     tables5_7_bistable_stopping_table => "tables5-7_bistable_stopping_table.toml";
 }
 
