@@ -161,6 +161,9 @@ fn avoid(t: &mut Tally, text: &str, path: &str, thesis: bool) -> Result<(), Stri
     if thesis {
         sc.thesis_mode();
     }
+    // As `flinch avoid` does: `[avoid.pfl]`'s speeds computed from the module scene (once per
+    // module and regions in a process: not in the per-case bound below).
+    flinch_harness::pfl::resolve_pfl(&mut sc).map_err(|e| format!("accepted, then the PFL speeds failed: {e}"))?;
     let t0 = Instant::now();
     let setup = Setup::new(&sc, None).map_err(|e| format!("accepted, then setup failed: {e}"))?;
     // A simulation error (e.g. a run that leaves the view is a status, not an error) is reported.
