@@ -30,6 +30,7 @@
     )
 )]
 
+pub mod cell;
 pub mod control;
 pub mod field;
 pub mod frame;
@@ -38,12 +39,14 @@ pub mod link;
 pub mod num;
 pub mod receiver;
 pub mod safe;
+pub mod velocity;
 
 pub use control::{Command, Controller, Gains, Repulsion, Watchdog};
 pub use field::{sample, FieldSample, Grid, MAX_AXIS, MAX_CENTRES, MAX_WINDOW, TRUNC_SIGMAS};
 pub use frame::{encode_frame, frame_len, FrameHeader};
 pub use gauss::{Gauss, GaussLibm, GaussLut, GaussMicromath};
 pub use link::{Link, LinkConfig, Status, Velocity};
+pub use cell::{board_config, BOARD_CELL};
 
 pub use num::{BoardReal, Real};
 pub use receiver::{Receiver, RxStats};

@@ -230,6 +230,7 @@ mod tests {
             y0_q16: 2294,
             spacing_q16: 4588, // 0.07 m
             sigma_q16: 3441,   // 0.0525 m (1.5 x spacing / 2)
+            ..fw::FrameHeader::default()
         };
         let mut w = vec![0i32; 225];
         w[7 * 15 + 7] = w0;

@@ -16,7 +16,7 @@ const SERIAL_TIMEOUT: Duration = Duration::from_secs(120);
 fn weights_frame(seq: u32, w_m: f64) -> Vec<u8> {
     use flinch_firmware::avoidance::frame::{encode_frame, FrameHeader, MAX_FRAME};
     let q = |v: f64| (v * 65536.0).round() as i32;
-    let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: q(0.105), y0_q16: q(0.105), spacing_q16: q(0.21), sigma_q16: q(0.105) };
+    let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: q(0.105), y0_q16: q(0.105), spacing_q16: q(0.21), sigma_q16: q(0.105), ..FrameHeader::default() };
     let mut out = vec![0u8; MAX_FRAME];
     let n = encode_frame(&h, &[q(w_m); 25], &mut out).unwrap_or(0);
     out.truncate(n);

@@ -182,7 +182,7 @@ fn measure_rx<R: Real>(name: &str, n: usize, rate_hz: usize, overhead: u32) -> u
     }
     let (mut max, mut total, mut now) = (0u32, 0u32, 0u32);
     for seq in 1..=3u32 {
-        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14, ..FrameHeader::default() };
         let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return u32::MAX };
         for chunk in out.get(..l).unwrap_or(&[]).chunks(per_step.max(1)) {
             let t0 = now_ticks();
@@ -194,7 +194,7 @@ fn measure_rx<R: Real>(name: &str, n: usize, rate_hz: usize, overhead: u32) -> u
             now = now.wrapping_add(10);
         }
     }
-    let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq: 4, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14 };
+    let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq: 4, age_ms: 5, x0_q16: 1 << 14, y0_q16: 1 << 14, spacing_q16: 1 << 15, sigma_q16: 1 << 14, ..FrameHeader::default() };
     let l = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out).unwrap_or(0);
     let t0 = now_ticks();
     rx.feed(black_box(out.get(..l).unwrap_or(&[])), now);
@@ -227,7 +227,8 @@ fn measure_rx<R: Real>(name: &str, n: usize, rate_hz: usize, overhead: u32) -> u
 /// frames' worth of steps at `rate_hz` frames a second, then 40 steps with the line silent. Prints
 /// the largest step.
 fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> u32 {
-    use flinch_firmware::avoidance::link::{board_config, encode_velocity, Link};
+    use flinch_firmware::avoidance::cell::board_config;
+    use flinch_firmware::avoidance::link::{encode_velocity, Link};
     let mut link = Link::new(board_config());
     let mut out = [0u8; frame::MAX_FRAME];
     let len = frame::frame_len(n, n).unwrap_or(0);
@@ -248,7 +249,7 @@ fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> 
     let (mut max, mut now, mut steps) = (0u32, 0u32, 0u32);
     let mut states = [0u32; 4];
     for seq in 1..=3u32 {
-        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: q(s / 2.0), y0_q16: q(s / 2.0), spacing_q16: q(s), sigma_q16: q(sigma_over_s * s) };
+        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: q(s / 2.0), y0_q16: q(s / 2.0), spacing_q16: q(s), sigma_q16: q(sigma_over_s * s), ..FrameHeader::default() };
         let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return u32::MAX };
         let chunks = out.get(..l).unwrap_or(&[]).chunks(per_step.max(1));
         for chunk in chunks.chain(core::iter::repeat_n(&[][..], 40 * (seq == 3) as usize)) {

@@ -30,7 +30,7 @@ pub enum Repulsion {
 }
 
 /// Gains and thresholds of the step.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Gains<R> {
     /// Repulsion law.
     pub repulsion: Repulsion,
@@ -55,7 +55,7 @@ pub struct Gains<R> {
 }
 
 /// Fail-safe on the age of the last good weights.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Watchdog {
     /// Age up to which the command is not reduced, ms.
     pub slow_after_ms: u32,

@@ -6,7 +6,7 @@
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 2 | sync `0xA5 0x5A` |
-//! | 2 | 1 | version ([`VERSION`], 2) |
+//! | 2 | 1 | version ([`VERSION`], 3) |
 //! | 3 | 1 | `nx`, centres along x, 1..=30 |
 //! | 4 | 1 | `ny`, centres along y, 1..=30 |
 //! | 5 | 1 | `session`: the host picks a new one each time it starts (ours: Unix seconds mod 256); another session is applied, with any `seq`, only once the weights in use are stale, and never one applied before since boot (see `receiver`) |
@@ -16,10 +16,19 @@
 //! | 16 | 4 | `y0`, Q16.16 m |
 //! | 20 | 4 | `spacing`, Q16.16 m, > 0 |
 //! | 24 | 4 | `sigma`, Q16.16 m, > 0: the sigma to evaluate with (eq 70, or widened per Fig. 90) |
-//! | 28 | 4 nx ny | weights, i32 Q16.16 m, row-major (`j * nx + i`, y outer) |
+//! | 28 | 4 | `echo_ms`, u32: the MCU's clock (`t_ms` of a velocity frame, `link`) read by the host *before* the depth image was captured: the capture is no earlier, so `now - echo_ms` on the MCU is an **upper** bound of the image's age, whatever the host's buffers and the line delayed (version 3) |
+//! | 32 | 1 | `echo_boot`: that velocity frame's `boot` byte; a frame echoing another boot's clock is not used by the monitor |
+//! | 33 | 3 | reserved, 0 |
+//! | 36 | 4 | `tool_x`, Q16.16 m: the tool's position when the image was captured (the sectors are measured from it) |
+//! | 40 | 4 | `tool_y`, Q16.16 m |
+//! | 44 | 4 | `nearest_x`, Q16.16 m: the nearest sensed point (steering only) |
+//! | 48 | 4 | `nearest_y`, Q16.16 m |
+//! | 52 | 16 | person separation per sector (`safe::SECTORS` sectors of 45 degrees, `safe::sector_of`), u16 mm from the tool's surface, rounded down; `0xFFFF`: nothing sensed |
+//! | 68 | 16 | fixture separation per sector (obstacles the scene declares fixed: clearance without a human approach speed), u16 mm, the same way |
+//! | 84 | 4 nx ny | weights, i32 Q16.16 m, row-major (`j * nx + i`, y outer) |
 //! | end-4 | 4 | CRC-32/ISO-HDLC (the zlib CRC) of bytes 2..end-4 |
 //!
-//! A 15 x 15 frame is 932 bytes, a 30 x 30 one 3,632 bytes.
+//! A 5 x 5 frame is 188 bytes, a 15 x 15 one 988 bytes, a 30 x 30 one 3,688 bytes.
 
 use super::field::MAX_AXIS;
 
@@ -27,10 +36,15 @@ use super::field::MAX_AXIS;
 pub const SYNC0: u8 = 0xA5;
 /// Second sync byte.
 pub const SYNC1: u8 = 0x5A;
-/// Protocol version carried in byte 2 (2: byte 5 is the session; version 1 had it reserved, 0).
-pub const VERSION: u8 = 2;
+/// Protocol version carried in byte 2 (3: the MCU clock echo and the sensed separation per sector
+/// for the monitor; 2: byte 5 is the session; version 1 had it reserved, 0).
+pub const VERSION: u8 = 3;
 /// Bytes before the weights.
-pub const HEADER_LEN: usize = 28;
+pub const HEADER_LEN: usize = 84;
+/// Sectors of the sensed separation (the monitor's, `safe::SECTORS`).
+pub const FRAME_SECTORS: usize = 8;
+/// A sector's separation when nothing was sensed in it, mm.
+pub const NOTHING_MM: u16 = u16::MAX;
 /// Bytes of the trailing CRC.
 pub const CRC_LEN: usize = 4;
 /// Longest frame (30 x 30).
@@ -42,6 +56,18 @@ pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 /// Header fields of a frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FrameHeader {
+    /// The MCU's clock read by the host before the image was captured (a velocity frame's `t_ms`), ms.
+    pub echo_ms: u32,
+    /// That velocity frame's boot byte.
+    pub echo_boot: u8,
+    /// Tool position at capture, Q16.16 m.
+    pub tool_q16: [i32; 2],
+    /// The nearest sensed point at capture, Q16.16 m.
+    pub nearest_q16: [i32; 2],
+    /// Person separation per sector from the tool's surface at capture, mm ([`NOTHING_MM`]: none).
+    pub person_mm: [u16; FRAME_SECTORS],
+    /// Fixture separation per sector, mm ([`NOTHING_MM`]: none).
+    pub fixture_mm: [u16; FRAME_SECTORS],
     /// Session of the sending host (byte 5): a restarted host sends a new one.
     pub session: u8,
     /// Centres along x.
@@ -60,6 +86,42 @@ pub struct FrameHeader {
     pub spacing_q16: i32,
     /// Sigma, Q16.16 m.
     pub sigma_q16: i32,
+}
+
+impl Default for FrameHeader {
+    /// A 1 x 1 grid at the origin with nothing sensed (a test and encoding convenience: the host sets
+    /// every field it knows).
+    fn default() -> Self {
+        FrameHeader {
+            echo_ms: 0,
+            echo_boot: 0,
+            tool_q16: [0; 2],
+            nearest_q16: [0; 2],
+            person_mm: [NOTHING_MM; FRAME_SECTORS],
+            fixture_mm: [NOTHING_MM; FRAME_SECTORS],
+            session: 0,
+            nx: 1,
+            ny: 1,
+            seq: 0,
+            age_ms: 0,
+            x0_q16: 0,
+            y0_q16: 0,
+            spacing_q16: 1 << 16,
+            sigma_q16: 1 << 16,
+        }
+    }
+}
+
+/// A separation in metres as the frame's u16 mm: rounded down (never more than measured), at most
+/// 65.534 m; [`NOTHING_MM`] for anything not finite or beyond.
+pub fn mm_of_m(m: f64) -> u16 {
+    if m.is_nan() || m < 0.0 {
+        0
+    } else if m * 1000.0 >= f64::from(NOTHING_MM) {
+        NOTHING_MM
+    } else {
+        (m * 1000.0) as u16
+    }
 }
 
 /// Total frame length for an `nx` by `ny` grid, `None` if the grid is out of range.
@@ -92,6 +154,16 @@ pub fn encode_frame(h: &FrameHeader, weights_q16: &[i32], out: &mut [u8]) -> Opt
     put(out, 16, &h.y0_q16.to_le_bytes())?;
     put(out, 20, &h.spacing_q16.to_le_bytes())?;
     put(out, 24, &h.sigma_q16.to_le_bytes())?;
+    put(out, 28, &h.echo_ms.to_le_bytes())?;
+    put(out, 32, &[h.echo_boot, 0, 0, 0])?;
+    put(out, 36, &h.tool_q16[0].to_le_bytes())?;
+    put(out, 40, &h.tool_q16[1].to_le_bytes())?;
+    put(out, 44, &h.nearest_q16[0].to_le_bytes())?;
+    put(out, 48, &h.nearest_q16[1].to_le_bytes())?;
+    for (k, (p, f)) in h.person_mm.iter().zip(h.fixture_mm.iter()).enumerate() {
+        put(out, 52usize.checked_add(k.checked_mul(2)?)?, &p.to_le_bytes())?;
+        put(out, 68usize.checked_add(k.checked_mul(2)?)?, &f.to_le_bytes())?;
+    }
     for (k, w) in weights_q16.iter().enumerate() {
         put(out, k.checked_mul(4)?.checked_add(HEADER_LEN)?, &w.to_le_bytes())?;
     }
@@ -120,7 +192,24 @@ pub fn decode_header(b: &[u8]) -> Option<FrameHeader> {
     let ny = *b.get(4)?;
     frame_len(nx as usize, ny as usize)?;
     let age = b.get(10..12)?;
+    // Reserved bytes must be zero (a later version's field is not silently ignored).
+    if b.get(33..36)? != [0, 0, 0] {
+        return None;
+    }
+    let le_u16 = |at: usize| -> Option<u16> { Some(u16::from_le_bytes([*b.get(at)?, *b.get(at.checked_add(1)?)?])) };
+    let mut person_mm = [NOTHING_MM; FRAME_SECTORS];
+    let mut fixture_mm = [NOTHING_MM; FRAME_SECTORS];
+    for (k, (p, f)) in person_mm.iter_mut().zip(fixture_mm.iter_mut()).enumerate() {
+        *p = le_u16(52usize.checked_add(k.checked_mul(2)?)?)?;
+        *f = le_u16(68usize.checked_add(k.checked_mul(2)?)?)?;
+    }
     Some(FrameHeader {
+        echo_ms: le_u32(b, 28)?,
+        echo_boot: *b.get(32)?,
+        tool_q16: [le_u32(b, 36)? as i32, le_u32(b, 40)? as i32],
+        nearest_q16: [le_u32(b, 44)? as i32, le_u32(b, 48)? as i32],
+        person_mm,
+        fixture_mm,
         session: *b.get(5)?,
         nx,
         ny,

@@ -1,107 +1,60 @@
 //! The avoidance step as the board runs it: weights frames in (through a [`Receiver`]), one step per
-//! control period, a velocity frame with a status word out.
+//! control period, a velocity frame ([`super::velocity`]) out. The same type is the host's
+//! `flinch avoid --mcu` engine, so the board and the host run one monitor from one configuration
+//! ([`super::cell`]).
 //!
 //! Kept in the library (not in the board binary) so that the host tests the whole step, the status
-//! and the velocity frame; the board binary (`src/bin/support/board_avoid.rs`) only moves bytes between the
-//! USART and this type and runs [`Link::step_with`] on a timer, with the detection firmware's latch.
+//! and the velocity frame; the board binary (`src/bin/support/board_avoid.rs`) only moves bytes
+//! between the USART and this type and runs [`Link::step_with`] on a timer, with the detection
+//! firmware's latch.
 //!
 //! Each step: the receiver is ticked and serviced (at most `budget_bytes` parsed), the field and its
 //! gradient are sampled at the tool, the command of eq 74-78 is formed with the weights-age watchdog
-//! factor, capped at `speed_cap_mps` (the length bound `max + min / 2`, never below the true speed),
-//! and classified:
+//! factor, then (with [`LinkConfig::ssm`]) steered round the sensed obstacles and limited by the
+//! speed and separation monitor with its power and force limits ([`super::safe`], ISO/TS 15066
+//! 5.5.4 and 5.5.5) from the separations the frame carries, their age bounded from above by the
+//! frame's echo of this MCU's clock; without a monitor (host comparisons only) capped at
+//! `speed_cap_mps`. Classified:
 //!
 //! | status | when | command |
 //! |---|---|---|
-//! | `ok` | fresh weights, the field below `slow_height_m` | as computed |
-//! | `slowed` | the weights older than `slow_after_ms`, or the field above `slow_height_m` | scaled down |
-//! | `stopped: stale` | no good frame yet, or the weights at least `stop_after_ms` old | zero |
+//! | `ok` | fresh weights, the field below `slow_height_m`, the monitor passed it | as computed |
+//! | `slowed` | the weights older than `slow_after_ms`, the field above `slow_height_m`, or the monitor scaled it (SSM or PFL) | scaled down |
+//! | `stopped: stale` | no good frame yet, the weights at least `stop_after_ms` old, or no separation the monitor may use (the frame's clock echo is of another boot, or ahead of this clock) | zero |
 //! | `stopped: no path` | the field at the tool at or above `stop_height_m`, or no command away from the goal (a local minimum) | zero |
+//! | `stopped: protective` | the monitor's protective stop | zero |
 //! | `stopped: latched` | the detection firmware holds the robot stopped ([`Link::step_with`] with `latched`: on the board every state but armed, i.e. the collision latch after a trip, a fault, the start latch after a reset, and the self-test after a reset press); before every other status | zero |
 //!
 //! While latched the receiver still takes and applies frames (so the weights are current when the
 //! latch is released) and the step number counts on, but the command is zero and the dead-reckoned
 //! position does not move: the robot is held, whatever the field says.
 //!
-//! The tool position is dead-reckoned from the commands (eq 79, `p += v dt`: the robot is assumed
-//! to follow the command), from `start_m`. The velocity frame reports it, so the host can check it
-//! against the robot's.
+//! **Position.** The board dead-reckons the tool from its commands (eq 79, `p += v dt`: the robot is
+//! assumed to follow the command), from `start_m`; the velocity frame reports it, so the host can
+//! check it against the robot's. Where the robot's measured position is available (the host's
+//! simulation; on a cell, a robot interface: not yet on the board) [`Link::step_at`] takes it
+//! instead.
 //!
-//! Velocity frame (board to host), little-endian, [`VEL_LEN`] bytes:
-//!
-//! | offset | size | field |
-//! |---|---|---|
-//! | 0 | 2 | sync `5A A5` (the weights frame's reversed) |
-//! | 2 | 1 | version 1 |
-//! | 3 | 1 | status: 0 `ok`, 1 `slowed`, 2 `stopped: stale`, 3 `stopped: no path`, 4 `stopped: latched` (a reader that does not know a code refuses the frame: [`decode_velocity`]) |
-//! | 4 | 4 | step number u32 (wrapping) |
-//! | 8 | 4 | `seq` of the weights in use u32 (0: none) |
-//! | 12 | 4 | `vx`, i32 micrometres per second |
-//! | 16 | 4 | `vy`, i32 um/s |
-//! | 20 | 4 | `x`, i32 micrometres (dead-reckoned tool position) |
-//! | 24 | 4 | `y`, i32 um |
-//! | 28 | 2 | good frames u16 (saturating) |
-//! | 30 | 2 | refused frames u16: bad CRC + bad header + short + stale (saturating) |
-//! | 32 | 4 | CRC-32/ISO-HDLC of bytes 2..32 |
+//! **Age.** The age of the frame in use, for the monitor's separations and for the weights
+//! watchdog alike, is `now - echo_ms`: the frame echoes a velocity frame's `t_ms` that the host read
+//! before the image was captured, so this bounds the age from above, whatever the host and the line
+//! delayed (the receiver's arrival-based age, a lower bound, still refuses frames too old on arrival
+//! and forgets the weights on a backlog). An echo of another boot (`boot`, [`Link::set_boot`]) or
+//! ahead of this clock makes the frame unusable: `stopped: stale`.
 
-use super::control::{Controller, Gains, Repulsion, Watchdog};
+use super::control::{Controller, Gains, Watchdog};
 use super::field::sample;
-use super::frame::CRC;
+use super::frame::{FrameHeader, FRAME_SECTORS, NOTHING_MM};
 use super::gauss::GaussLut;
 use super::num::Real;
 use super::receiver::Receiver;
+use super::safe::{SafeController, SafeState, Sensed, SsmParams, Steer, SECTORS};
+pub use super::velocity::{decode_velocity, encode_velocity, Monitor, Status, Velocity, VelocityFrame, VEL_LEN, VEL_SYNC0, VEL_SYNC1, VEL_VERSION};
 
-/// Bytes of a velocity frame.
-pub const VEL_LEN: usize = 36;
-/// First sync byte of a velocity frame.
-pub const VEL_SYNC0: u8 = 0x5A;
-/// Second sync byte of a velocity frame.
-pub const VEL_SYNC1: u8 = 0xA5;
-/// Velocity frame version.
-pub const VEL_VERSION: u8 = 1;
-
-/// What the step did.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Status {
-    /// The command as computed.
-    Ok = 0,
-    /// Scaled down (old weights, or the field above the slow height).
-    Slowed = 1,
-    /// Zero: no weights yet, or too old.
-    StoppedStale = 2,
-    /// Zero: the field at the tool at or above the stop height, or no command away from the goal.
-    StoppedNoPath = 3,
-    /// Zero: the detection firmware holds the robot stopped (its collision latch, a fault, the start
-    /// latch, the self-test); only a person's reset press at the module ends it.
-    StoppedLatched = 4,
-}
-
-impl Status {
-    /// The status word as the velocity frame's reader prints it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Status::Ok => "ok",
-            Status::Slowed => "slowed",
-            Status::StoppedStale => "stopped: stale",
-            Status::StoppedNoPath => "stopped: no path",
-            Status::StoppedLatched => "stopped: latched",
-        }
-    }
-
-    /// From the frame's status byte.
-    pub fn from_code(c: u8) -> Option<Status> {
-        match c {
-            0 => Some(Status::Ok),
-            1 => Some(Status::Slowed),
-            2 => Some(Status::StoppedStale),
-            3 => Some(Status::StoppedNoPath),
-            4 => Some(Status::StoppedLatched),
-            _ => None,
-        }
-    }
-}
+const _: () = assert!(FRAME_SECTORS == SECTORS);
 
 /// The installation's avoidance settings.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LinkConfig<R> {
     /// Gains and heights of the step.
     pub gains: Gains<R>,
@@ -121,73 +74,68 @@ pub struct LinkConfig<R> {
     pub byte_timeout_ms: u32,
     /// Bytes parsed per step (more than the line brings in one period).
     pub budget_bytes: usize,
+    /// The speed and separation monitor with its PFL speeds (`None`: the thesis's law alone, for
+    /// host comparisons; the board ships one).
+    pub ssm: Option<SsmParams<R>>,
+    /// The steering barrier before the monitor (`None`: none).
+    pub steer: Option<Steer<R>>,
+}
+
+impl LinkConfig<f64> {
+    /// The same settings in the number type `R` (each value through [`Real::from_f64`]).
+    pub fn to_real<R: Real>(&self) -> LinkConfig<R> {
+        let q = R::from_f64;
+        let g = &self.gains;
+        LinkConfig {
+            gains: Gains {
+                repulsion: g.repulsion,
+                k_att: q(g.k_att),
+                k_rep: q(g.k_rep),
+                capture_radius_m: q(g.capture_radius_m),
+                latch_height_m: q(g.latch_height_m),
+                slow_height_m: q(g.slow_height_m),
+                stop_height_m: q(g.stop_height_m),
+                bounded: g.bounded,
+            },
+            watchdog: self.watchdog,
+            start_m: self.start_m.map(q),
+            goal_m: self.goal_m.map(q),
+            speed_cap_mps: q(self.speed_cap_mps),
+            period_ms: self.period_ms,
+            max_age_ms: self.max_age_ms,
+            byte_timeout_ms: self.byte_timeout_ms,
+            budget_bytes: self.budget_bytes,
+            ssm: self.ssm.map(|p| SsmParams {
+                human_speed_mps: q(p.human_speed_mps),
+                reaction_time_s: q(p.reaction_time_s),
+                stopping_time_s: q(p.stopping_time_s),
+                margin_m: q(p.margin_m),
+                speed_cap_mps: q(p.speed_cap_mps),
+                whole_body_only: p.whole_body_only,
+                pfl: p.pfl.map(|f| super::safe::Pfl { axis: f.axis.map(q), along_mps: q(f.along_mps), across_mps: q(f.across_mps) }),
+            }),
+            steer: self.steer.map(|s| Steer { barrier_m: q(s.barrier_m), band_m: q(s.band_m), view_m: s.view_m.map(q), edge_margin_m: q(s.edge_margin_m) }),
+        }
+    }
 }
 
 /// The board's control period, ms: one avoidance step every ten 1 ms ticks.
 pub const BOARD_PERIOD_MS: u32 = 10;
 
-/// The installation's avoidance settings as the board ships them: those of the demo scene
-/// (`scenes/avoid_*.toml`: k_a 0.25 m/s, the thesis's vortex) on the 1.05 m work plane; replace
-/// with the cell's. The one copy: the board (`src/bin/support/board_avoid.rs`) runs it and the
-/// step's instruction count (`avoid-cost`, its `avoid_board` lines) measures it.
-pub fn board_config() -> LinkConfig<super::num::BoardReal> {
-    let r = super::num::BoardReal::from_f32;
-    LinkConfig {
-        gains: Gains {
-            repulsion: Repulsion::Vortex { sign: 0 },
-            k_att: r(0.25),
-            k_rep: r(0.5),
-            capture_radius_m: r(0.03),
-            latch_height_m: r(0.02),
-            slow_height_m: r(0.05),
-            stop_height_m: r(0.15),
-            bounded: false,
-        },
-        watchdog: Watchdog { slow_after_ms: 100, stop_after_ms: 330 },
-        start_m: [r(0.2), r(0.5)],
-        goal_m: [r(0.9), r(0.5)],
-        speed_cap_mps: r(0.25),
-        period_ms: BOARD_PERIOD_MS,
-        max_age_ms: 100,
-        byte_timeout_ms: 50,
-        // 115,200 baud brings 115 bytes in 10 ms.
-        budget_bytes: 256,
-    }
-}
-
-/// One step's output.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Velocity<R> {
-    /// Step number (wrapping).
-    pub step: u32,
-    /// `seq` of the weights in use (0: none).
-    pub seq: u32,
-    /// What the step did.
-    pub status: Status,
-    /// Command, m/s.
-    pub vx: R,
-    /// Command, m/s.
-    pub vy: R,
-    /// Dead-reckoned tool position before this step's motion, m.
-    pub x: R,
-    /// Dead-reckoned tool position before this step's motion, m.
-    pub y: R,
-    /// Frames applied.
-    pub good: u32,
-    /// Frames refused (bad CRC, bad header, short, stale).
-    pub refused: u32,
-}
-
 /// The receiver and the step.
 pub struct Link<R> {
     rx: Receiver<R>,
     ctl: Controller<R>,
+    safe: Option<SafeController<R>>,
     gauss: GaussLut<R>,
     cfg: LinkConfig<R>,
     dt_s: R,
+    /// `1 / 1000`: mm to m, ms to s.
+    milli: R,
     x: R,
     y: R,
     step: u32,
+    boot: u8,
 }
 
 impl<R: Real> Link<R> {
@@ -197,13 +145,37 @@ impl<R: Real> Link<R> {
         rx.budget_bytes = cfg.budget_bytes;
         // A restarted host's new session is taken once the weights watchdog has stopped the robot.
         rx.new_session_after_ms = cfg.watchdog.stop_after_ms;
-        let dt_s = R::from_int(cfg.period_ms.min(60_000) as i32).div(R::from_int(1000));
-        Link { rx, ctl: Controller::new(cfg.gains), gauss: GaussLut::new(), cfg, dt_s, x: cfg.start_m[0], y: cfg.start_m[1], step: 0 }
+        let milli = R::ONE.div(R::from_int(1000));
+        let dt_s = R::from_int(cfg.period_ms.min(60_000) as i32).mul(milli);
+        let safe = cfg.ssm.map(|p| {
+            let c = SafeController::new(p);
+            match cfg.steer {
+                Some(s) => c.with_steer(s),
+                None => c,
+            }
+        });
+        Link { rx, ctl: Controller::new(cfg.gains), safe, gauss: GaussLut::new(), cfg, dt_s, milli, x: cfg.start_m[0], y: cfg.start_m[1], step: 0, boot: 0 }
+    }
+
+    /// This boot's byte (the board: from its reset counter), sent in every velocity frame; a weights
+    /// frame whose echo carries another is not used by the monitor.
+    pub fn set_boot(&mut self, boot: u8) {
+        self.boot = boot;
     }
 
     /// The receiver (to push bytes into, and for its counters).
     pub fn receiver(&mut self) -> &mut Receiver<R> {
         &mut self.rx
+    }
+
+    /// The receiver's counters.
+    pub fn rx_stats(&self) -> super::receiver::RxStats {
+        self.rx.stats
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &LinkConfig<R> {
+        &self.cfg
     }
 
     /// One control step at `now_ms` (wrap-safe: only differences of it are used), the robot not
@@ -217,10 +189,60 @@ impl<R: Real> Link<R> {
     /// [`Status::StoppedLatched`] (before every other) and the dead-reckoned position stays where it
     /// is; the receiver is still serviced, so the weights are current when the latch is released.
     pub fn step_with(&mut self, now_ms: u32, latched: bool) -> Velocity<R> {
+        self.step_at(now_ms, latched, None)
+    }
+
+    /// The age of the frame in use from its echo of this clock, ms: `None` for an echo of another
+    /// boot or one ahead of `now_ms` (or older than the receiver's expiry).
+    fn echo_age_ms(&self, h: &FrameHeader, now_ms: u32) -> Option<u32> {
+        let age_ms = now_ms.wrapping_sub(h.echo_ms);
+        (h.echo_boot == self.boot && age_ms <= super::receiver::EXPIRE_MS).then_some(age_ms)
+    }
+
+    /// The sensed separations of the frame in use as the monitor takes them, `age_ms` old.
+    fn sensed(&self, h: &FrameHeader, age_ms: u32) -> Sensed<R> {
+        let m = |mm: u16| -> R {
+            if mm == NOTHING_MM {
+                // Far: nothing sensed in the sector (the host's NOTHING_SENSED_M is 10 m).
+                R::from_int(10)
+            } else {
+                // mm to Q16.16 m, rounded down: never more than the frame says.
+                R::from_q16(i32::from(mm).saturating_mul(8192) / 125)
+            }
+        };
+        let sectors_m = h.person_mm.map(m);
+        let mut sep = R::from_int(10);
+        for &s in sectors_m.iter() {
+            if s < sep {
+                sep = s;
+            }
+        }
+        Sensed {
+            separation_m: sep,
+            tool_x_m: R::from_q16(h.tool_q16[0]),
+            tool_y_m: R::from_q16(h.tool_q16[1]),
+            age_s: R::from_int(i32::try_from(age_ms).unwrap_or(i32::MAX)).mul(self.milli),
+            nearest_x_m: R::from_q16(h.nearest_q16[0]),
+            nearest_y_m: R::from_q16(h.nearest_q16[1]),
+            sectors_m,
+        }
+    }
+
+    /// [`Link::step_with`] with the tool at `pos` (the robot's measured position, m) when given, else
+    /// at the dead-reckoned one; the dead reckoning then goes on from `pos`.
+    pub fn step_at(&mut self, now_ms: u32, latched: bool, pos: Option<[R; 2]>) -> Velocity<R> {
         self.rx.tick(now_ms);
         self.rx.service(now_ms);
         self.step = self.step.wrapping_add(1);
-        let factor: R = self.cfg.watchdog.factor(self.rx.weights_age_ms(now_ms));
+        if let Some([x, y]) = pos {
+            self.x = x;
+            self.y = y;
+        }
+        // The weights' age from the frame's clock echo (an upper bound); none without weights, or
+        // with an echo of another boot or ahead of this clock: stale.
+        let header = self.rx.header_in_use().copied();
+        let age_ms = header.and_then(|h| self.echo_age_ms(&h, now_ms));
+        let factor: R = self.cfg.watchdog.factor(age_ms);
         let (x, y) = (self.x, self.y);
         let [gx, gy] = self.cfg.goal_m;
         let f = sample(self.rx.grid(), &self.gauss, x, y);
@@ -238,7 +260,7 @@ impl<R: Real> Link<R> {
         // 1 mm/s: below it a command away from the goal is no motion (a local minimum).
         let crawl = R::from_f32(0.001);
         // NaN-safe: anything not comparable stops (a factor that is not > 0 is stale).
-        let status = if latched {
+        let mut status = if latched {
             Status::StoppedLatched
         } else if factor.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Greater) {
             Status::StoppedStale
@@ -254,15 +276,43 @@ impl<R: Real> Link<R> {
         } else {
             Status::Ok
         };
-        if matches!(status, Status::StoppedStale | Status::StoppedNoPath | Status::StoppedLatched) {
+        let moving = matches!(status, Status::Ok | Status::Slowed);
+        let (mut monitor, mut limit) = (if self.safe.is_some() { Monitor::NotRun } else { Monitor::Off }, if moving { cap } else { R::ZERO });
+        if moving && self.safe.is_some() {
+            let sensed = match (header, age_ms) {
+                (Some(h), Some(a)) => Some(self.sensed(&h, a)),
+                _ => None,
+            };
+            if let Some(safe) = self.safe.as_mut() {
+                let (sx, sy) = safe.steer(c.vx, c.vy, x, y, sensed.as_ref());
+                let out = safe.limit(sx, sy, x, y, sensed.as_ref());
+                (vx, vy, limit) = (out.vx, out.vy, out.limit_mps);
+                monitor = match out.state {
+                    SafeState::Run => Monitor::Run,
+                    SafeState::Slow => Monitor::Slow,
+                    SafeState::ProtectiveStop => Monitor::ProtectiveStop,
+                    SafeState::NoData => Monitor::NoData,
+                    SafeState::Pfl => Monitor::Pfl,
+                };
+                status = match out.state {
+                    SafeState::ProtectiveStop => Status::StoppedProtective,
+                    SafeState::NoData => Status::StoppedStale,
+                    SafeState::Slow | SafeState::Pfl => Status::Slowed,
+                    SafeState::Run => status,
+                };
+            }
+        }
+        if !matches!(status, Status::Ok | Status::Slowed) {
             vx = R::ZERO;
             vy = R::ZERO;
+            limit = R::ZERO;
         }
         self.x = x.add(vx.mul(self.dt_s));
         self.y = y.add(vy.mul(self.dt_s));
         let s = self.rx.stats;
         let refused = s.bad_crc.saturating_add(s.bad_header).saturating_add(s.short).saturating_add(s.stale);
-        Velocity { step: self.step, seq: if self.rx.weights_age_ms(now_ms).is_some() { self.rx.grid().seq } else { 0 }, status, vx, vy, x, y, good: s.good, refused }
+        let seq = if header.is_some() { self.rx.grid().seq } else { 0 };
+        Velocity { step: self.step, seq, status, vx, vy, x, y, good: s.good, refused, t_ms: now_ms, boot: self.boot, monitor, limit_mps: limit }
     }
 }
 
@@ -328,86 +378,6 @@ fn norm_bound<R: Real>(a: R, b: R) -> R {
     }
 }
 
-/// Metres (per second) to whole micrometres (per second), saturating ([`Real::to_micro`]).
-fn micro<R: Real>(v: R) -> i32 {
-    v.to_micro()
-}
-
-/// The velocity frame of one step.
-pub fn encode_velocity<R: Real>(v: &Velocity<R>) -> [u8; VEL_LEN] {
-    let mut b = [0u8; VEL_LEN];
-    let sat16 = |n: u32| u16::try_from(n).unwrap_or(u16::MAX);
-    let fields: [(usize, &[u8]); 9] = [
-        (0, &[VEL_SYNC0, VEL_SYNC1, VEL_VERSION, v.status as u8]),
-        (4, &v.step.to_le_bytes()),
-        (8, &v.seq.to_le_bytes()),
-        (12, &micro(v.vx).to_le_bytes()),
-        (16, &micro(v.vy).to_le_bytes()),
-        (20, &micro(v.x).to_le_bytes()),
-        (24, &micro(v.y).to_le_bytes()),
-        (28, &sat16(v.good).to_le_bytes()),
-        (30, &sat16(v.refused).to_le_bytes()),
-    ];
-    for (at, bytes) in fields {
-        if let Some(dst) = b.get_mut(at..at.saturating_add(bytes.len())) {
-            dst.copy_from_slice(bytes);
-        }
-    }
-    let crc = CRC.checksum(b.get(2..32).unwrap_or(&[]));
-    if let Some(dst) = b.get_mut(32..36) {
-        dst.copy_from_slice(&crc.to_le_bytes());
-    }
-    b
-}
-
-/// A decoded velocity frame (integers as sent).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VelocityFrame {
-    /// What the step did.
-    pub status: Status,
-    /// Step number.
-    pub step: u32,
-    /// Weights in use (0: none).
-    pub seq: u32,
-    /// Command, um/s.
-    pub vx_umps: i32,
-    /// Command, um/s.
-    pub vy_umps: i32,
-    /// Tool position, um.
-    pub x_um: i32,
-    /// Tool position, um.
-    pub y_um: i32,
-    /// Frames applied (saturating).
-    pub good: u16,
-    /// Frames refused (saturating).
-    pub refused: u16,
-}
-
-/// Decode one velocity frame (`None`: wrong sync, version, status or CRC, or too short).
-pub fn decode_velocity(b: &[u8]) -> Option<VelocityFrame> {
-    let b: &[u8; VEL_LEN] = b.get(..VEL_LEN)?.try_into().ok()?;
-    let [s0, s1, ver, st, ..] = *b;
-    if s0 != VEL_SYNC0 || s1 != VEL_SYNC1 || ver != VEL_VERSION {
-        return None;
-    }
-    let u32_at = |k: usize| -> Option<u32> { Some(u32::from_le_bytes(b.get(k..k.checked_add(4)?)?.try_into().ok()?)) };
-    let u16_at = |k: usize| -> Option<u16> { Some(u16::from_le_bytes(b.get(k..k.checked_add(2)?)?.try_into().ok()?)) };
-    if CRC.checksum(b.get(2..32)?) != u32_at(32)? {
-        return None;
-    }
-    Some(VelocityFrame {
-        status: Status::from_code(st)?,
-        step: u32_at(4)?,
-        seq: u32_at(8)?,
-        vx_umps: u32_at(12)? as i32,
-        vy_umps: u32_at(16)? as i32,
-        x_um: u32_at(20)? as i32,
-        y_um: u32_at(24)? as i32,
-        good: u16_at(28)?,
-        refused: u16_at(30)?,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -434,12 +404,14 @@ mod tests {
             max_age_ms: 100,
             byte_timeout_ms: 50,
             budget_bytes: 256,
+            ssm: None,
+            steer: None,
         }
     }
 
     /// A 5 x 5 grid over 1.05 m with every weight `w` (m).
-    fn frame(seq: u32, w: f64) -> heapless::Vec<u8, 256> {
-        let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: (0.105 * 65536.0) as i32, y0_q16: (0.105 * 65536.0) as i32, spacing_q16: (0.21 * 65536.0) as i32, sigma_q16: (0.105 * 65536.0) as i32 };
+    fn frame(seq: u32, w: f64, echo_ms: u32) -> heapless::Vec<u8, 256> {
+        let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: (0.105 * 65536.0) as i32, y0_q16: (0.105 * 65536.0) as i32, spacing_q16: (0.21 * 65536.0) as i32, sigma_q16: (0.105 * 65536.0) as i32, echo_ms, ..FrameHeader::default() };
         let ws = [(w * 65536.0) as i32; 25];
         let mut out = [0u8; 256];
         let n = encode_frame(&h, &ws, &mut out).unwrap();
@@ -457,12 +429,12 @@ mod tests {
         let v = l.step(0);
         assert_eq!((v.status, v.vx, v.vy, v.seq), (Status::StoppedStale, 0.0, 0.0, 0));
         // A high field everywhere: no path, zero.
-        feed(&mut l, &frame(1, 0.5), 5);
+        feed(&mut l, &frame(1, 0.5, 5), 5);
         let v = l.step(10);
         assert_eq!((v.status, v.vx, v.vy, v.seq), (Status::StoppedNoPath, 0.0, 0.0, 1));
         assert_eq!((v.x, v.y), (0.2, 0.5));
         // An empty field: ok, at the cruise speed towards the goal.
-        feed(&mut l, &frame(2, 0.0), 15);
+        feed(&mut l, &frame(2, 0.0, 15), 15);
         let v = l.step(20);
         assert_eq!((v.status, v.seq), (Status::Ok, 2));
         assert!((v.vx - 0.25).abs() < 1e-4 && v.vy.abs() < 1e-6, "{v:?}");
@@ -473,7 +445,7 @@ mod tests {
         let v = l.step(20 + 330);
         assert_eq!((v.status, v.vx, v.vy), (Status::StoppedStale, 0.0, 0.0));
         // A corrupted frame is refused and counted; nothing changes.
-        let mut bad = frame(3, 0.0);
+        let mut bad = frame(3, 0.0, 360);
         bad[40] ^= 1;
         feed(&mut l, &bad, 360);
         let v = l.step(370);
@@ -484,7 +456,7 @@ mod tests {
     fn a_latched_step_is_zero_and_holds_the_position_and_release_resumes() {
         let mut l = Link::new(cfg());
         // Fresh weights of an empty field, the goal 0.7 m away: unlatched this is `ok` at the cap.
-        feed(&mut l, &frame(1, 0.0), 0);
+        feed(&mut l, &frame(1, 0.0, 0), 0);
         let v = l.step(10);
         assert_eq!(v.status, Status::Ok, "{v:?}");
         let held = l.step_with(20, false);
@@ -494,7 +466,7 @@ mod tests {
         for k in 0..20u32 {
             let now = 30 + 10 * k;
             if k % 3 == 0 {
-                feed(&mut l, &frame(2 + k, 0.0), now - 5);
+                feed(&mut l, &frame(2 + k, 0.0, now - 5), now - 5);
             }
             let v = l.step_with(now, true);
             step += 1;
@@ -506,7 +478,7 @@ mod tests {
         // Before every other status: with no weights at all, and with a field above the stop height.
         let mut fresh = Link::new(cfg());
         assert_eq!(fresh.step_with(0, true).status, Status::StoppedLatched);
-        feed(&mut fresh, &frame(1, 0.5), 5);
+        feed(&mut fresh, &frame(1, 0.5, 5), 5);
         assert_eq!(fresh.step_with(10, true).status, Status::StoppedLatched);
         // Released: the newest frame (seq 20, taken while latched at 205 ms) is in use and the step
         // resumes from the held position.
@@ -529,14 +501,14 @@ mod tests {
         // Attraction only (no vortex): a field between slow and stop slows.
         c.gains.k_rep = 0.0;
         let mut l = Link::new(c);
-        feed(&mut l, &frame(1, 0.06), 0);
+        feed(&mut l, &frame(1, 0.06, 0), 0);
         let v = l.step(10);
         assert_eq!(v.status, Status::Slowed, "{v:?}");
         // The goal at the start: no command, but not away from the goal: ok, not no path.
         let mut c = cfg();
         c.goal_m = c.start_m;
         let mut l = Link::new(c);
-        feed(&mut l, &frame(1, 0.0), 0);
+        feed(&mut l, &frame(1, 0.0, 0), 0);
         assert_eq!(l.step(10).status, Status::Ok);
     }
 
@@ -568,21 +540,7 @@ mod tests {
         d.step_done();
         assert!(!d.tick() && d.missed());
     }
-
-    #[test]
-    fn the_velocity_frame_round_trips_and_refuses_damage() {
-        let v = Velocity { step: 7, seq: 3, status: Status::Slowed, vx: 0.125f32, vy: -0.25, x: 0.5, y: 1.0, good: 70_000, refused: 2 };
-        let b = encode_velocity(&v);
-        let d = decode_velocity(&b).unwrap();
-        assert_eq!(d, VelocityFrame { status: Status::Slowed, step: 7, seq: 3, vx_umps: 125_000, vy_umps: -250_000, x_um: 500_000, y_um: 1_000_000, good: u16::MAX, refused: 2 });
-        for k in 0..VEL_LEN {
-            let mut c = b;
-            c[k] ^= 0x10;
-            assert!(decode_velocity(&c).is_none(), "byte {k} flipped was accepted");
-        }
-        // NaN and huge values saturate; a NaN command never decodes as motion.
-        let w = Velocity { vx: f32::NAN, vy: 1e30, ..v };
-        let d = decode_velocity(&encode_velocity(&w)).unwrap();
-        assert_eq!((d.vx_umps, d.vy_umps), (0, i32::MAX));
-    }
 }
+
+#[cfg(test)]
+mod monitor_tests;

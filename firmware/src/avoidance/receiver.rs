@@ -4,7 +4,7 @@
 //! Bytes go in through [`Receiver::feed`] (or [`Receiver::poll`] from an `embedded-io` reader) into
 //! a ring of [`RING`] bytes. [`Receiver::service`] parses at most `budget_bytes` of them per call, so
 //! one control step's share of frame handling is bounded whatever arrives: the header is decoded
-//! once per frame (when its 28 bytes are in), the CRC is updated as the bytes go by (the 1 KiB
+//! once per frame (when its `HEADER_LEN` bytes are in), the CRC is updated as the bytes go by (the 1 KiB
 //! byte table: in QEMU's instruction count the 16 KiB sliced one saved nothing), and every weight is decoded into the inactive grid as soon as its four
 //! bytes are parsed. At the frame's end only the CRC is compared and the two grids swapped: the
 //! controller never sees a half-written grid, and no step pays for a whole frame.
@@ -119,6 +119,8 @@ pub struct Receiver<R> {
     seen: [u32; 8],
     /// Capture bound of the grid in use: its first byte's arrival less its `age_ms`, ms.
     origin_ms: u32,
+    /// The header of the frame whose grid is in use (its sensed separations and clock echo).
+    in_use: FrameHeader,
     /// Index (counting every byte ever pushed, wrapping) of the byte at `start`.
     start_abs: u32,
     /// Arrival marks, a ring: `(index of the first byte pushed at that time, ms)`.
@@ -167,6 +169,7 @@ impl<R: Real> Receiver<R> {
             last: None,
             seen: [0; 8],
             origin_ms: 0,
+            in_use: FrameHeader::default(),
             start_abs: 0,
             marks: [(0, 0); MARKS],
             mark_head: 0,
@@ -189,6 +192,12 @@ impl<R: Real> Receiver<R> {
         } else {
             a
         }
+    }
+
+    /// The header of the frame in use (the monitor's sensed separations and the MCU clock echo);
+    /// `None` when [`Receiver::weights_age_ms`] is (no weights, or forgotten).
+    pub fn header_in_use(&self) -> Option<&FrameHeader> {
+        self.have_grid.then_some(&self.in_use)
     }
 
     /// Age of the grid in use, ms: from its capture bound (its first byte's arrival less its

@@ -72,7 +72,7 @@
 use super::num::Real;
 
 /// Parameters of the monitor. All in metres, seconds, metres per second.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SsmParams<R> {
     /// `v_h`, the human's approach speed far from the robot (ISO 13855:2010 6.2: 1.6 m/s); the
     /// monitor raises it to `max(2.0 m/s, v_h)` where its stop separation is within 0.5 m
@@ -96,7 +96,7 @@ pub struct SsmParams<R> {
 
 /// The PFL speeds (ISO/TS 15066, 5.5.5 and Annex A) of the module on this robot, for the body
 /// regions the scene allows to be touched. All m/s, the axis a unit vector in the cell's plane.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pfl<R> {
     /// The module's axis in the cell's frame (unit length).
     pub axis: [R; 2],
@@ -175,7 +175,7 @@ impl<R: Real> Sensed<R> {
 ///   dither; chosen towards the view's centre when the command is head-on.
 /// * Workspace edge: the sensed view is a barrier of the same kind on each axis, the tool's centre
 ///   kept `edge_margin_m` inside it: it never leaves the region where obstacles are seen.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Steer<R> {
     /// Separation (from the tool's surface) the barrier holds, m: the host sets it so that the
     /// monitor still allows the cap there with the oldest frame.

@@ -43,7 +43,14 @@ impl<R: Real> Receiver<R> {
                         self.blocked = true;
                         return;
                     }
-                    left = left.saturating_sub(HEADER_LEN.saturating_sub(d));
+                    // The header is decoded at once: it waits for the next call unless its bytes
+                    // fit what is left of the budget (or the budget itself is below a header's
+                    // length: then it takes one whole call).
+                    let need = HEADER_LEN.saturating_sub(d);
+                    if left < need && left < self.budget_bytes {
+                        return;
+                    }
+                    left = left.saturating_sub(need);
                     if !self.header() {
                         self.stats.bad_header = self.stats.bad_header.saturating_add(1);
                         self.refuse();
@@ -79,7 +86,7 @@ impl<R: Real> Receiver<R> {
         }
     }
 
-    /// The 28 header bytes are held: decode them once, start the CRC, set the inactive grid's
+    /// The `HEADER_LEN` header bytes are held: decode them once, start the CRC, set the inactive grid's
     /// geometry. `false` if the header is invalid.
     fn header(&mut self) -> bool {
         let mut h = [0u8; HEADER_LEN];
@@ -195,6 +202,7 @@ impl<R: Real> Receiver<R> {
         self.have_grid = true;
         self.last = Some((hdr.session, hdr.seq));
         self.origin_ms = origin;
+        self.in_use = *hdr;
         self.stats.good = self.stats.good.saturating_add(1);
     }
 }

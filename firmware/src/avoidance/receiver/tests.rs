@@ -19,6 +19,7 @@ pub(super) fn header(nx: u8, ny: u8, seq: u32) -> FrameHeader {
         y0_q16: 2 << 14,
         spacing_q16: 1 << 15,
         sigma_q16: 1 << 14,
+        ..FrameHeader::default()
     }
 }
 

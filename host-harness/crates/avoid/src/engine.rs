@@ -34,14 +34,12 @@ pub fn board_real_name() -> &'static str {
     }
 }
 
-/// The `--mcu` engine for a scene: the firmware as the board runs it, in [`BoardReal`] with the
-/// lookup-table Gaussian.
-pub fn mcu_engine(scene: &Avoid) -> Result<FwEngine<BoardReal, fw::GaussLut<BoardReal>>, String> {
-    FwEngine::new(scene, fw::GaussLut::new())
-}
-
 /// A command source for [`simulate_with`](crate::path::simulate_with): gets every new field, answers every control step.
 pub trait StepEngine {
+    /// The monitor's part of the next frame: the separations sensed at capture (`sensed.age_s` is
+    /// not used) and the capture time, s. Called before [`StepEngine::new_field`] for the same frame;
+    /// the engines that get the separations with every command ignore it.
+    fn capture(&mut self, _sensed: &Sensed<f64>, _capture_s: f64) {}
     /// A new fit is available (frame `seq` at `now_ms`).
     fn new_field(&mut self, field: &Field, seq: u32, now_ms: u32) -> Result<(), String>;
     /// Velocity command at `p`, after the speed and separation monitor when `sensed` is given (the

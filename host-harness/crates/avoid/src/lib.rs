@@ -6,6 +6,7 @@
 //! potential-field step (5.3), `engine` gives it its commands and `verdict` judges the run; `scene` reads `[avoid]` scene files; `plot` draws Fig. 88-90.
 //! `flinch avoid SCENE.toml` is [`run`].
 
+pub mod board_engine;
 pub mod calib;
 pub mod camera;
 pub mod compare;

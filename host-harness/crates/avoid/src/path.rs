@@ -14,6 +14,7 @@
 
 use flinch_firmware::avoidance::{SafeController, Sensed};
 // The parts of the loop live in their own modules; their names stay reachable here.
+pub use crate::board_engine::{link_config, mcu_engine, BoardEngine};
 pub use crate::engine::*;
 pub use crate::link::*;
 pub use crate::result::*;
@@ -174,11 +175,13 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
                     no_room = pfl.is_none() && gs.is_some_and(|g| m.speed_limit(g) <= 0.0);
                 }
             }
+            let s = Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1], sectors_m: sec };
+            engine.capture(&s, tc);
             engine.new_field(&f, seq, now)?;
             seq = seq.wrapping_add(1);
             field = f;
             capture_t = tc;
-            sensed = Some(Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1], sectors_m: sec });
+            sensed = Some(s);
         }
         if let Some(sn) = sensed.as_mut() {
             // Counted from capture: latency plus the time since it arrived.

@@ -244,8 +244,15 @@ impl Field {
     }
 
     /// The frame that carries this field to the MCU (`flinch_firmware::avoidance::frame`), in this
-    /// host start's session ([`host_session`]).
+    /// host start's session ([`host_session`]), with nothing sensed and a zero clock echo (see
+    /// [`Field::to_frame_with`]).
     pub fn to_frame(&self, seq: u32, age_ms: u16) -> Result<Vec<u8>, String> {
+        self.to_frame_with(seq, age_ms, &fw::FrameHeader::default())
+    }
+
+    /// [`Field::to_frame`] with the monitor's part of the header (clock echo, tool at capture,
+    /// nearest point, separations per sector) taken from `sensed`.
+    pub fn to_frame_with(&self, seq: u32, age_ms: u16, sensed: &fw::FrameHeader) -> Result<Vec<u8>, String> {
         let h = fw::FrameHeader {
             session: host_session(),
             nx: self.nx as u8,
@@ -256,6 +263,7 @@ impl Field {
             y0_q16: Self::q16(self.y0_m),
             spacing_q16: Self::q16(self.spacing_m),
             sigma_q16: Self::q16(self.sigma_m),
+            ..*sensed
         };
         let w: Vec<i32> = self.weights.iter().map(|&v| Self::q16(v)).collect();
         let mut out = vec![0u8; fw::frame::MAX_FRAME];

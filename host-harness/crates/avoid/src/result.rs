@@ -31,7 +31,8 @@ pub struct StepRow {
     pub separation_m: f64,
     /// Speed limit that applied during the step, m/s.
     pub speed_limit_mps: f64,
-    /// What the controller did: `run`, `slow`, `protective_stop`, `no_data`, `field` (monitor off),
+    /// What the controller did: `run`, `slow`, `pfl`, `protective_stop`, `no_data`, `field` (monitor off),
+    /// `no_path` (`--mcu`: the board's step stopped on the field),
     /// or `stopped` on the run's last step when its command was zero and the run ended before the
     /// goal.
     pub state: &'static str,

@@ -68,7 +68,7 @@ fn sigma_wider_than_the_spacing_is_refused_where_the_mcu_would_refuse_it() {
         let spacing = 1.05 / n as f64;
         for (ratio, accepted) in [(MAX_EVAL_SIGMA_OVER_SPACING, true), (MAX_EVAL_SIGMA_OVER_SPACING * 1.01, false)] {
             let q = |v: f64| (v * 65536.0).round() as i32;
-            let h = fw::FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq: 1, age_ms: 0, x0_q16: q(spacing / 2.0), y0_q16: q(spacing / 2.0), spacing_q16: q(spacing), sigma_q16: q(ratio * spacing) };
+            let h = fw::FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq: 1, age_ms: 0, x0_q16: q(spacing / 2.0), y0_q16: q(spacing / 2.0), spacing_q16: q(spacing), sigma_q16: q(ratio * spacing), ..fw::FrameHeader::default() };
             let mut out = vec![0u8; fw::frame::MAX_FRAME];
             let len = fw::encode_frame(&h, &vec![0; n * n], &mut out).unwrap();
             let mut rx = Box::new(fw::Receiver::<I16F16>::new(100, 10));
