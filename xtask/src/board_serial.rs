@@ -10,13 +10,42 @@ use std::time::{Duration, Instant};
 /// How long the whole serial conversation may take (QEMU's virtual clock follows the host's).
 const SERIAL_TIMEOUT: Duration = Duration::from_secs(120);
 
-/// A 5 x 5 weights frame over the 1.05 m work plane (centres 0.21 m apart from 0.105 m, sigma
-/// 0.105 m), every weight `w_m`: the shipped demo's grid size; 0.5 m puts the field at the tool far
-/// above the board's stop height (the hand over the tool), 0 is an empty field.
-fn weights_frame(seq: u32, w_m: f64) -> Vec<u8> {
-    use flinch_firmware::avoidance::frame::{encode_frame, FrameHeader, MAX_FRAME};
+/// A 5 x 5 protocol-v3 weights frame over the 1.05 m work plane (centres 0.21 m apart from
+/// 0.105 m, sigma 0.105 m), every weight `w_m`: 0.5 m puts the field at the tool far above the
+/// board's stop height (the hand over the tool), 0 is an empty field. It echoes the clock and boot
+/// of `last`, the newest velocity frame read before it was made (as a host does before each
+/// capture), the tool where `last` had it, and a person `person_mm` away in sector `sector` (none:
+/// nothing sensed).
+fn weights_frame(seq: u32, w_m: f64, last: &flinch_firmware::avoidance::link::VelocityFrame, person: Option<(usize, u16)>, boot: u8) -> Vec<u8> {
+    use flinch_firmware::avoidance::frame::{encode_frame, FrameHeader, MAX_FRAME, NOTHING_MM};
     let q = |v: f64| (v * 65536.0).round() as i32;
-    let h = FrameHeader { session: 1, nx: 5, ny: 5, seq, age_ms: 5, x0_q16: q(0.105), y0_q16: q(0.105), spacing_q16: q(0.21), sigma_q16: q(0.105), ..FrameHeader::default() };
+    let tool = [f64::from(last.x_um) * 1e-6, f64::from(last.y_um) * 1e-6];
+    let mut person_mm = [NOTHING_MM; 8];
+    let mut nearest = [tool[0] + 10.0, tool[1]];
+    if let Some((k, mm)) = person {
+        person_mm[k] = mm;
+        // On the sector's centre line, the separation plus the wrist's 45 mm from the tool's centre.
+        let a = (22.5 + 45.0 * k as f64).to_radians();
+        let r = f64::from(mm) * 1e-3 + 0.045;
+        nearest = [tool[0] + r * a.cos(), tool[1] + r * a.sin()];
+    }
+    let h = FrameHeader {
+        session: 1,
+        nx: 5,
+        ny: 5,
+        seq,
+        age_ms: 5,
+        x0_q16: q(0.105),
+        y0_q16: q(0.105),
+        spacing_q16: q(0.21),
+        sigma_q16: q(0.105),
+        echo_ms: last.t_ms,
+        echo_boot: boot,
+        tool_q16: [q(tool[0]), q(tool[1])],
+        nearest_q16: [q(nearest[0]), q(nearest[1])],
+        person_mm,
+        ..FrameHeader::default()
+    };
     let mut out = vec![0u8; MAX_FRAME];
     let n = encode_frame(&h, &[q(w_m); 25], &mut out).unwrap_or(0);
     out.truncate(n);
@@ -28,12 +57,46 @@ fn weights_frame(seq: u32, w_m: f64) -> Vec<u8> {
 fn velocity_line(what: &str, f: &flinch_firmware::avoidance::link::VelocityFrame, full: bool) -> String {
     if full {
         format!(
-            "{what}: status={} seq={} vx_umps={} vy_umps={} x_um={} y_um={} good={} refused={}",
-            f.status.name(), f.seq, f.vx_umps, f.vy_umps, f.x_um, f.y_um, f.good, f.refused
+            "{what}: status={} monitor={} seq={} vx_umps={} vy_umps={} x_um={} y_um={} good={} refused={}",
+            f.status.name(), f.monitor.name(), f.seq, f.vx_umps, f.vy_umps, f.x_um, f.y_um, f.good, f.refused
         )
     } else {
-        format!("{what}: status={} seq={}", f.status.name(), f.seq)
+        format!("{what}: status={} monitor={} seq={}", f.status.name(), f.monitor.name(), f.seq)
     }
+}
+
+/// The board ELF's velocity frames against the library's `Link` on the host (the type `flinch
+/// avoid --mcu` runs), from the board's own configuration: a fresh `Link` gets each weights frame
+/// the host sent just before the step whose counters first show it (applied or refused: a 5 x 5
+/// frame is parsed within one step once its bytes are in, and until then no output depends on
+/// them), and the detection latch as the board's frame reported it; every velocity frame must come
+/// out byte for byte the same (`f32` on both: IEEE single on the M4F's FPU and on the host, no fused
+/// operations). `None` when they all agree, else the first difference.
+fn replay(raw: &[[u8; flinch_firmware::avoidance::link::VEL_LEN]], sent: &[Vec<u8>]) -> Result<usize, String> {
+    use flinch_firmware::avoidance::cell::board_config;
+    use flinch_firmware::avoidance::link::{decode_velocity, encode_velocity, Link, Status};
+    let first = raw.first().and_then(|b| decode_velocity(b)).ok_or("no velocity frame to replay")?;
+    let mut link = Link::<flinch_firmware::avoidance::BoardReal>::new(board_config());
+    link.set_boot(first.boot);
+    let mut pushed = 0usize;
+    for (k, bytes) in raw.iter().enumerate() {
+        let f = decode_velocity(bytes).ok_or_else(|| format!("velocity frame {k} does not decode"))?;
+        if f.step as usize != k + 1 {
+            return Err(format!("velocity frame {k} is step {}: a frame was lost, the replay needs every step from the first", f.step));
+        }
+        let seen = usize::from(f.good) + usize::from(f.refused);
+        while pushed < seen {
+            let frame = sent.get(pushed).ok_or_else(|| format!("step {}: the board counts {seen} frames, the host sent {}", f.step, sent.len()))?;
+            link.receiver().push(frame, f.t_ms);
+            pushed += 1;
+        }
+        let v = link.step_with(f.t_ms, f.status == Status::StoppedLatched);
+        let mine = encode_velocity(&v);
+        if &mine != bytes {
+            return Err(format!("step {}: the board sent {:?}\n the host's Link {:?}", f.step, f, decode_velocity(&mine)));
+        }
+    }
+    Ok(raw.len())
 }
 
 /// The board's avoidance over its serial port: the `qemu-io` board ELF (the board's code; its GPIO
@@ -69,7 +132,8 @@ pub fn board_serial() -> Result<String, String> {
         .spawn()
         .map_err(|e| format!("could not start qemu-system-arm: {e}"))?;
     let start = Instant::now();
-    let result = (|| -> Result<Vec<String>, String> {
+    type Conversation = (Vec<String>, Vec<[u8; flinch_firmware::avoidance::link::VEL_LEN]>, Vec<Vec<u8>>);
+    let result = (|| -> Result<Conversation, String> {
         listener.set_nonblocking(true).map_err(|e| e.to_string())?;
         let mut stream = loop {
             match listener.accept() {
@@ -90,12 +154,18 @@ pub fn board_serial() -> Result<String, String> {
         // Every latched frame since the trip must hold the tool where the first one had it.
         let mut held_at: Option<(i32, i32)> = None;
         let mut moved_while_latched = 0usize;
+        // Every velocity frame as received (the replay needs them all), and every weights frame sent.
+        let mut raw: Vec<[u8; VEL_LEN]> = Vec::new();
+        let mut sent: Vec<Vec<u8>> = Vec::new();
         // The next velocity frame that satisfies `want` (frames before it are read and dropped).
         let mut wait = |stream: &mut std::os::unix::net::UnixStream, what: &str, want: &dyn Fn(&VelocityFrame) -> bool| -> Result<VelocityFrame, String> {
             loop {
                 while buf.len() >= VEL_LEN {
                     if buf[0] == VEL_SYNC0 && buf[1] == VEL_SYNC1 {
                         if let Some(f) = decode_velocity(&buf[..VEL_LEN]) {
+                            let mut one = [0u8; VEL_LEN];
+                            one.copy_from_slice(&buf[..VEL_LEN]);
+                            raw.push(one);
                             buf.drain(..VEL_LEN);
                             frames += 1;
                             if f.status == Status::StoppedLatched {
@@ -127,19 +197,25 @@ pub fn board_serial() -> Result<String, String> {
             }
         };
         let mut lines = Vec::new();
+        let mut send = |stream: &mut std::os::unix::net::UnixStream, frame: Vec<u8>| -> Result<(), String> {
+            stream.write_all(&frame).map_err(|e| e.to_string())?;
+            sent.push(frame);
+            Ok(())
+        };
         let f = wait(&mut stream, "the first velocity frame", &|_| true)?;
         lines.push(velocity_line("the start latch, before the reset press", &f, true));
         let f = wait(&mut stream, "the latch released by the bench's reset press", &|f| f.status != Status::StoppedLatched)?;
         lines.push(velocity_line("armed after the reset press, before any weights frame", &f, true));
-        stream.write_all(&weights_frame(1, 0.5)).map_err(|e| e.to_string())?;
+        let boot = f.boot;
+        send(&mut stream, weights_frame(1, 0.5, &f, None, boot))?;
         let f = wait(&mut stream, "frame 1 in use", &|f| f.seq == 1)?;
         lines.push(velocity_line("frame 1 (field 0.5 m weights: the hand over the tool)", &f, true));
-        let mut bad = weights_frame(2, 0.0);
-        bad[40] ^= 0x01;
-        stream.write_all(&bad).map_err(|e| e.to_string())?;
+        let mut bad = weights_frame(2, 0.0, &f, None, boot);
+        bad[100] ^= 0x01;
+        send(&mut stream, bad)?;
         let f = wait(&mut stream, "frame 2 refused", &|f| f.refused >= 1)?;
         lines.push(velocity_line("frame 2 (one bit flipped)", &f, true));
-        stream.write_all(&weights_frame(3, 0.0)).map_err(|e| e.to_string())?;
+        send(&mut stream, weights_frame(3, 0.0, &f, None, boot))?;
         let f = wait(&mut stream, "frame 3 in use", &|f| f.seq == 3)?;
         lines.push(velocity_line("frame 3 (empty field)", &f, true));
         let f = wait(&mut stream, "the weights slowing with age", &|f| f.status != Status::Ok)?;
@@ -148,18 +224,38 @@ pub fn board_serial() -> Result<String, String> {
         lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("the line still silent", &f, false), f.vx_umps, f.vy_umps));
         let f = wait(&mut stream, "the bench's obstacle tripping the switch", &|f| f.status == Status::StoppedLatched)?;
         lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("the obstacle trips the switch (the collision latch)", &f, false), f.vx_umps, f.vy_umps));
-        stream.write_all(&weights_frame(4, 0.0)).map_err(|e| e.to_string())?;
+        send(&mut stream, weights_frame(4, 0.0, &f, None, boot))?;
         let f = wait(&mut stream, "frame 4 in use while latched", &|f| f.seq == 4)?;
         let line = velocity_line("frame 4 (empty field) while latched", &f, false);
         lines.push(format!("{line}, vx_umps={} vy_umps={} good={} refused={}", f.vx_umps, f.vy_umps, f.good, f.refused));
         let f = wait(&mut stream, "the latch released by the bench's second reset press", &|f| f.status != Status::StoppedLatched)?;
         lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("released by a reset press, frame 4 aged meanwhile", &f, false), f.vx_umps, f.vy_umps));
-        stream.write_all(&weights_frame(5, 0.0)).map_err(|e| e.to_string())?;
+        send(&mut stream, weights_frame(5, 0.0, &f, None, boot))?;
         let f = wait(&mut stream, "frame 5 in use after the release", &|f| f.seq == 5)?;
         let line = velocity_line("frame 5 (empty field) after the release", &f, false);
         lines.push(format!("{line}, vx_umps={} vy_umps={} good={} refused={}", f.vx_umps, f.vy_umps, f.good, f.refused));
+        // The monitor (ISO/TS 15066 5.5.4 + 5.5.5, the board's cell): a person 0.30 m ahead along
+        // the module's axis (inside the protective separation: PFL carries the cruise speed), one
+        // 0.10 m behind (moving away: not limited), a frame echoing another boot's clock (its age
+        // unknown: stale), and a plain frame again.
+        send(&mut stream, weights_frame(6, 0.0, &f, Some((0, 300)), boot))?;
+        let f = wait(&mut stream, "frame 6 in use", &|f| f.seq == 6)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("frame 6 (a person 0.30 m ahead, along the module's axis)", &f, false), f.vx_umps, f.vy_umps));
+        send(&mut stream, weights_frame(7, 0.0, &f, Some((4, 100)), boot))?;
+        let f = wait(&mut stream, "frame 7 in use", &|f| f.seq == 7)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("frame 7 (a person 0.10 m behind, moving away)", &f, false), f.vx_umps, f.vy_umps));
+        send(&mut stream, weights_frame(8, 0.0, &f, None, boot.wrapping_add(1)))?;
+        let f = wait(&mut stream, "frame 8 in use", &|f| f.seq == 8)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("frame 8 (echoing another boot's clock)", &f, false), f.vx_umps, f.vy_umps));
+        send(&mut stream, weights_frame(9, 0.0, &f, None, boot))?;
+        let f = wait(&mut stream, "frame 9 in use", &|f| f.seq == 9)?;
+        let line = velocity_line("frame 9 (nothing sensed)", &f, false);
+        lines.push(format!("{line}, vx_umps={} vy_umps={} good={} refused={}", f.vx_umps, f.vy_umps, f.good, f.refused));
+        // The frames the board sends until the bench ends the run, for the replay.
+        let _ = wait(&mut stream, "the end of the run", &|_| false);
         lines.push(format!("latched frames with a command or a moved position: {moved_while_latched}"));
-        Ok(lines)
+        drop(send);
+        Ok((lines, raw, sent))
     })();
     // The bench ends the run itself once it has seen `ok` after the release.
     let mut status = None;
@@ -173,7 +269,9 @@ pub fn board_serial() -> Result<String, String> {
     let _ = child.kill();
     let _ = child.wait();
     let _ = fs::remove_file(&sock);
-    let got = result?;
+    let (got, raw, sent) = result?;
+    // The same frames through the host's `Link` (the `--mcu` engine's type): the same bytes back.
+    let replayed = replay(&raw, &sent).map_err(|e| format!("the board ELF and the host's Link differ: {e}"))?;
     let bench = fs::read_to_string(&out_path).unwrap_or_default();
     for l in bench.lines().chain(got.iter().map(|l| l.as_str())) {
         println!("board serial: {l}");
@@ -189,7 +287,7 @@ pub fn board_serial() -> Result<String, String> {
             want.join("\n")
         ));
     }
-    Ok(format!("board ELF (qemu-io, bench mode serial) on netduinoplus2: weights frames over USART1, {} velocity lines as in firmware/qemu/board-serial.txt (ok/slowed/stale after a reset press, stopped: latched while latched)", got.len()))
+    Ok(format!("board ELF (qemu-io, bench mode serial) on netduinoplus2: protocol-v3 weights frames over USART1, {} velocity lines as in firmware/qemu/board-serial.txt (ok/slowed/stale after a reset press, stopped: latched while latched, the monitor's PFL, a person behind, another boot's echo); all {replayed} velocity frames byte for byte those of the host's Link on the same frames", got.len()))
 }
 
 /// USART1 traffic for a QEMU run: a Unix socket QEMU connects to as its serial chardev, and a thread

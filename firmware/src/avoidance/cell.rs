@@ -40,7 +40,7 @@ pub struct PflProvenance {
 /// The board's cell settings, in `f64` (converted once at start-up).
 pub const BOARD_CELL: LinkConfig<f64> = LinkConfig {
     gains: Gains { repulsion: Repulsion::Vortex { sign: 0 }, k_att: 0.25, k_rep: 0.6, capture_radius_m: 0.03, latch_height_m: 0.02, slow_height_m: 0.05, stop_height_m: 0.3, bounded: true },
-    watchdog: Watchdog { slow_after_ms: 99, stop_after_ms: 330 },
+    watchdog: Watchdog { slow_after_ms: 180, stop_after_ms: 412 },
     start_m: [0.12, 0.5],
     goal_m: [0.93, 0.5],
     speed_cap_mps: 0.25,

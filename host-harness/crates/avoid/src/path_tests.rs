@@ -57,12 +57,20 @@ mod tests {
         assert_eq!(straight.status, Status::Collision(None));
         assert!(!straight.status.ok());
 
-        // The firmware step (the board's number type, table, frames) follows the same path closely.
-        let mcu = simulate(&scene, &setup, Engine::Mcu).unwrap();
-        assert!(mcu.time_to_goal_s.is_some());
-        assert_eq!(mcu.rx.map(|s| s.good), Some(mcu.frames as u32));
-        let dev = res.points.iter().zip(&mcu.points).map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()).fold(0.0, f64::max);
+        // The firmware's law (the board's number type, table, frames parsed whole) follows the same
+        // path closely.
+        let fw = simulate_with(&scene, &setup, &mut FwEngine::<flinch_firmware::avoidance::BoardReal, _>::new(&scene, flinch_firmware::avoidance::GaussLut::new()).unwrap()).unwrap();
+        assert!(fw.time_to_goal_s.is_some());
+        assert_eq!(fw.rx.map(|s| s.good), Some(fw.frames as u32));
+        let dev = res.points.iter().zip(&fw.points).map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()).fold(0.0, f64::max);
         assert!(dev < 0.01, "{} path within 10 mm of f64: {dev}", board_real_name());
+        // The board's step itself (`--mcu`: its cap, its frame parsing budget a step) reaches the
+        // goal too, every frame but possibly the last (still being parsed at the end) applied.
+        let mcu = simulate(&scene, &setup, Engine::Mcu).unwrap();
+        assert!(mcu.time_to_goal_s.is_some(), "{:?}", mcu.status);
+        let good = mcu.rx.map_or(0, |s| s.good) as usize;
+        assert!(good + 1 >= mcu.frames && good <= mcu.frames, "{good} of {} frames", mcu.frames);
+        assert_eq!(mcu.rx.map(|s| s.bad_crc + s.stale + s.backlog + s.overrun), Some(0));
     }
 
     #[test]
