@@ -355,7 +355,13 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
     } else {
         let name = args.scene.display();
         if args.mcu {
-            println!("avoid {name}: engine mcu ({}, LUT, serial frames)", path::board_real_name());
+            // Whether this scene is the cell the board ships for (its settings the board's constant).
+            let shipped = path::link_config(&scene).is_ok_and(|c| c == flinch_firmware::avoidance::BOARD_CELL);
+            println!(
+                "avoid {name}: engine mcu (the board's step: {}, LUT, protocol-v3 frames, velocity frames; {})",
+                path::board_real_name(),
+                if shipped { "the board's shipped configuration".to_string() } else { format!("this scene's configuration; the board ships {}", flinch_firmware::avoidance::cell::BOARD_CELL_SCENE) }
+            );
         } else {
             println!("avoid {name}: engine reference (f64)");
         }
