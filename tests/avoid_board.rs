@@ -110,14 +110,3 @@ fn the_mcu_engine_is_the_board_step() {
     assert!(r.time_to_goal_s.is_some(), "the board's cell reaches its goal under --mcu: {:?}", r.status);
 }
 
-#[test]
-#[ignore]
-fn debug_mcu() {
-    let s = board_scene();
-    let setup = Setup::new(&s, None).unwrap();
-    let r = simulate(&s, &setup, Engine::Mcu).unwrap();
-    eprintln!("{:?} rx {:?} frames {}", r.status, r.rx, r.frames);
-    for row in r.rows.iter().take(60) {
-        eprintln!("{:.3} {:?} {:?} {}", row.t_s, row.p_m, row.v_mps, row.state);
-    }
-}

@@ -106,15 +106,13 @@ pub struct BoardEngine {
     steps_ms: VecDeque<u32>,
     /// The next frame's monitor header (set by [`StepEngine::capture`]).
     next: FrameHeader,
-    /// The velocity frames, in order, when recording (`flinch avoid --mcu` compares them).
-    pub record: Option<Vec<[u8; flinch_firmware::avoidance::link::VEL_LEN]>>,
 }
 
 impl BoardEngine {
     /// For a scene.
     pub fn new(scene: &Avoid) -> Result<Self, String> {
         let cfg = link_config(scene)?.to_real::<BoardReal>();
-        Ok(BoardEngine { link: Box::new(Link::new(cfg)), line: SimSerial::pair(), steps_ms: VecDeque::new(), next: FrameHeader::default(), record: None })
+        Ok(BoardEngine { link: Box::new(Link::new(cfg)), line: SimSerial::pair(), steps_ms: VecDeque::new(), next: FrameHeader::default() })
     }
 }
 
@@ -154,9 +152,6 @@ impl StepEngine for BoardEngine {
             self.steps_ms.pop_front();
         }
         let bytes = encode_velocity(&v);
-        if let Some(r) = self.record.as_mut() {
-            r.push(bytes);
-        }
         // The robot receives the velocity frame: its integers are the command.
         match decode_velocity(&bytes) {
             Some(f) => {
