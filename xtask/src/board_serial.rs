@@ -254,7 +254,6 @@ pub fn board_serial() -> Result<String, String> {
         // The frames the board sends until the bench ends the run, for the replay.
         let _ = wait(&mut stream, "the end of the run", &|_| false);
         lines.push(format!("latched frames with a command or a moved position: {moved_while_latched}"));
-        drop(send);
         Ok((lines, raw, sent))
     })();
     // The bench ends the run itself once it has seen `ok` after the release.
