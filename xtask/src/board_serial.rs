@@ -241,16 +241,20 @@ pub fn board_serial() -> Result<String, String> {
         send(&mut stream, weights_frame(6, 0.0, &f, Some((0, 300)), boot))?;
         let f = wait(&mut stream, "frame 6 in use", &|f| f.seq == 6)?;
         lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("frame 6 (a person 0.30 m ahead, along the module's axis)", &f, false), f.vx_umps, f.vy_umps));
-        send(&mut stream, weights_frame(7, 0.0, &f, Some((4, 100)), boot))?;
-        let f = wait(&mut stream, "frame 7 in use", &|f| f.seq == 7)?;
-        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("frame 7 (a person 0.10 m behind, moving away)", &f, false), f.vx_umps, f.vy_umps));
-        send(&mut stream, weights_frame(8, 0.0, &f, None, boot.wrapping_add(1)))?;
-        let f = wait(&mut stream, "frame 8 in use", &|f| f.seq == 8)?;
-        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("frame 8 (echoing another boot's clock)", &f, false), f.vx_umps, f.vy_umps));
-        send(&mut stream, weights_frame(9, 0.0, &f, None, boot))?;
-        let f = wait(&mut stream, "frame 9 in use", &|f| f.seq == 9)?;
-        let line = velocity_line("frame 9 (nothing sensed)", &f, false);
-        lines.push(format!("{line}, vx_umps={} vy_umps={} good={} refused={}", f.vx_umps, f.vy_umps, f.good, f.refused));
+        send(&mut stream, weights_frame(70, 0.0, &f, Some((0, 40)), boot))?;
+        let f = wait(&mut stream, "frame 70 in use", &|f| f.seq == 70)?;
+        lines.push(format!("{}, vy {}", velocity_line("frame 70 (a person 0.04 m ahead: the steering turns, across the axis only the rigid PFL speed)", &f, false), if f.vy_umps.unsigned_abs() <= 63_500 { "within the rigid PFL speed" } else { "OVER the rigid PFL speed" }));
+        send(&mut stream, weights_frame(71, 0.0, &f, Some((4, 100)), boot))?;
+        let f = wait(&mut stream, "frame 71 in use", &|f| f.seq == 71)?;
+        // (The command's direction now depends on where the turn left the tool: timing.)
+        lines.push(velocity_line("frame 71 (a person 0.10 m behind, moving away)", &f, false));
+        send(&mut stream, weights_frame(80, 0.0, &f, None, boot.wrapping_add(1)))?;
+        let f = wait(&mut stream, "frame 80 in use", &|f| f.seq == 80)?;
+        lines.push(format!("{}, vx_umps={} vy_umps={}", velocity_line("frame 80 (echoing another boot's clock)", &f, false), f.vx_umps, f.vy_umps));
+        send(&mut stream, weights_frame(90, 0.0, &f, None, boot))?;
+        let f = wait(&mut stream, "frame 90 in use", &|f| f.seq == 90)?;
+        let line = velocity_line("frame 90 (nothing sensed)", &f, false);
+        lines.push(format!("{line}, good={} refused={}", f.good, f.refused));
         // The frames the board sends until the bench ends the run, for the replay.
         let _ = wait(&mut stream, "the end of the run", &|_| false);
         lines.push(format!("latched frames with a command or a moved position: {moved_while_latched}"));

@@ -15,7 +15,7 @@ use super::num::BoardReal;
 use super::safe::{Pfl, SsmParams, Steer};
 
 /// The avoidance scene the board's constant is made from (relative to the repository).
-pub const BOARD_CELL_SCENE: &str = "scenes/avoid_thesis_reach_pfl.toml";
+pub const BOARD_CELL_SCENE: &str = "scenes/avoid_board_cell.toml";
 
 /// Where the PFL speeds of [`BOARD_CELL`] come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,14 +40,14 @@ pub struct PflProvenance {
 /// The board's cell settings, in `f64` (converted once at start-up).
 pub const BOARD_CELL: LinkConfig<f64> = LinkConfig {
     gains: Gains { repulsion: Repulsion::Vortex { sign: 0 }, k_att: 0.25, k_rep: 0.6, capture_radius_m: 0.03, latch_height_m: 0.02, slow_height_m: 0.05, stop_height_m: 0.3, bounded: true },
-    watchdog: Watchdog { slow_after_ms: 180, stop_after_ms: 412 },
+    watchdog: Watchdog { slow_after_ms: 467, stop_after_ms: 1167 },
     start_m: [0.12, 0.5],
     goal_m: [0.93, 0.5],
     speed_cap_mps: 0.25,
     period_ms: 10,
-    max_age_ms: 200,
+    max_age_ms: 387,
     byte_timeout_ms: 20,
-    budget_bytes: 384,
+    budget_bytes: 256,
     ssm: Some(SsmParams {
         human_speed_mps: 1.6,
         reaction_time_s: 0.02,

@@ -33,14 +33,25 @@
 //! assumed to follow the command), from `start_m`; the velocity frame reports it, so the host can
 //! check it against the robot's. Where the robot's measured position is available (the host's
 //! simulation; on a cell, a robot interface: not yet on the board) [`Link::step_at`] takes it
-//! instead.
+//! instead. The monitor's term for the tool's motion since capture does not use absolute positions
+//! (a dead-reckoned position need not agree with the frame's tool at capture: an offset of a few
+//! millimetres would hide motion): it is the tool's own path length since the step that started at
+//! or before the echoed clock ([`Link::moved_since_m`], a ring of [`PATH_STEPS`] steps).
 //!
 //! **Age.** The age of the frame in use, for the monitor's separations and for the weights
 //! watchdog alike, is `now - echo_ms`: the frame echoes a velocity frame's `t_ms` that the host read
 //! before the image was captured, so this bounds the age from above, whatever the host and the line
-//! delayed (the receiver's arrival-based age, a lower bound, still refuses frames too old on arrival
-//! and forgets the weights on a backlog). An echo of another boot (`boot`, [`Link::set_boot`]) or
-//! ahead of this clock makes the frame unusable: `stopped: stale`.
+//! delayed; never less than the receiver's own arrival-based lower bound (the frame's first byte
+//! less its `age_ms`), which also refuses frames too old on arrival and forgets the weights on a
+//! backlog. An echo of another boot (`boot`, [`Link::set_boot`]) or ahead of this clock makes the
+//! frame unusable: `stopped: stale`. **Open:** the boot byte is the backup SRAM's boot count, which
+//! a power-on (no VBAT) resets to 0, so two power-ons share it; a frame of the earlier one is still
+//! refused unless its clock echo is behind the new clock and its `seq` newer than every frame since
+//! (the receiver's order check), and a per-boot random nonce (the RNG, which needs the PLL's 48 MHz)
+//! is not done.
+//!
+//! **Fixtures.** The frame's fixture separations bound the command like a person's (as if a fixture
+//! could approach at `K`): conservative, until the board has the fixtures' own clearance rule.
 
 use super::control::{Controller, Gains, Watchdog};
 use super::field::sample;
@@ -136,7 +147,19 @@ pub struct Link<R> {
     y: R,
     step: u32,
     boot: u8,
+    /// The tool's path length since start (a bound: each step's move by `max + min / 2`), m, and
+    /// its value at the start of each of the last [`PATH_STEPS`] steps (a ring, the newest at
+    /// `path_head`).
+    path_m: R,
+    path_ring: [R; PATH_STEPS],
+    path_head: usize,
+    /// The position at the previous step's start (`None` before the first).
+    last_pos: Option<[R; 2]>,
 }
+
+/// Steps of path length kept: 64 steps (640 ms at 10 ms), more than any usable frame's age (the
+/// watchdog stops at its `stop_after_ms`); an older echo bounds the motion by the cap instead.
+pub const PATH_STEPS: usize = 64;
 
 impl<R: Real> Link<R> {
     /// A link with no weights (every step `stopped: stale` until the first good frame).
@@ -154,7 +177,7 @@ impl<R: Real> Link<R> {
                 None => c,
             }
         });
-        Link { rx, ctl: Controller::new(cfg.gains), safe, gauss: GaussLut::new(), cfg, dt_s, milli, x: cfg.start_m[0], y: cfg.start_m[1], step: 0, boot: 0 }
+        Link { rx, ctl: Controller::new(cfg.gains), safe, gauss: GaussLut::new(), cfg, dt_s, milli, x: cfg.start_m[0], y: cfg.start_m[1], step: 0, boot: 0, path_m: R::ZERO, path_ring: [R::ZERO; PATH_STEPS], path_head: 0, last_pos: None }
     }
 
     /// This boot's byte (the board: from its reset counter), sent in every velocity frame; a weights
@@ -199,8 +222,30 @@ impl<R: Real> Link<R> {
         (h.echo_boot == self.boot && age_ms <= super::receiver::EXPIRE_MS).then_some(age_ms)
     }
 
-    /// The sensed separations of the frame in use as the monitor takes them, `age_ms` old.
-    fn sensed(&self, h: &FrameHeader, age_ms: u32) -> Sensed<R> {
+    /// How far the tool can have moved since the frame's capture, m: its path since the step that
+    /// started at or before the echoed clock (`ceil(age / period)` steps back; the capture came after
+    /// the echo, on that path), a bound that needs no absolute position (the board dead-reckons,
+    /// and its dead reckoning need not agree with the frame's tool position); beyond the ring, the
+    /// cap times the age.
+    fn moved_since_m(&self, age_ms: u32) -> R {
+        let period = self.cfg.period_ms.max(1);
+        // `period` is at least 1: `div_ceil` cannot divide by zero.
+        let back = age_ms.div_ceil(period) as usize;
+        if back < PATH_STEPS {
+            let then = *self.path_ring.get(self.path_head.wrapping_add(PATH_STEPS).wrapping_sub(back) % PATH_STEPS).unwrap_or(&R::ZERO);
+            self.path_m.sub(then)
+        } else {
+            self.cfg.speed_cap_mps.mul(R::from_int(i32::try_from(age_ms).unwrap_or(i32::MAX))).mul(self.milli)
+        }
+    }
+
+    /// The sensed separations of the frame in use as the monitor takes them, `age_ms` old, for the
+    /// tool at `(x, y)`. Persons and fixtures alike bound the command (a fixture as if it could
+    /// approach at `K`: conservative, until fixtures have their own clearance rule on the board).
+    /// The tool's motion since capture is [`Link::moved_since_m`], passed to the monitor as the tool
+    /// at capture that far from `(x, y)` along x (the monitor's `|p - p_capture|` is then exactly
+    /// it).
+    fn sensed(&self, h: &FrameHeader, age_ms: u32, x: R, y: R) -> Sensed<R> {
         let m = |mm: u16| -> R {
             if mm == NOTHING_MM {
                 // Far: nothing sensed in the sector (the host's NOTHING_SENSED_M is 10 m).
@@ -210,7 +255,10 @@ impl<R: Real> Link<R> {
                 R::from_q16(i32::from(mm).saturating_mul(8192) / 125)
             }
         };
-        let sectors_m = h.person_mm.map(m);
+        let mut sectors_m = [R::ZERO; SECTORS];
+        for (s, (p, f)) in sectors_m.iter_mut().zip(h.person_mm.iter().zip(h.fixture_mm.iter())) {
+            *s = m(if p < f { *p } else { *f });
+        }
         let mut sep = R::from_int(10);
         for &s in sectors_m.iter() {
             if s < sep {
@@ -219,8 +267,8 @@ impl<R: Real> Link<R> {
         }
         Sensed {
             separation_m: sep,
-            tool_x_m: R::from_q16(h.tool_q16[0]),
-            tool_y_m: R::from_q16(h.tool_q16[1]),
+            tool_x_m: x.sub(self.moved_since_m(age_ms)),
+            tool_y_m: y,
             age_s: R::from_int(i32::try_from(age_ms).unwrap_or(i32::MAX)).mul(self.milli),
             nearest_x_m: R::from_q16(h.nearest_q16[0]),
             nearest_y_m: R::from_q16(h.nearest_q16[1]),
@@ -238,10 +286,24 @@ impl<R: Real> Link<R> {
             self.x = x;
             self.y = y;
         }
+        // The path since start, at this step's start (the move since the last step's start).
+        if let Some([lx, ly]) = self.last_pos {
+            self.path_m = self.path_m.add(norm_bound(self.x.sub(lx), self.y.sub(ly)));
+        }
+        self.last_pos = Some([self.x, self.y]);
+        self.path_head = self.path_head.wrapping_add(1) % PATH_STEPS;
+        if let Some(slot) = self.path_ring.get_mut(self.path_head) {
+            *slot = self.path_m;
+        }
         // The weights' age from the frame's clock echo (an upper bound); none without weights, or
         // with an echo of another boot or ahead of this clock: stale.
         let header = self.rx.header_in_use().copied();
-        let age_ms = header.and_then(|h| self.echo_age_ms(&h, now_ms));
+        // Never below the receiver's own lower bound (its first byte's arrival less its `age_ms`):
+        // a host whose echo is wrong cannot make a frame younger than it arrived.
+        let age_ms = header.and_then(|h| self.echo_age_ms(&h, now_ms)).map(|a| match self.rx.weights_age_ms(now_ms) {
+            Some(lower) if lower > a => lower,
+            _ => a,
+        });
         let factor: R = self.cfg.watchdog.factor(age_ms);
         let (x, y) = (self.x, self.y);
         let [gx, gy] = self.cfg.goal_m;
@@ -280,7 +342,7 @@ impl<R: Real> Link<R> {
         let (mut monitor, mut limit) = (if self.safe.is_some() { Monitor::NotRun } else { Monitor::Off }, if moving { cap } else { R::ZERO });
         if moving && self.safe.is_some() {
             let sensed = match (header, age_ms) {
-                (Some(h), Some(a)) => Some(self.sensed(&h, a)),
+                (Some(h), Some(a)) => Some(self.sensed(&h, a, x, y)),
                 _ => None,
             };
             if let Some(safe) = self.safe.as_mut() {

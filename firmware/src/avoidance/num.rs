@@ -299,8 +299,12 @@ macro_rules! impl_float {
             }
             #[inline]
             fn to_micro(self) -> i32 {
-                // `as` saturates and maps NaN to 0: no panic.
-                $round(self * 1e6) as i32
+                // Half away from zero by adding a half before `as` (which truncates, saturates and
+                // maps NaN to 0: no panic). Not `roundf`: a software call of about 20 instructions,
+                // six a velocity frame, in QEMU's count of the board's step. Within a micrometre of
+                // `roundf` (a value just below a half may round up in the addition).
+                let t = self * 1e6;
+                (if t >= 0.0 { t + 0.5 } else { t - 0.5 }) as i32
             }
             #[inline]
             fn floor_int(self) -> i32 {

@@ -147,3 +147,79 @@ fn latched_is_before_the_monitor_and_stale_before_any_frame() {
     let v = l.step(20);
     assert_eq!((v.status, v.monitor), (Status::StoppedStale, Monitor::NotRun));
 }
+
+/// A fixture 5 mm ahead (and nothing else) is not driven into at the cap.
+#[test]
+fn a_fixture_ahead_bounds_the_command() {
+    let start = board_config().start_m;
+    let at = [start[0] as f64, start[1] as f64];
+    let mut f = frame(1, at, 0, NOTHING_MM, 5, 0);
+    // Rewrite the frame with the fixture separations set (sectors 0 and 7, 5 mm).
+    let mut h = crate::avoidance::frame::decode_header(&f).unwrap();
+    h.fixture_mm[0] = 5;
+    h.fixture_mm[7] = 5;
+    let mut out = std::vec![0u8; MAX_FRAME];
+    let n = encode_frame(&h, &[0; 25], &mut out).unwrap();
+    f = out[..n].to_vec();
+    let mut l = link();
+    let v = step_after(&mut l, &f, 10);
+    assert_ne!(v.monitor, Monitor::Run, "{v:?}");
+    // Towards it (+x) no faster than the module's PFL speed along its axis (the fixture is rigid:
+    // never at the cap with PFL off).
+    let mut cfg = board_config();
+    if let Some(p) = cfg.ssm.as_mut() {
+        p.pfl = None;
+    }
+    let mut l = Link::new(cfg);
+    let v = step_after(&mut l, &f, 10);
+    assert!(v.vx <= 0.0 + 1e-6, "into a fixture 5 mm ahead: {v:?}");
+}
+
+/// The tool's motion since capture comes from the board's own path, not from the frame's tool
+/// position: a frame whose tool at capture is 4 mm off the board's dead reckoning gives the same
+/// command, and an older echo (the tool moved at the cap meanwhile) a lower one.
+#[test]
+fn the_motion_since_capture_is_the_boards_own_path() {
+    let mut cfg = board_config();
+    if let Some(p) = cfg.ssm.as_mut() {
+        p.pfl = None;
+    }
+    cfg.steer = None;
+    let start = [cfg.start_m[0] as f64, cfg.start_m[1] as f64];
+    // Drive 10 steps at the cap with nobody near, then a person 0.45 m ahead, echoing the clock of
+    // 100 ms ago (the tool has moved 25 mm since), the frame's tool at the start (stale) or 4 mm off.
+    let run = |tool: [f64; 2], echo_back: u32| {
+        let mut l = Link::new(cfg);
+        let _ = step_after(&mut l, &frame(1, start, 0, NOTHING_MM, 0, 0), 0);
+        for k in 1..10u32 {
+            let _ = l.step(10 * k);
+        }
+        step_after(&mut l, &frame(2, tool, 0, 450, 100 - echo_back, 0), 100)
+    };
+    let a = run(start, 0);
+    let b = run([start[0] + 0.004, start[1]], 0);
+    assert_eq!((a.vx, a.vy, a.monitor), (b.vx, b.vy, b.monitor), "the frame's tool position must not move the bound");
+    let c = run(start, 100);
+    assert!(c.vx < a.vx, "an echo 100 ms older (the tool 25 mm further) must lower the bound: {a:?} {c:?}");
+}
+
+/// A host whose echo claims the frame is fresher than it arrived: the receiver's lower bound wins.
+#[test]
+fn the_age_is_never_below_the_arrival_bound() {
+    let start = board_config().start_m;
+    let at = [start[0] as f64, start[1] as f64];
+    let mut h = crate::avoidance::frame::decode_header(&frame(1, at, 0, NOTHING_MM, 1000, 0)).unwrap();
+    // Sent just after the watchdog's slowing age by its own account, but echoing the clock of its
+    // arrival.
+    let slow = board_config().watchdog.slow_after_ms;
+    h.age_ms = u16::try_from(slow + 10).unwrap();
+    let mut out = std::vec![0u8; MAX_FRAME];
+    let n = encode_frame(&h, &[0; 25], &mut out).unwrap();
+    // A receiver that still takes it (its own refusal of frames too old on arrival is another check).
+    let mut cfg = board_config();
+    cfg.max_age_ms = 2000;
+    let mut l = Link::new(cfg);
+    let v = step_after(&mut l, &out[..n], 1000);
+    // Older than the watchdog's slowing age: slowed, not ok at the cap.
+    assert_eq!(v.status, Status::Slowed, "{v:?}");
+}

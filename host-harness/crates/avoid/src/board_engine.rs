@@ -106,13 +106,15 @@ pub struct BoardEngine {
     steps_ms: VecDeque<u32>,
     /// The next frame's monitor header (set by [`StepEngine::capture`]).
     next: FrameHeader,
+    /// The boot byte of the velocity frames (echoed with the clock).
+    boot: u8,
 }
 
 impl BoardEngine {
     /// For a scene.
     pub fn new(scene: &Avoid) -> Result<Self, String> {
         let cfg = link_config(scene)?.to_real::<BoardReal>();
-        Ok(BoardEngine { link: Box::new(Link::new(cfg)), line: SimSerial::pair(), steps_ms: VecDeque::new(), next: FrameHeader::default() })
+        Ok(BoardEngine { link: Box::new(Link::new(cfg)), line: SimSerial::pair(), steps_ms: VecDeque::new(), next: FrameHeader::default(), boot: 0 })
     }
 }
 
@@ -127,7 +129,7 @@ impl StepEngine for BoardEngine {
         let echo = self.steps_ms.iter().rev().find(|&&t| f64::from(t) <= capture_ms + 1e-9).copied().unwrap_or(0);
         self.next = FrameHeader {
             echo_ms: echo,
-            echo_boot: 0,
+            echo_boot: self.boot,
             // The tool at capture rounded to the nearest 1/65536 m (15 um): inside the margin's
             // robot uncertainty.
             tool_q16: [q16(sensed.tool_x_m), q16(sensed.tool_y_m)],
@@ -155,6 +157,7 @@ impl StepEngine for BoardEngine {
         // The robot receives the velocity frame: its integers are the command.
         match decode_velocity(&bytes) {
             Some(f) => {
+                self.boot = f.boot;
                 let stopped = !matches!(f.status, Status::Ok | Status::Slowed);
                 Cmd {
                     v: if stopped { [0.0, 0.0] } else { [f64::from(f.vx_umps) * 1e-6, f64::from(f.vy_umps) * 1e-6] },
