@@ -116,6 +116,8 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
             nearest_y_m: y,
             // Every sector as near as the nearest: each one's bound is computed (the costliest).
             sectors_m: [R::from_f64(0.30 + 0.02 * k as f64); SECTORS],
+            // Every fixture sector near too: each one's bound is computed (the costliest).
+            fixture_sectors_m: [R::from_f64(0.05 + 0.01 * k as f64); SECTORS],
         };
         let t0 = now_ticks();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
