@@ -12,7 +12,8 @@ import json, math, os, re, subprocess, sys, tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "target", "debug", "flinch")
 SCENES = ["avoid_thesis_reach", "avoid_hand_side_wide", "avoid_operator_hand", "avoid_head_on_wide",
-          "avoid_moving_hand_wide", "avoid_forearm_across", "avoid_fast_hand", "avoid_hand_behind"]
+          "avoid_moving_hand_wide", "avoid_forearm_across", "avoid_fast_hand", "avoid_hand_behind",
+          "avoid_tray_beside_goal"]
 
 
 def xy(key, text):

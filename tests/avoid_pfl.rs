@@ -190,6 +190,7 @@ fn the_arm_sweeping_into_a_standing_person_is_a_collision() {
         radius_m: 0.08,
         size_m: [0.0; 2],
         height_m: 1.0,
+        fixture: false,
     });
     let r = run(&s, Engine::Reference);
     assert!(r.link_min_signed_distance_m < 0.0, "the link sweeps into the person: {}", r.link_min_signed_distance_m);

@@ -369,3 +369,39 @@ fn a_verdict_on_a_recording_is_not_verified() {
     assert_eq!(got.map(|v| v.code()), Ok(5), "exit 5: unverified");
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// Honest edges (issue 29 item 7): a recording whose frames are mis-timed (median interval over
+/// 1 s: here the capture times of a 30 Hz recording written 60 times too far apart) or mis-scaled
+/// (most valid points under the work plane: here read with `depth_scale_m` doubled, so the table at
+/// 1.5 m reads 3 m away) gets a warning naming why, in the result and in the JSON's `warnings`; a
+/// right one gets none. Before, both ran silently.
+#[test]
+fn mis_timed_or_mis_scaled_recordings_are_warned_of() {
+    let (_, mut scene) = scene();
+    scene.max_time_s = 0.5;
+    let setup = Setup::new(&scene, None).unwrap();
+    let root = tmp("warnings");
+    let good = root.join("good");
+    let still: Vec<(f64, [f64; 2])> = (0..12).map(|k| (k as f64 / 30.0, scene.start_m)).collect();
+    render_recording(&scene, &[(&good, 0.001)], 240, 240, &still).unwrap();
+    let (r, _) = recorded::simulate(&scene, &setup, Engine::Reference, &good, Some(&good.join("poses.csv"))).unwrap();
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    assert_eq!(metrics(&r)["warnings"], serde_json::json!([]));
+
+    // Mis-timed: the same frames, their capture times 2 s apart.
+    let slow = root.join("slow");
+    let stretched: Vec<(f64, [f64; 2])> = still.iter().map(|&(t, p)| (60.0 * t, p)).collect();
+    render_recording(&scene, &[(&slow, 0.001)], 240, 240, &stretched).unwrap();
+    let (r, _) = recorded::simulate(&scene, &setup, Engine::Reference, &slow, Some(&slow.join("poses.csv"))).unwrap();
+    assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
+    assert!(r.warnings[0].contains("mis-timed") && r.warnings[0].contains("2.000 s"), "{}", r.warnings[0]);
+    assert!(metrics(&r)["warnings"][0].as_str().unwrap().contains("median interval"));
+
+    // Mis-scaled: the good frames read with twice the depth scale.
+    let mut wrong = scene.clone();
+    wrong.depth_camera.as_mut().unwrap().depth_scale_m = 0.002;
+    let (r, _) = recorded::simulate(&wrong, &setup, Engine::Reference, &good, Some(&good.join("poses.csv"))).unwrap();
+    assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
+    assert!(r.warnings[0].contains("mis-scaled") && r.warnings[0].contains("under the work plane") && r.warnings[0].contains("depth_scale_m"), "{}", r.warnings[0]);
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -86,8 +86,11 @@ fn the_last_csv_row_is_stopped_only_when_the_tool_stood_still() {
     s.max_time_s = 0.5;
     let (_, r) = run_scene(s);
     assert_eq!(r.status, Status::Stopped(Reason::Timeout), "{:?}", r.status);
-    let last = r.rows.last().unwrap();
+    // The last control step (the braking after it is in rows of its own, `braking`).
+    let last = r.rows.iter().rev().find(|w| w.state != "braking").unwrap();
     assert!(last.v_mps[0].hypot(last.v_mps[1]) > 0.1, "moving at the timeout: {:?}", last.v_mps);
+    let tail = r.rows.last().unwrap();
+    assert_eq!((tail.state, tail.v_mps), ("braking", [0.0, 0.0]), "then the drive brakes: {tail:?}");
     assert_ne!(last.state, "stopped", "it moved in that step: {:?}", last);
     for w in &r.rows {
         if w.state == "stopped" {

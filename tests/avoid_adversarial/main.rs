@@ -10,6 +10,7 @@ use flinch_harness::avoid::scene::Avoid;
 use flinch_tests::scene_path;
 
 mod cli_docs;
+mod fixtures;
 mod monitor;
 mod random;
 mod scenes;
@@ -64,12 +65,31 @@ pub(crate) fn honest(name: &str, scene: &Avoid, r: &PathResult) {
     let inside_steps = r.rows.iter().filter(|w| w.swept_separation_m < 0.0).count();
     assert!((r.time_inside_s - inside_steps as f64 * scene.dt_s).abs() < 1e-9, "{name}: time inside");
     // The SSM verdict, recomputed here from the true geometry with the ISO/TS 15066 formula.
+    // With fixtures (issue 29 item 2) the people's bound at the people's separation, and the
+    // fixtures' (the robot's own stop, no K: `v (T_r + T_s / 2) + margin <= s`) at theirs.
+    let fixtures = scene.operator.obstacles.iter().any(|o| o.fixture);
+    let w = scene.robot.wrist_radius_m;
+    let person_at = |t: f64, p: [f64; 2]| {
+        let mut op = scene.operator_shape_at(t);
+        op.obstacles.retain(|o| !o.fixture);
+        op.signed_distance(scene.hand_at(t), p) - w
+    };
+    let fixture_at = |p: [f64; 2]| scene.operator.obstacles.iter().filter(|o| o.fixture).map(|o| o.signed_distance(p) - w).fold(f64::INFINITY, f64::min);
+    let f = &scene.safety;
+    let margin = f.intrusion_used_m(scene.camera.m_per_px) + f.sensor_uncertainty_m + f.robot_uncertainty_m + scene.clearance_m;
     let mut violations = 0;
     for (k, row) in r.rows.iter().enumerate() {
-        let v_obs = flinch_harness::avoid::path::obstacle_speed_mps(scene, row.t_s - scene.dt_s, row.t_s);
-        let bound = ssm_bound_at(scene, r.signed_distance_m[k], v_obs);
+        let t0 = row.t_s - scene.dt_s;
+        let v_obs = flinch_harness::avoid::path::obstacle_speed_mps(scene, t0, row.t_s);
+        let s_person = if fixtures { person_at(t0, r.points[k]) } else { r.signed_distance_m[k] };
+        let bound = ssm_bound_at(scene, s_person, v_obs);
         assert!((row.ssm_bound_mps - bound).abs() < 1e-9, "{name}: step {k}: bound {} != {bound}", row.ssm_bound_mps);
-        if towards_mps(scene, row.t_s - scene.dt_s, r.points[k], row.v_mps) > bound + 1e-6 && !within_pfl(scene, row.v_mps) {
+        let towards = if fixtures { towards_by(&|p| person_at(t0, p), r.points[k], row.v_mps) } else { towards_mps(scene, t0, r.points[k], row.v_mps) };
+        let over_fixture = fixtures && {
+            let b = ((fixture_at(r.points[k]) - margin) / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps);
+            towards_by(&fixture_at, r.points[k], row.v_mps) > b + 1e-6
+        };
+        if over_fixture || (towards > bound + 1e-6 && !within_pfl(scene, row.v_mps)) {
             violations += 1;
         }
     }
@@ -83,9 +103,17 @@ pub(crate) fn honest(name: &str, scene: &Avoid, r: &PathResult) {
             } else {
                 assert!((0.0..scene.clearance_m).contains(&r.min_signed_distance_m), "{name}: too close is within the clearance, not inside");
             }
-            let last = r.points.last().unwrap();
-            let d = ((last[0] - scene.goal_m[0]).powi(2) + (last[1] - scene.goal_m[1]).powi(2)).sqrt();
+            // Within the tolerance at the last control step; then the drive brakes to rest, at
+            // most `v (T_r - dt) + v T_s / 2` farther on from the speed `v` it had there (drive.rs).
+            let main = r.rows.iter().rposition(|w| w.state != "braking").unwrap();
+            let at = r.rows[main].p_m;
+            let d = ((at[0] - scene.goal_m[0]).powi(2) + (at[1] - scene.goal_m[1]).powi(2)).sqrt();
             assert!(d <= scene.goal_tolerance_m, "{name}: reached but {d} m from the goal");
+            let last = r.points.last().unwrap();
+            let v = r.max_speed_mps;
+            let tail = v * (scene.safety.reaction_time_s - scene.dt_s).max(0.0) + v * scene.safety.stopping_time_s / 2.0;
+            let d = ((last[0] - scene.goal_m[0]).powi(2) + (last[1] - scene.goal_m[1]).powi(2)).sqrt();
+            assert!(d <= scene.goal_tolerance_m + tail + 1e-9, "{name}: {d} m from the goal after braking (at most {tail} m of braking)");
         }
         Status::Stopped(_) => assert!(r.min_signed_distance_m >= 0.0, "{name}: stopped is only for runs never inside"),
         Status::Collision(_) => {
@@ -104,9 +132,14 @@ pub(crate) fn honest(name: &str, scene: &Avoid, r: &PathResult) {
         assert!(matches!(r.status, Status::SsmViolation(_)), "{name}: over the SSM bound but {:?}", r.status);
     }
     assert_eq!(r.status.ok(), r.status == Status::Reached);
-    // The speeds are those of the rows.
+    // The drive is never faster than the fastest command (it takes a speed-up at once and slows
+    // down towards a command in a straight line: drive.rs); a command it was still slowing
+    // towards when the next came need not be reached.
     let vmax = r.rows.iter().map(|w| w.v_mps[0].hypot(w.v_mps[1])).fold(0.0, f64::max);
-    assert!((vmax - r.max_speed_mps).abs() < 1e-12, "{name}");
+    assert!(r.max_speed_mps <= vmax + 1e-12, "{name}: {} over the commands' {vmax}", r.max_speed_mps);
+    // After the run's last command only braking rows, at zero command.
+    let main = r.rows.iter().rposition(|w| w.state != "braking").map_or(0, |k| k + 1);
+    assert!(r.rows[main..].iter().all(|w| w.v_mps == [0.0, 0.0]), "{name}");
 }
 
 pub(crate) const ADVERSARIAL: [&str; 19] = [
@@ -173,6 +206,22 @@ pub(crate) fn towards_mps(scene: &Avoid, t: f64, p: [f64; 2], v: [f64; 2]) -> f6
     ((scene.signed_distance_m(t, p) - scene.signed_distance_m(t, q)) / h * speed).clamp(0.0, speed)
 }
 
+/// [`towards_mps`] for any signed distance `d` (0 where it is infinite: nothing there).
+pub(crate) fn towards_by(d: &dyn Fn([f64; 2]) -> f64, p: [f64; 2], v: [f64; 2]) -> f64 {
+    let speed = v[0].hypot(v[1]);
+    if speed == 0.0 {
+        return 0.0;
+    }
+    let h = 1e-5;
+    let q = [p[0] + h * v[0] / speed, p[1] + h * v[1] / speed];
+    let fall = (d(p) - d(q)) / h;
+    if fall.is_finite() {
+        (fall * speed).clamp(0.0, speed)
+    } else {
+        0.0
+    }
+}
+
 /// Within the scene's PFL speeds (`[avoid.pfl]` resolved): along the module's axis and across it.
 pub(crate) fn within_pfl(scene: &Avoid, v: [f64; 2]) -> bool {
     let Some(p) = &scene.pfl else { return false };
@@ -204,10 +253,29 @@ pub(crate) fn safe(name: &str, scene: &Avoid, r: &PathResult) {
     }
     assert!(r.max_speed_mps <= scene.speed_mps + 1e-9, "{name}: {} m/s", r.max_speed_mps);
     assert_eq!(r.ssm_violations, 0, "{name}: {} steps over the SSM bound, by up to {} m/s", r.ssm_violations, r.max_speed_over_ssm_mps);
+    // The people's bound (with K) at their true separation; with fixtures (issue 29 item 2) the
+    // fixtures' (no K) at theirs.
+    let fixtures = scene.operator.obstacles.iter().any(|o| o.fixture);
+    let w = scene.robot.wrist_radius_m;
+    let f = &scene.safety;
+    let margin = f.intrusion_used_m(scene.camera.m_per_px) + f.sensor_uncertainty_m + f.robot_uncertainty_m + scene.clearance_m;
     for (k, row) in r.rows.iter().enumerate() {
-        let s_true = r.signed_distance_m[k];
-        let v = towards_mps(scene, row.t_s - scene.dt_s, r.points[k], row.v_mps);
-        let b = ssm_bound_at(scene, s_true, flinch_harness::avoid::path::obstacle_speed_mps(scene, row.t_s - scene.dt_s, row.t_s));
+        let t0 = row.t_s - scene.dt_s;
+        let person_at = |p: [f64; 2]| {
+            let mut op = scene.operator_shape_at(t0);
+            op.obstacles.retain(|o| !o.fixture);
+            op.signed_distance(scene.hand_at(t0), p) - w
+        };
+        let s_true = if fixtures { person_at(r.points[k]) } else { r.signed_distance_m[k] };
+        let v = if fixtures { towards_by(&person_at, r.points[k], row.v_mps) } else { towards_mps(scene, t0, r.points[k], row.v_mps) };
+        let b = ssm_bound_at(scene, s_true, flinch_harness::avoid::path::obstacle_speed_mps(scene, t0, row.t_s));
         assert!(v <= b + 1e-6 || within_pfl(scene, row.v_mps), "{name}: t = {} s: {v} m/s towards the person at {s_true} m (bound {b})", row.t_s);
+        if fixtures {
+            let fixture_at = |p: [f64; 2]| scene.operator.obstacles.iter().filter(|o| o.fixture).map(|o| o.signed_distance(p) - w).fold(f64::INFINITY, f64::min);
+            let s_fix = fixture_at(r.points[k]);
+            let bf = ((s_fix - margin) / (f.reaction_time_s + f.stopping_time_s / 2.0)).clamp(0.0, scene.speed_mps);
+            let vf = towards_by(&fixture_at, r.points[k], row.v_mps);
+            assert!(vf <= bf + 1e-6, "{name}: t = {} s: {vf} m/s towards a fixture at {s_fix} m (bound {bf})", row.t_s);
+        }
     }
 }

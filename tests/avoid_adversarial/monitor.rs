@@ -138,6 +138,44 @@ fn a_thin_wall_between_two_steps_is_a_collision() {
     assert_eq!(avoid::metrics_json(&r, Engine::Reference, false)["collided"], true);
 }
 
+/// Braking over `T_s` (issue 29 item 7): a run that ends while moving (here `max_time_s`, at the
+/// cap) leaves the tool to the drive, which runs on for `T_r - dt` and brakes at `cap / T_s`: 2.5 +
+/// 12.5 mm more at 0.25 m/s with the defaults. A thin wall 5 mm beyond the tool's surface where the
+/// run ended is hit by that braking: a `collision`, exit 1. Before, the tool stopped where the last
+/// command left it and the run read `stopped` (`timeout`), exit 4.
+#[test]
+fn the_braking_after_a_stop_is_simulated() {
+    let mut s = Avoid::load(&scene_path("avoid_box_wall.toml")).unwrap();
+    s.thesis_mode();
+    s.k_rep = 0.0;
+    s.latency_s = 0.0;
+    s.dt_s = 0.01;
+    s.start_m = [0.12, 0.5];
+    s.goal_m = [0.93, 0.5];
+    s.max_time_s = 1.0;
+    s.operator.entry_m = [1.0, 0.0];
+    s.operator.keyframes.truncate(1);
+    s.operator.keyframes[0].hand_m = [1.0, 0.05];
+    s.operator.keyframes[0].t_s = 0.0;
+    s.operator.obstacles.truncate(1);
+    s.operator.obstacles[0].size_m = [0.004, 0.9];
+    let mut free = s.clone();
+    free.operator.obstacles[0].center_m = [0.5, 5.0];
+    let (_, f) = run_scene(free);
+    let end = f.rows.iter().rev().find(|w| w.state != "braking").unwrap();
+    assert!((end.v_mps[0] - s.speed_mps).abs() < 1e-9, "moving at the cap when the run ends: {:?}", end.v_mps);
+    let last = *f.points.last().unwrap();
+    let (tr, ts) = (s.safety.reaction_time_s, s.safety.stopping_time_s);
+    let tail = s.speed_mps * (tr - s.dt_s) + s.speed_mps * ts / 2.0;
+    assert!((last[0] - end.p_m[0] - tail).abs() < 1e-9, "braking distance {} m, expected {tail} m", last[0] - end.p_m[0]);
+    assert!(f.rows.last().unwrap().t_s - end.t_s >= ts, "the stop takes T_s");
+    s.operator.obstacles[0].center_m = [end.p_m[0] + s.robot.wrist_radius_m + 0.005 + 0.002, 0.5];
+    let (scene, r) = run_scene(s);
+    honest("braking into a wall", &scene, &r);
+    assert!(matches!(r.status, Status::Collision(Some(Reason::Timeout))), "{:?}", r.status);
+    assert!(r.min_signed_distance_m < -0.005, "{}", r.min_signed_distance_m);
+}
+
 /// The swept bound itself: a tool passing a static disc, and a disc moving across a still tool
 /// between two step times, are found inside, and the bound is never above the true minimum.
 #[test]

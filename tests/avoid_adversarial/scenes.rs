@@ -81,7 +81,10 @@ fn hand_beside_the_tool_is_not_erased() {
     safe("avoid_hand_at_tool.toml", &scene, &r);
     assert!(r.max_speed_mps < 1e-9, "{}", r.max_speed_mps);
     let (_, t) = thesis("avoid_hand_at_tool.toml");
-    assert!(matches!(t.status, Status::Collision(_)), "{:?}", t.status);
+    // With the drive's reaction and braking (issue 29 item 7) the thesis's tool, turned late,
+    // may pass the erased hand without touching it; it is never judged safe.
+    eprintln!("thesis, hand at the tool: {:?}, min {:.4} m, {} steps over the SSM bound", t.status, t.min_signed_distance_m, t.ssm_violations);
+    assert!(matches!(t.status, Status::Collision(_) | Status::SsmViolation(_)), "{:?}", t.status);
 }
 
 /// A hand and forearm lying flat (20 mm high) reach across the path. With the sense height below a
@@ -242,7 +245,10 @@ fn obstacles_trap_and_wall() {
         assert!(matches!(r.status, Status::Stopped(_)), "{name}: {:?}", r.status);
         let (ts, t) = thesis(name);
         honest(name, &ts, &t);
-        assert!(matches!(t.status, Status::Collision(_)), "{name}: thesis {:?}", t.status);
+        eprintln!("{name}: thesis {:?}, min {:.4} m, {} steps over the SSM bound", t.status, t.min_signed_distance_m, t.ssm_violations);
+        // The box wall: with the drive's reaction and braking the thesis's tool may be turned out
+        // of the view instead of through the wall; never judged safe.
+        assert!(matches!(t.status, Status::Collision(_) | Status::SsmViolation(_)), "{name}: thesis {:?}", t.status);
         // The signed distance includes the obstacles: inside a box is negative.
         let o = &scene.operator.obstacles[0];
         assert!(scene.operator_shape().signed_distance(scene.hand_at(0.0), o.center_m) < 0.0);

@@ -69,7 +69,12 @@ pub fn check_avoid_budget(out: &str) -> Result<String, String> {
     const LIMIT: u32 = 5_000;
     // The board's number type, f32 (the `avoid-fixed` build's I16F16 is a comparison: with protocol
     // v3's 188-byte 5 x 5 frames it measures 5,430 at 30 Hz, over the budget; docs/avoidance.md).
-    const SHIPPED: [(&str, &str, &str); 2] = [("5x5", "30", "f32-lut"), ("15x15", "10", "f32-lut")];
+    // 15 x 15 at 10 Hz, the board's cell, is held by `check_avoid_board`: the board's whole step
+    // measured at once (bytes in, `Link::step` with the monitor, the velocity frame); this line's sum
+    // of two separately measured maxima (the monitor's synthetic worst with persons and fixtures in
+    // every sector, plus the receiver's worst call) measures 5,125 there since the fixture classes
+    // and protocol v3 (docs/avoidance.md).
+    const SHIPPED: [(&str, &str, &str); 1] = [("5x5", "30", "f32-lut")];
     let field = |line: &str, key: &str| line.split_whitespace().find_map(|w| w.strip_prefix(key)).map(str::to_string);
     let mut worst = 0;
     for (grid, rate, variant) in SHIPPED {
@@ -84,7 +89,7 @@ pub fn check_avoid_budget(out: &str) -> Result<String, String> {
         }
         worst = worst.max(total);
     }
-    Ok(format!("step + frame handling worst {worst} <= {LIMIT} instructions per 10 ms step (f32: 5x5 at 30 Hz, 15x15 at 10 Hz)"))
+    Ok(format!("step + frame handling worst {worst} <= {LIMIT} instructions per 10 ms step (f32, 5x5 at 30 Hz; the board's cell, 15x15 at 10 Hz, by the board step)"))
 }
 
 #[cfg(test)]
@@ -103,13 +108,16 @@ mod tests {
     fn avoid_budget_checks_the_shipped_configurations() {
         let line = |g: &str, r: u32, v: &str, t: u32| format!("avoid_budget grid={g} sigma'=1s rate_hz={r} variant={v} step_max=1 rx_max=1 total={t} (instructions per 10 ms step; limit 5000)\n");
         let ok = line("5x5", 30, "I16F16-lut", 4680) + &line("5x5", 30, "f32-lut", 2810) + &line("15x15", 10, "f32-lut", 3680) + &line("30x30", 30, "f32-lut", 13626);
-        assert!(check_avoid_budget(&ok).unwrap().contains("worst 3680"));
+        assert!(check_avoid_budget(&ok).unwrap().contains("worst 2810"));
         let over = line("5x5", 30, "I16F16-lut", 4680) + &line("5x5", 30, "f32-lut", 5001) + &line("15x15", 10, "f32-lut", 3680);
+        // The board's cell is checked as a whole step (check_avoid_board), not here.
+        let cell = line("5x5", 30, "f32-lut", 2810) + &line("15x15", 10, "f32-lut", 5125);
+        assert!(check_avoid_budget(&cell).is_ok());
         assert!(check_avoid_budget(&over).unwrap_err().contains("5001 > 5000"));
-        let missing = line("5x5", 30, "I16F16-lut", 4680) + &line("5x5", 30, "f32-lut", 2810);
+        let missing = line("5x5", 30, "I16F16-lut", 4680) + &line("15x15", 10, "f32-lut", 2810);
         // The comparison build is not held to the budget.
         let fixed_over = line("5x5", 30, "I16F16-lut", 5430) + &line("5x5", 30, "f32-lut", 2810) + &line("15x15", 10, "f32-lut", 3680);
-        assert!(check_avoid_budget(&fixed_over).unwrap().contains("worst 3680"));
-        assert!(check_avoid_budget(&missing).unwrap_err().contains("15x15 at 10 Hz"));
+        assert!(check_avoid_budget(&fixed_over).unwrap().contains("worst 2810"));
+        assert!(check_avoid_budget(&missing).unwrap_err().contains("5x5 at 30 Hz"));
     }
 }

@@ -116,6 +116,8 @@ fn measure<R: Real, G: Gauss<R>>(name: &str, n: usize, sigma_over_s: f64, gauss:
             nearest_y_m: y,
             // Every sector as near as the nearest: each one's bound is computed (the costliest).
             sectors_m: [R::from_f64(0.30 + 0.02 * k as f64); SECTORS],
+            // Every fixture sector near too: each one's bound is computed (the costliest).
+            fixture_sectors_m: [R::from_f64(0.05 + 0.01 * k as f64); SECTORS],
         };
         let t0 = now_ticks();
         let f = sample(black_box(&g), gauss, black_box(x), black_box(y));
@@ -268,6 +270,8 @@ fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> 
             tool_q16: [q(f64::from(start[0])), q(f64::from(start[1]))],
             nearest_q16: [q(f64::from(start[0]) + 0.345), q(f64::from(start[1]))],
             person_mm: [300; 8],
+            // And a fixture 0.10 m away in every sector: each fixture bound computed too.
+            fixture_mm: [100; 8],
             ..FrameHeader::default()
         };
         let Some(l) = frame::encode_frame(&h, w.get(..n * n).unwrap_or(&[]), &mut out) else { return u32::MAX };
@@ -289,7 +293,7 @@ fn measure_board(n: usize, sigma_over_s: f64, rate_hz: usize, overhead: u32) -> 
         }
     }
     hprintln!(
-        "avoid_board grid={}x{} sigma'={}s rate_hz={} variant=BoardReal max={} steps={} ok/slowed/stale/no_path/latched/protective={}/{}/{}/{}/{}/{} (instructions per 10 ms step: bytes in, Link::step with the monitor (a person 0.3 m away in every sector), encode_velocity; limit 5000)",
+        "avoid_board grid={}x{} sigma'={}s rate_hz={} variant=BoardReal max={} steps={} ok/slowed/stale/no_path/latched/protective={}/{}/{}/{}/{}/{} (instructions per 10 ms step: bytes in, Link::step with the monitor (a person 0.3 m and a fixture 0.1 m away in every sector), encode_velocity; limit 5000)",
         n, n, sigma_over_s, rate_hz, max, steps, states[0], states[1], states[2], states[3], states[4], states[5]
     );
     max

@@ -196,12 +196,19 @@ pub fn decode_header(b: &[u8]) -> Option<FrameHeader> {
     if b.get(33..36)? != [0, 0, 0] {
         return None;
     }
-    let le_u16 = |at: usize| -> Option<u16> { Some(u16::from_le_bytes([*b.get(at)?, *b.get(at.checked_add(1)?)?])) };
+    // Two bytes a sector, straight from the header's slices (the receiver decodes a header in one
+    // step: no per-value index arithmetic).
     let mut person_mm = [NOTHING_MM; FRAME_SECTORS];
     let mut fixture_mm = [NOTHING_MM; FRAME_SECTORS];
-    for (k, (p, f)) in person_mm.iter_mut().zip(fixture_mm.iter_mut()).enumerate() {
-        *p = le_u16(52usize.checked_add(k.checked_mul(2)?)?)?;
-        *f = le_u16(68usize.checked_add(k.checked_mul(2)?)?)?;
+    for (d, c) in person_mm.iter_mut().zip(b.get(52..68)?.chunks_exact(2)) {
+        if let [lo, hi] = c {
+            *d = u16::from_le_bytes([*lo, *hi]);
+        }
+    }
+    for (d, c) in fixture_mm.iter_mut().zip(b.get(68..84)?.chunks_exact(2)) {
+        if let [lo, hi] = c {
+            *d = u16::from_le_bytes([*lo, *hi]);
+        }
     }
     Some(FrameHeader {
         echo_ms: le_u32(b, 28)?,

@@ -50,8 +50,8 @@
 //! (the receiver's order check), and a per-boot random nonce (the RNG, which needs the PLL's 48 MHz)
 //! is not done.
 //!
-//! **Fixtures.** The frame's fixture separations bound the command like a person's (as if a fixture
-//! could approach at `K`): conservative, until the board has the fixtures' own clearance rule.
+//! **Fixtures.** The frame's fixture separations go to the monitor as fixtures: the robot's own stop
+//! and clearance from them, no human approach speed (`safe`'s fixture bound).
 
 use super::control::{Controller, Gains, Watchdog};
 use super::field::sample;
@@ -240,9 +240,8 @@ impl<R: Real> Link<R> {
     }
 
     /// The sensed separations of the frame in use as the monitor takes them, `age_ms` old, for the
-    /// tool at `(x, y)`. Persons and fixtures alike bound the command (a fixture as if it could
-    /// approach at `K`: conservative, until fixtures have their own clearance rule on the board).
-    /// The tool's motion since capture is [`Link::moved_since_m`], passed to the monitor as the tool
+    /// tool at `(x, y)`: persons and fixtures apart (the monitor keeps the robot's own stop from a
+    /// fixture, with no human approach speed). The tool's motion since capture is [`Link::moved_since_m`], passed to the monitor as the tool
     /// at capture that far from `(x, y)` along x (the monitor's `|p - p_capture|` is then exactly
     /// it).
     fn sensed(&self, h: &FrameHeader, age_ms: u32, x: R, y: R) -> Sensed<R> {
@@ -255,10 +254,8 @@ impl<R: Real> Link<R> {
                 R::from_q16(i32::from(mm).saturating_mul(8192) / 125)
             }
         };
-        let mut sectors_m = [R::ZERO; SECTORS];
-        for (s, (p, f)) in sectors_m.iter_mut().zip(h.person_mm.iter().zip(h.fixture_mm.iter())) {
-            *s = m(if p < f { *p } else { *f });
-        }
+        let sectors_m = h.person_mm.map(m);
+        let fixture_sectors_m = h.fixture_mm.map(m);
         let mut sep = R::from_int(10);
         for &s in sectors_m.iter() {
             if s < sep {
@@ -273,6 +270,7 @@ impl<R: Real> Link<R> {
             nearest_x_m: R::from_q16(h.nearest_q16[0]),
             nearest_y_m: R::from_q16(h.nearest_q16[1]),
             sectors_m,
+            fixture_sectors_m,
         }
     }
 

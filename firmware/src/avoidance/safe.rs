@@ -53,6 +53,17 @@
 //! apply no PFL: within the 5,000-instruction step budget only so (`firmware/avoid-cost`); the
 //! board's `f32` does both.
 //!
+//! # Fixed fixtures: the robot's own stop only (issue 29 item 2)
+//!
+//! A fixture (a tray, a jig, a wall the scene declares, classified by the sensor: [`Sensed::fixture_sectors_m`])
+//! does not move, so no human approach is budgeted for it: per fixture sector the command's approach
+//! `u_k` (the same directional math, with `r` the tool's motion since capture only, no `K age`) must
+//! keep `S_p,fixture(u_k) = u_k T_r + u_k T_s / 2 + margin <= s_k - r` (no `K (T_r + T_s)` term, no
+//! 100 mm floor). The same `T_r + T_s / 2` divides both bounds, so the fixed-point types (one division
+//! a step) bound the whole speed by the smaller of the person's free distance and the nearest
+//! fixture's, without another division. PFL does not apply to a fixture (the limits of Table A.2 are a
+//! body's): the command is scaled by `min(max(SSM scale, PFL scale), fixture scale)`.
+//!
 //! # Power and force limiting (ISO/TS 15066, 5.5.5) beside it
 //!
 //! With [`SsmParams::pfl`] the command may instead be within the speeds at which a contact with the
@@ -151,14 +162,24 @@ pub struct Sensed<R> {
     pub nearest_y_m: R,
     /// The separation per direction when the image was taken: the nearest sensed point in each
     /// sector ([`sector_of`], seen from the tool at capture), from the tool's surface, m; far away
-    /// where nothing was sensed. `separation_m` is at most their minimum.
+    /// where nothing was sensed. `separation_m` is at most their minimum. People only: a pixel the
+    /// host classed as a fixture is in `fixture_sectors_m` instead.
     pub sectors_m: [R; SECTORS],
+    /// The same for the fixed fixtures (trays, fixtures, a wall the scene declares; issue 29 item
+    /// 2): per sector the nearest fixture pixel from the tool's surface at capture, m; far away
+    /// (`NOTHING_SENSED_M` on the host) where there is none. A fixture does not move: its bound
+    /// ([`SafeController::limit`]) has no human approach and no age term.
+    pub fixture_sectors_m: [R; SECTORS],
 }
 
 impl<R: Real> Sensed<R> {
     /// The same separation in every direction (a sensor that gives no direction).
     pub fn sectors_all(separation_m: R) -> [R; SECTORS] {
         [separation_m; SECTORS]
+    }
+    /// No fixture sensed: every fixture sector far away (10 m).
+    pub fn no_fixtures() -> [R; SECTORS] {
+        [R::from_int(10); SECTORS]
     }
 }
 
@@ -250,6 +271,9 @@ pub struct SafeController<R> {
     s22: R,
     /// The PFL speeds at 63/64 of their value (`None`: SSM alone, or a PFL speed not positive).
     pfl: Option<Pfl<R>>,
+    /// The separation from a fixture the steering barrier holds, m (`None`: the barrier steers
+    /// round people only; the monitor bounds the fixtures either way).
+    fixture_barrier_m: Option<R>,
     /// `1 / cap`, 1/(m/s) (saturating in fixed point: a smaller factor, a lower limit).
     inv_cap: R,
 }
@@ -292,6 +316,7 @@ impl<R: Real> SafeController<R> {
             c22: R::from_f64(C22),
             s22: R::from_f64(S22),
             inv_cap: R::ONE.div(params.speed_cap_mps),
+            fixture_barrier_m: None,
             pfl: params.pfl.and_then(|p| {
                 let k = R::from_int(63).div(R::from_int(64));
                 // Only positive speeds and a finite axis make a PFL regime; anything else is none.
@@ -311,6 +336,14 @@ impl<R: Real> SafeController<R> {
         self
     }
 
+    /// The steering barrier also round the fixtures, holding `barrier_m` from them (from the tool's
+    /// surface; the host sets it so that the fixture bound allows the cap there with the oldest
+    /// frame: no human approach in it).
+    pub fn with_fixture_barrier(mut self, barrier_m: R) -> Self {
+        self.fixture_barrier_m = Some(barrier_m);
+        self
+    }
+
     /// The [`Steer`] barrier on a requested command (unchanged without one): approach towards the
     /// nearest sensed point and towards the view's edges limited, the blocked approach turned along
     /// the boundary. The result still goes through [`Self::limit`].
@@ -320,8 +353,17 @@ impl<R: Real> SafeController<R> {
         let [x0, y0, x1, y1] = st.view_m;
         let mut inside_band = false;
         if let Some(f) = sensed {
-            let g = f.separation_m.sub(self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m)));
-            let free = g.sub(st.barrier_m);
+            let moved = self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m));
+            let g = f.separation_m.sub(moved);
+            let mut free = g.sub(st.barrier_m);
+            // A fixture nearer, in its own barrier's terms, steers as a person does (the nearest
+            // point the host gives is the nearest of either class).
+            if let Some(fb) = self.fixture_barrier_m {
+                let ff = min_of(&f.fixture_sectors_m).sub(moved).sub(fb);
+                if ff < free {
+                    free = ff;
+                }
+            }
             if free < st.band_m {
                 inside_band = true;
                 // Towards the nearest point (not normalised): v.n <= a |n| with a the allowed
@@ -397,8 +439,18 @@ impl<R: Real> SafeController<R> {
 
     /// The speed limit for a separation lower bound `s`, m/s (0: protective stop).
     pub fn speed_limit(&self, s: R) -> R {
+        self.limit_free(s.sub(self.stop_separation_m))
+    }
+
+    /// The speed limit for a fixture at separation lower bound `s` (the tool's motion since capture
+    /// taken off), m/s: `S_p,fixture(v) = v (T_r + T_s / 2) + margin <= s` (no human approach).
+    pub fn fixture_speed_limit(&self, s: R) -> R {
+        self.limit_free(s.sub(self.params.margin_m))
+    }
+
+    /// `free / (T_r + T_s / 2)` within `[0, cap]`, m/s.
+    fn limit_free(&self, free: R) -> R {
         let cap = self.params.speed_cap_mps;
-        let free = s.sub(self.stop_separation_m);
         // NaN-safe: only a positive margin gives a positive limit.
         if free > R::ZERO {
             // `free / per_speed <= cap` without dividing when the cap applies anyway.
@@ -431,15 +483,23 @@ impl<R: Real> SafeController<R> {
         let stop = |state, separation_m| SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: R::ZERO, separation_m, state };
         let Some(f) = sensed else { return stop(SafeState::NoData, R::ZERO) };
         // What may have changed since capture: the tool's motion and the person's at K.
-        let r = self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m)).add(self.approach_mps.mul(f.age_s));
+        let moved = self.norm_bound(x.sub(f.tool_x_m), y.sub(f.tool_y_m));
+        let r = moved.add(self.approach_mps.mul(f.age_s));
         let s = f.separation_m.sub(r);
-        let omni = self.speed_limit(s);
+        // The nearest fixture: no human approach, no age term (module docs).
+        let fix_free = min_of(&f.fixture_sectors_m).sub(moved).sub(self.params.margin_m);
+        let person_free = s.sub(self.stop_separation_m);
+        // NaN-safe: a NaN fixture separation is not above the person's free distance: it is taken.
+        let omni = self.limit_free(if fix_free >= person_free { person_free } else { fix_free });
+        let fix_omni = self.limit_free(fix_free);
         let pfl_omni = match self.pfl {
             _ if !R::HW_DIV => R::ZERO,
             Some(p) if p.along_mps < p.across_mps => p.along_mps,
             Some(p) => p.across_mps,
             None => R::ZERO,
         };
+        // PFL permits no contact with a fixture: never above the fixture's bound.
+        let pfl_omni = if pfl_omni > fix_omni { fix_omni } else { pfl_omni };
         let any_dir = if omni > pfl_omni { omni } else { pfl_omni };
         let Some((vx, vy, capped, speed)) = self.capped(vx, vy) else { return stop(SafeState::ProtectiveStop, s) };
         if speed.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Greater) {
@@ -461,35 +521,22 @@ impl<R: Real> SafeController<R> {
         for (c, &s0) in self.centres.iter().zip(sectors.iter()) {
             // NaN-safe: a NaN separation gives a zero limit.
             let l = self.speed_limit(s0.sub(r));
-            if l >= speed {
-                continue;
-            }
-            // `l / u` for the sector's fastest approach `u` (module docs): `u = |v|`, or
-            // `(s_k u_0 + |v| r) / (s_k - r)` where that is smaller, 0 when it is not positive.
-            let mut full = true;
-            let mut q = R::ZERO;
-            if s0 > r {
-                let dot = vx.mul(c[0]).add(vy.mul(c[1]));
-                let cross = vx.mul(c[1]).sub(vy.mul(c[0])).abs();
-                // Within 22.5 degrees of the centre: straight at a point of the sector.
-                let u0 = if self.s22.mul(dot) >= self.c22.mul(cross) { speed } else { dot.mul(self.c22).add(cross.mul(self.s22)) };
-                let num = s0.mul(u0).add(speed.mul(r));
-                if num.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Greater) {
-                    // Moving away from every point the sector can hold now.
-                    continue;
-                }
-                let den = s0.sub(r);
-                if num < speed.mul(den) {
-                    full = false;
-                    q = l.mul(den).div(num);
+            if let Some(q) = self.sector_scale(c, s0, r, l, vx, vy, speed, &mut inv_speed) {
+                if q < k_ssm {
+                    k_ssm = q;
                 }
             }
-            if full {
-                let inv = *inv_speed.get_or_insert_with(|| R::ONE.div(speed));
-                q = l.mul(inv);
-            }
-            if q < k_ssm {
-                k_ssm = q;
+        }
+        // The fixtures' scale: the same directions, the tool's motion only. Fixed point: the
+        // nearest fixture is already in `omni` (the whole speed).
+        let mut k_fix = R::ONE;
+        let fixtures: &[R] = if R::HW_DIV { &f.fixture_sectors_m } else { &[] };
+        for (c, &s0) in self.centres.iter().zip(fixtures.iter()) {
+            let l = self.fixture_speed_limit(s0.sub(moved));
+            if let Some(q) = self.sector_scale(c, s0, moved, l, vx, vy, speed, &mut inv_speed) {
+                if q < k_fix {
+                    k_fix = q;
+                }
             }
         }
         // The PFL scale: along and across the module's axis within their speeds.
@@ -520,8 +567,13 @@ impl<R: Real> SafeController<R> {
         } else if k_ssm > R::ZERO {
             (k_ssm, SafeState::Slow)
         } else {
-            return SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: R::ZERO, separation_m: s, state: SafeState::ProtectiveStop };
+            (R::ZERO, SafeState::ProtectiveStop)
         };
+        // A fixture bounds either regime. NaN-safe: only a scale known to be smaller is taken.
+        let (k, state) = if k_fix < k { (k_fix, if k_fix > R::ZERO { SafeState::Slow } else { SafeState::ProtectiveStop }) } else { (k, state) };
+        if state == SafeState::ProtectiveStop {
+            return SafeCommand { vx: R::ZERO, vy: R::ZERO, limit_mps: R::ZERO, separation_m: s, state: SafeState::ProtectiveStop };
+        }
         let limit = speed.mul(k);
         let limit_mps = if limit > any_dir { limit } else { any_dir };
         if k >= R::ONE {
@@ -529,6 +581,36 @@ impl<R: Real> SafeController<R> {
         } else {
             SafeCommand { vx: vx.mul(k), vy: vy.mul(k), limit_mps, separation_m: s, state }
         }
+    }
+
+    /// The scale that brings the approach towards sector `c` (separation `s0` at capture, `r` what
+    /// may have changed since, `l` the limit at `s0 - r`) within `l`: `None` when it does not
+    /// limit (module docs: `u_k`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn sector_scale(&self, c: &[R; 2], s0: R, r: R, l: R, vx: R, vy: R, speed: R, inv_speed: &mut Option<R>) -> Option<R> {
+        if l >= speed {
+            return None;
+        }
+        // `l / u` for the sector's fastest approach `u` (module docs): `u = |v|`, or
+        // `(s_k u_0 + |v| r) / (s_k - r)` where that is smaller, 0 when it is not positive.
+        if s0 > r {
+            let dot = vx.mul(c[0]).add(vy.mul(c[1]));
+            let cross = vx.mul(c[1]).sub(vy.mul(c[0])).abs();
+            // Within 22.5 degrees of the centre: straight at a point of the sector.
+            let u0 = if self.s22.mul(dot) >= self.c22.mul(cross) { speed } else { dot.mul(self.c22).add(cross.mul(self.s22)) };
+            let num = s0.mul(u0).add(speed.mul(r));
+            if num.partial_cmp(&R::ZERO) != Some(core::cmp::Ordering::Greater) {
+                // Moving away from every point the sector can hold now.
+                return None;
+            }
+            let den = s0.sub(r);
+            if num < speed.mul(den) {
+                return Some(l.mul(den).div(num));
+            }
+        }
+        let inv = *inv_speed.get_or_insert_with(|| R::ONE.div(speed));
+        Some(l.mul(inv))
     }
 
     /// The command within the cap: `(vx, vy, scaled, length bound)`; `None` when it is not
@@ -576,6 +658,20 @@ impl<R: Real> SafeController<R> {
         let (m, n) = if aa > bb { (aa, bb) } else { (bb, aa) };
         m.add(n.halve())
     }
+}
+
+/// The smallest of the sectors (NaN-safe: a NaN sector is taken).
+fn min_of<R: Real>(v: &[R; SECTORS]) -> R {
+    let mut m = v[0];
+    for &x in &v[1..] {
+        match x.partial_cmp(&m) {
+            Some(core::cmp::Ordering::Less) => m = x,
+            // `x` NaN: taken (a NaN separation stops); `m` NaN already: kept.
+            None if m.partial_cmp(&m).is_some() => m = x,
+            _ => {}
+        }
+    }
+    m
 }
 
 /// The factor that brings `x >= 0` within `lim`: 1 when it is, `lim / x` when `lim` is positive,

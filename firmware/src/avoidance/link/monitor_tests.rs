@@ -164,8 +164,7 @@ fn a_fixture_ahead_bounds_the_command() {
     let mut l = link();
     let v = step_after(&mut l, &f, 10);
     assert_ne!(v.monitor, Monitor::Run, "{v:?}");
-    // Towards it (+x) no faster than the module's PFL speed along its axis (the fixture is rigid:
-    // never at the cap with PFL off).
+    // Towards it (+x): not at all with PFL off (5 mm is inside the robot's own stop and the margin).
     let mut cfg = board_config();
     if let Some(p) = cfg.ssm.as_mut() {
         p.pfl = None;

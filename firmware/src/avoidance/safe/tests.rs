@@ -18,7 +18,7 @@ fn params<R: Real>() -> SsmParams<R> {
 
 fn sensed<R: Real>(sep: f64, age: f64) -> Sensed<R> {
     let s = R::from_f64(sep);
-    Sensed { separation_m: s, tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age), nearest_x_m: R::from_f64(sep + 0.05), nearest_y_m: R::ZERO, sectors_m: Sensed::sectors_all(s) }
+    Sensed { separation_m: s, tool_x_m: R::ZERO, tool_y_m: R::ZERO, age_s: R::from_f64(age), nearest_x_m: R::from_f64(sep + 0.05), nearest_y_m: R::ZERO, sectors_m: Sensed::sectors_all(s), fixture_sectors_m: Sensed::no_fixtures() }
 }
 
 #[test]
@@ -161,7 +161,7 @@ fn steered(barrier: f64) -> SafeController<f64> {
 }
 
 fn at(sep: f64, nearest: [f64; 2]) -> Sensed<f64> {
-    Sensed { separation_m: sep, tool_x_m: 1.0, tool_y_m: 1.0, age_s: 0.0, nearest_x_m: nearest[0], nearest_y_m: nearest[1], sectors_m: [sep; SECTORS] }
+    Sensed { separation_m: sep, tool_x_m: 1.0, tool_y_m: 1.0, age_s: 0.0, nearest_x_m: nearest[0], nearest_y_m: nearest[1], sectors_m: [sep; SECTORS], fixture_sectors_m: Sensed::no_fixtures() }
 }
 
 /// Head-on in the band: the approach is cut to the barrier's rate (its length bound allows at
@@ -209,7 +209,7 @@ fn the_view_edges_are_a_barrier() {
 fn steered_commands_stay_bounded() {
     let q = |v: f64| I16F16::from_f64(v);
     let mut c = SafeController::new(params::<I16F16>()).with_steer(Steer { barrier_m: q(0.4), band_m: q(0.05), view_m: [q(0.0), q(0.0), q(2.0), q(2.0)], edge_margin_m: q(0.045) });
-    let s = Sensed { separation_m: q(0.43), tool_x_m: q(1.0), tool_y_m: q(1.0), age_s: q(0.0), nearest_x_m: q(1.4), nearest_y_m: q(1.3), sectors_m: [q(0.43); SECTORS] };
+    let s = Sensed { separation_m: q(0.43), tool_x_m: q(1.0), tool_y_m: q(1.0), age_s: q(0.0), nearest_x_m: q(1.4), nearest_y_m: q(1.3), sectors_m: [q(0.43); SECTORS], fixture_sectors_m: Sensed::no_fixtures() };
     for (vx, vy) in [(30000.0, 30000.0), (-30000.0, 5.0), (0.3, 0.2), (0.0, 0.0)] {
         let (sx, sy) = c.steer(q(vx), q(vy), q(1.0), q(1.0), Some(&s));
         let out = c.limit(sx, sy, q(1.0), q(1.0), Some(&s));
@@ -231,7 +231,7 @@ fn sectors(list: &[(usize, f64)]) -> [f64; SECTORS] {
 
 fn dir(sep: [f64; SECTORS]) -> Sensed<f64> {
     let min = sep.iter().copied().fold(f64::INFINITY, f64::min);
-    Sensed { separation_m: min, tool_x_m: 0.0, tool_y_m: 0.0, age_s: 0.0, nearest_x_m: 1.0, nearest_y_m: 0.0, sectors_m: sep }
+    Sensed { separation_m: min, tool_x_m: 0.0, tool_y_m: 0.0, age_s: 0.0, nearest_x_m: 1.0, nearest_y_m: 0.0, sectors_m: sep, fixture_sectors_m: Sensed::no_fixtures() }
 }
 
 #[test]
@@ -270,7 +270,7 @@ fn fixed_point_bounds_the_whole_speed_by_the_nearest_sector() {
     let mut sec = [q(10.0); SECTORS];
     sec[3] = q(0.25);
     sec[4] = q(0.25);
-    let behind = Sensed { separation_m: q(0.25), tool_x_m: q(0.0), tool_y_m: q(0.0), age_s: q(0.0), nearest_x_m: q(-0.3), nearest_y_m: q(0.0), sectors_m: sec };
+    let behind = Sensed { separation_m: q(0.25), tool_x_m: q(0.0), tool_y_m: q(0.0), age_s: q(0.0), nearest_x_m: q(-0.3), nearest_y_m: q(0.0), sectors_m: sec, fixture_sectors_m: Sensed::no_fixtures() };
     let away = c.limit(q(0.2), q(0.0), q(0.0), q(0.0), Some(&behind));
     assert_eq!(away.state, SafeState::Slow);
     assert!(away.vx.to_f64() <= c.speed_limit(q(0.25)).to_f64() + 1e-4, "{}", away.vx.to_f64());
@@ -308,7 +308,7 @@ fn the_directional_bound_holds_for_every_point_a_frame_could_hold() {
         let mut sep = [10.0; SECTORS];
         sep[sector_of(q[0], q[1])] = d - w;
         let age = rnd() * 0.25;
-        let sensed = Sensed { separation_m: d - w, tool_x_m: 0.0, tool_y_m: 0.0, age_s: age, nearest_x_m: q[0], nearest_y_m: q[1], sectors_m: sep };
+        let sensed = Sensed { separation_m: d - w, tool_x_m: 0.0, tool_y_m: 0.0, age_s: age, nearest_x_m: q[0], nearest_y_m: q[1], sectors_m: sep, fixture_sectors_m: Sensed::no_fixtures() };
         // The tool moved since capture, the point moved up to K age.
         let (tb, tm) = (rnd() * core::f64::consts::TAU, rnd() * 0.01);
         let p = [tm * tb.cos(), tm * tb.sin()];
@@ -354,14 +354,14 @@ fn pfl_lets_the_module_touch_along_its_axis_only() {
     assert!((o.vx - 0.12).abs() < 1e-12 && (o.vy - 0.16).abs() < 1e-12, "along the rotated axis: {o:?}");
     // The board's f32: the across component cut to the rigid speed, the along one kept.
     let g = SafeController::new(SsmParams { pfl: Some(Pfl { axis: [0.6f32, 0.8], along_mps: 0.29, across_mps: 0.063 }), ..params::<f32>() });
-    let gc = Sensed { separation_m: 0.0f32, tool_x_m: 0.0, tool_y_m: 0.0, age_s: 0.0, nearest_x_m: 0.1, nearest_y_m: 0.0, sectors_m: [0.0; SECTORS] };
+    let gc = Sensed { separation_m: 0.0f32, tool_x_m: 0.0, tool_y_m: 0.0, age_s: 0.0, nearest_x_m: 0.1, nearest_y_m: 0.0, sectors_m: [0.0; SECTORS], fixture_sectors_m: Sensed::no_fixtures() };
     let o = g.limit(0.2, -0.15, 0.0, 0.0, Some(&gc));
     let (ox, oy) = (f64::from(o.vx), f64::from(o.vy));
     assert!((ox * 0.8 - oy * 0.6).abs() <= 0.063 && (ox * 0.6 + oy * 0.8).abs() <= 0.29 && ox > 0.0, "f32 across: {ox} {oy}");
     // Fixed point applies no PFL (the step budget): in contact it stops.
     let q = |v: f64| I16F16::from_f64(v);
     let f = SafeController::new(SsmParams { pfl: Some(Pfl { axis: [q(0.6), q(0.8)], along_mps: q(0.29), across_mps: q(0.063) }), ..params::<I16F16>() });
-    let qc = Sensed { separation_m: q(0.0), tool_x_m: q(0.0), tool_y_m: q(0.0), age_s: q(0.0), nearest_x_m: q(0.1), nearest_y_m: q(0.0), sectors_m: [q(0.0); SECTORS] };
+    let qc = Sensed { separation_m: q(0.0), tool_x_m: q(0.0), tool_y_m: q(0.0), age_s: q(0.0), nearest_x_m: q(0.1), nearest_y_m: q(0.0), sectors_m: [q(0.0); SECTORS], fixture_sectors_m: Sensed::no_fixtures() };
     let o = f.limit(q(0.12), q(0.16), q(0.0), q(0.0), Some(&qc));
     assert_eq!((o.vx.to_f64(), o.vy.to_f64(), o.state), (0.0, 0.0, SafeState::ProtectiveStop));
 }
@@ -374,5 +374,99 @@ fn a_broken_pfl_configuration_is_none() {
         let c = SafeController::new(SsmParams { pfl: Some(Pfl { axis, along_mps: a, across_mps: b }), ..params::<f64>() });
         let o = c.limit(0.1, 0.0, 0.0, 0.0, Some(&contact));
         assert_eq!((o.vx, o.vy, o.state), (0.0, 0.0, SafeState::ProtectiveStop), "{a} {b} {axis:?}");
+    }
+}
+
+fn with_fixture<R: Real>(person_m: f64, fixtures: &[(usize, f64)], age: f64) -> Sensed<R> {
+    let mut s = sensed::<R>(person_m, age);
+    for &(k, d) in fixtures {
+        s.fixture_sectors_m[k] = R::from_f64(d);
+    }
+    s
+}
+
+/// A fixture is bounded by the robot's own stop only (issue 29 item 2): `v (T_r + T_s / 2) +
+/// margin <= s`, no `K (T_r + T_s)` and no `K age`. At 0.1 m ahead a person would stop the tool
+/// (`S_p(0)` = 0.24 m); a fixture there lets it run at the cap; at 30 mm it slows to (0.03 -
+/// 0.02) / 0.06 m/s, whatever the frame's age; moving away is not limited. `separation_m` stays
+/// the person's.
+#[test]
+fn a_fixture_is_bounded_without_a_human_approach() {
+    let c = SafeController::new(params::<f64>());
+    let ahead = [(0, 0.1), (7, 0.1)];
+    let out = c.limit(0.25, 0.0, 0.0, 0.0, Some(&with_fixture::<f64>(5.0, &ahead, 0.0)));
+    assert_eq!((out.vx, out.state), (0.25, SafeState::Run));
+    assert!((out.separation_m - 5.0).abs() < 1e-12, "the person's separation: {}", out.separation_m);
+    // The same pixel as a person: a protective stop.
+    let person = c.limit(0.25, 0.0, 0.0, 0.0, Some(&sensed::<f64>(0.1, 0.0)));
+    assert_eq!(person.state, SafeState::ProtectiveStop);
+    for age in [0.0, 0.1, 0.3] {
+        let near = with_fixture::<f64>(5.0, &[(0, 0.03), (7, 0.03)], age);
+        let out = c.limit(0.25, 0.0, 0.0, 0.0, Some(&near));
+        let l = (0.03 - 0.02) / 0.06;
+        assert!(out.vx <= l + 1e-12 && out.vx > 0.9 * l, "age {age}: {} against {l}", out.vx);
+        assert_eq!(out.state, SafeState::Slow);
+        let away = c.limit(-0.25, 0.0, 0.0, 0.0, Some(&near));
+        assert_eq!(away.vx, -0.25, "moving away from the fixture");
+    }
+    // The tool's own motion since capture still counts: 10 mm on, 20 mm are left: (0.02 - 0.02).
+    let near = with_fixture::<f64>(5.0, &[(0, 0.03), (7, 0.03)], 0.0);
+    let moved = c.limit(0.25, 0.0, 0.01, 0.0, Some(&near));
+    assert_eq!(moved.state, SafeState::ProtectiveStop);
+    // In fixed point (the whole speed by the nearest, no extra division): within the same bound.
+    let q = SafeController::new(params::<I16F16>());
+    let out = q.limit(I16F16::from_f64(0.25), I16F16::ZERO, I16F16::ZERO, I16F16::ZERO, Some(&with_fixture::<I16F16>(5.0, &[(0, 0.03), (7, 0.03)], 0.1)));
+    assert!(out.vx.to_f64() <= (0.03 - 0.02) / 0.06 + 1e-4 && out.vx.to_f64() > 0.1, "{}", out.vx.to_f64());
+    let out = q.limit(I16F16::from_f64(0.25), I16F16::ZERO, I16F16::ZERO, I16F16::ZERO, Some(&with_fixture::<I16F16>(5.0, &[(0, 0.1), (7, 0.1)], 0.1)));
+    assert_eq!(out.state, SafeState::Run);
+}
+
+/// PFL permits contact with a person, never with a fixture: the fixture's bound caps the PFL
+/// speeds too.
+#[test]
+fn pfl_does_not_carry_the_tool_into_a_fixture() {
+    let c = with_pfl();
+    let near = with_fixture::<f64>(5.0, &[(0, 0.025), (7, 0.025)], 0.0);
+    let out = c.limit(0.25, 0.0, 0.0, 0.0, Some(&near));
+    let l = (0.025 - 0.02) / 0.06;
+    assert!(out.vx <= l + 1e-12, "{} over the fixture's {l}", out.vx);
+    assert_eq!(out.state, SafeState::Slow);
+    // A person as near: PFL carries it at the module's speed.
+    let person = c.limit(0.25, 0.0, 0.0, 0.0, Some(&sensed::<f64>(0.025, 0.0)));
+    assert_eq!(person.state, SafeState::Pfl);
+}
+
+/// The fixture bound holds for every fixture point a frame could show, wherever the tool moved
+/// since capture: `v . n (T_r + T_s / 2) + margin <= s` for the point's direction `n` and
+/// separation `s` now, over 200,000 random frames (a fixture does not move: no `K age`), with a
+/// person far; and where a person is in the frame too, that one's bound still holds.
+#[test]
+fn the_fixture_bound_holds_for_every_point_a_frame_could_hold() {
+    let c = SafeController::new(params::<f64>());
+    let w = 0.045;
+    let mut seed: u64 = 0x2545_F491_4F6C_DD1D;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let per = 0.01 + 0.1 / 2.0;
+    for _ in 0..200_000 {
+        let a = rnd() * core::f64::consts::TAU;
+        let d = w + rnd() * 0.3;
+        let q = [d * a.cos(), d * a.sin()];
+        let mut fix = [10.0; SECTORS];
+        fix[sector_of(q[0], q[1])] = d - w;
+        let sensed = Sensed { separation_m: 10.0, tool_x_m: 0.0, tool_y_m: 0.0, age_s: rnd() * 0.25, nearest_x_m: q[0], nearest_y_m: q[1], sectors_m: [10.0; SECTORS], fixture_sectors_m: fix };
+        let (tb, tm) = (rnd() * core::f64::consts::TAU, rnd() * 0.01);
+        let p = [tm * tb.cos(), tm * tb.sin()];
+        let (vb, vm) = (rnd() * core::f64::consts::TAU, rnd() * 0.4);
+        for c in [c, with_pfl()] {
+            let out = c.limit(vm * vb.cos(), vm * vb.sin(), p[0], p[1], Some(&sensed));
+            let (rx, ry) = (q[0] - p[0], q[1] - p[1]);
+            let dist = rx.hypot(ry);
+            let u = ((out.vx * rx + out.vy * ry) / dist).max(0.0);
+            let sp = 0.02 + u * per;
+            assert!(u == 0.0 || sp <= dist - w + 1e-9, "fixture {q:?}, tool {p:?}: u {u} needs {sp} > {}", dist - w);
+        }
     }
 }

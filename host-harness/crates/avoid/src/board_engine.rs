@@ -135,7 +135,7 @@ impl StepEngine for BoardEngine {
             tool_q16: [q16(sensed.tool_x_m), q16(sensed.tool_y_m)],
             nearest_q16: [q16(sensed.nearest_x_m), q16(sensed.nearest_y_m)],
             person_mm: sensed.sectors_m.map(mm_of_m),
-            fixture_mm: [flinch_firmware::avoidance::frame::NOTHING_MM; 8],
+            fixture_mm: sensed.fixture_sectors_m.map(mm_of_m),
             ..FrameHeader::default()
         };
     }

@@ -134,6 +134,9 @@ pub struct Reprojected {
     /// reflection, a wrong depth scale), dropped as if null, so their cells stay unknown unless
     /// another point sees them.
     pub below_plane_points: usize,
+    /// Valid points that fell on the plane raster (the robot's, those below the plane and the
+    /// rest), count.
+    pub valid_points: usize,
 }
 
 /// Reproject a depth image onto the plane raster: every valid pixel's point goes into the cell that
@@ -150,6 +153,7 @@ pub fn reproject(cam: &Pinhole, img: &DepthImage, plane: &PlaneRaster, robot: Op
     let mut cells = vec![Cell::Unknown; plane.width * plane.height];
     let mut robot_points = 0;
     let mut below_plane_points = 0;
+    let mut valid_points = 0;
     for v in 0..img.height {
         for u in 0..img.width {
             let count = img.mm[v * img.width + u];
@@ -158,6 +162,7 @@ pub fn reproject(cam: &Pinhole, img: &DepthImage, plane: &PlaneRaster, robot: Op
             }
             let p = cam.unproject(u as f64, v as f64, cam.depth_m(count));
             let Some(k) = plane.cell(p[0], p[1]) else { continue };
+            valid_points += 1;
             if p[2] < -below_m {
                 below_plane_points += 1;
                 continue;
@@ -176,7 +181,7 @@ pub fn reproject(cam: &Pinhole, img: &DepthImage, plane: &PlaneRaster, robot: Op
             };
         }
     }
-    Reprojected { cells, robot_points, below_plane_points }
+    Reprojected { cells, robot_points, below_plane_points, valid_points }
 }
 
 /// The robot's height over `p` grown sideways by `margin` (the highest of `p` and 8 points

@@ -126,6 +126,14 @@ pub fn steer_barrier_m(scene: &Avoid) -> Result<f64, String> {
     Ok(monitor.stop_separation_m() + monitor.approach_speed_mps() * oldest + scene.speed_mps * (s.reaction_time_s + s.stopping_time_s / 2.0) + 0.01)
 }
 
+/// The separation from a fixture the steering barrier holds, m: where the fixture bound (no human
+/// approach: the tool's own stop `cap (T_r + T_s / 2)` plus the margin) still allows the cap, plus
+/// 10 mm. The tool's motion since capture is taken off by the barrier itself.
+pub fn fixture_barrier_m(scene: &Avoid) -> f64 {
+    let s = &scene.safety;
+    ssm_params::<f64>(scene).margin_m + scene.speed_mps * (s.reaction_time_s + s.stopping_time_s / 2.0) + 0.01
+}
+
 /// The monitor with its steering barrier for a scene (`None`: monitor off, as the thesis wrote it).
 pub fn safe_controller<R: Real>(scene: &Avoid) -> Result<Option<SafeController<R>>, String> {
     let Some(p) = ssm::<R>(scene) else { return Ok(None) };
@@ -135,7 +143,7 @@ pub fn safe_controller<R: Real>(scene: &Avoid) -> Result<Option<SafeController<R
     // speed, so the barrier keeps only the clearance asked (it still goes round where it can); SSM
     // alone: where the monitor allows the cap.
     let barrier = if p.pfl.is_some() { scene.clearance_m } else { steer_barrier_m(scene)? };
-    Ok(Some(SafeController::new(p).with_steer(Steer {
+    Ok(Some(SafeController::new(p).with_fixture_barrier(q(fixture_barrier_m(scene))).with_steer(Steer {
         barrier_m: q(barrier),
         band_m: q(STEER_BAND_M),
         view_m: [R::ZERO, R::ZERO, q(w), q(h)],
@@ -156,6 +164,7 @@ fn monitored<R: Real>(safe: &mut Option<SafeController<R>>, v: [R; 2], p: [f64; 
                 nearest_x_m: q(s.nearest_x_m),
                 nearest_y_m: q(s.nearest_y_m),
                 sectors_m: s.sectors_m.map(q),
+                fixture_sectors_m: s.fixture_sectors_m.map(q),
             });
             let (x, y) = (q(p[0]), q(p[1]));
             let (vx, vy) = c.steer(v[0], v[1], x, y, sn.as_ref());

@@ -11,6 +11,7 @@ pub mod calib;
 pub mod camera;
 pub mod compare;
 pub mod depth;
+pub mod drive;
 pub mod engine;
 pub mod link;
 pub mod path;
@@ -204,6 +205,10 @@ pub struct AvoidMetrics {
     pub contacts_within_pfl: usize,
     /// The tool's speed at the contact, m/s (0 without one; the person's own speed is not in it).
     pub max_contact_speed_mps: f64,
+    /// What the input looked wrong in, each naming why (also on stderr): a recording whose frames
+    /// are mis-timed (median interval over 1 s) or mis-scaled (most valid points under the work
+    /// plane). Empty when nothing was.
+    pub warnings: Vec<String>,
 }
 
 impl AvoidMetrics {
@@ -266,6 +271,7 @@ impl AvoidMetrics {
             max_contact_speed_mps: res.max_contact_speed_mps,
             link_min_signed_distance_m: res.link_min_signed_distance_m.is_finite().then_some(res.link_min_signed_distance_m),
             link_min_signed_distance_null_reason: (!res.link_min_signed_distance_m.is_finite()).then_some("no person or obstacle reaches the height of the link's underside"),
+            warnings: res.warnings.clone(),
         }
     }
 }
@@ -344,6 +350,9 @@ pub fn run_scene(args: &AvoidArgs, mut scene: scene::Avoid) -> Result<path::Verd
             (r, Some(stats))
         }
     };
+    for w in &res.warnings {
+        eprintln!("warning: {}: {w}", args.scene.display());
+    }
     if let Some(p) = &args.plot {
         plot::plot(&scene, &res, p)?;
     }

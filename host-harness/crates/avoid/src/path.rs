@@ -41,6 +41,10 @@ pub fn count_stalls(points: &[[f64; 2]], goal: [f64; 2], window: usize, move_m: 
     stalls
 }
 
+fn norm(v: [f64; 2]) -> f64 {
+    v[0].hypot(v[1])
+}
+
 /// Simulate the scene with the reference or the on-target ([`BoardReal`](fw::BoardReal), lookup table) engine.
 pub fn simulate(scene: &Avoid, setup: &Setup, engine: Engine) -> Result<PathResult, String> {
     match engine {
@@ -73,6 +77,9 @@ pub struct Frame {
     /// The separation per direction ([`SECTORS`] sectors of 45 degrees round the tool, from its
     /// surface), m: what the monitor's directional bound reads.
     pub sectors_m: [f64; SECTORS],
+    /// The same for the pixels classed as fixtures ([`NOTHING_SENSED_M`] where none), m: the
+    /// monitor's fixture bound reads them; `separation_m` and `sectors_m` are the people's.
+    pub fixture_sectors_m: [f64; SECTORS],
 }
 
 /// The synthetic camera: the scene rendered at every frame, captured when asked.
@@ -80,8 +87,8 @@ pub struct Synthetic(pub Rng);
 
 impl FrameSource for Synthetic {
     fn frame(&mut self, scene: &Avoid, setup: &Setup, t_s: f64, tool: [f64; 2]) -> Result<Option<Frame>, String> {
-        let (field, separation_m, nearest_m, goal, sectors_m) = fit_and_sense_sectors(scene, setup, tool, &scene.operator_shape_at(t_s), scene.hand_at(t_s), &mut self.0);
-        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: t_s, goal_separation_m: Some(goal), sectors_m }))
+        let s = fit_and_sense_classed(scene, setup, tool, &scene.operator_shape_at(t_s), scene.hand_at(t_s), &mut self.0);
+        Ok(Some(Frame { field: s.field, separation_m: s.separation_m, nearest_m: s.nearest_m, capture_s: t_s, goal_separation_m: Some(s.goal_separation_m), sectors_m: s.sectors_m, fixture_sectors_m: s.fixture_sectors_m }))
     }
 }
 
@@ -108,14 +115,15 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     let mut rows = Vec::with_capacity(steps.min(1 << 20));
     // Frames in flight: (time it reaches the controller, capture time, field, separation, tool at
     // capture). Each reaches the controller `latency_s` after capture.
-    let mut in_flight: std::collections::VecDeque<(f64, f64, Field, f64, [f64; 2], [f64; 2], Option<f64>, [f64; SECTORS])> = std::collections::VecDeque::new();
-    let Some(Frame { field: f0, separation_m: sep0, nearest_m: near0, goal_separation_m: goal0, sectors_m: sec0, .. }) = source.frame(scene, setup, 0.0, p)? else {
+    type InFlight = (f64, f64, Field, f64, [f64; 2], [f64; 2], Option<f64>, [f64; SECTORS], [f64; SECTORS]);
+    let mut in_flight: std::collections::VecDeque<InFlight> = std::collections::VecDeque::new();
+    let Some(Frame { field: f0, separation_m: sep0, nearest_m: near0, goal_separation_m: goal0, sectors_m: sec0, fixture_sectors_m: fix0, .. }) = source.frame(scene, setup, 0.0, p)? else {
         return Err("no camera frame at t = 0".into());
     };
     let mut field = f0.clone();
     // Capture to command: the latency, plus the frame's time on the line when the baud is modelled.
     let delay = frame_delay_s(scene)?;
-    in_flight.push_back((delay, 0.0, f0, sep0, p, near0, goal0, sec0));
+    in_flight.push_back((delay, 0.0, f0, sep0, p, near0, goal0, sec0, fix0));
     // The verdict: the SSM bound at the true separation, and the swept distance's Lipschitz term.
     let verdict = SsmVerdict::new(scene);
     let (mut ssm_violations, mut over_max, mut first_violation) = (0usize, 0.0f64, None);
@@ -146,25 +154,30 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
     let (mut best_goal, mut t_best, mut p_best) = (dist_goal(p), 0.0, p);
     let mut spread: f64 = 0.0;
     let mut path_len = 0.0;
+    let mut drive = crate::drive::Drive::new(scene);
+    // Fixtures (issue 29 item 2): their clearance judged without K, contact with one a collision.
+    let fixtures = scene.has_fixtures();
+    let mut fix_min = f64::INFINITY;
+    let mut t_end = 0.0;
 
     for k in 1..=steps {
         let t = k as f64 * dt;
         let t_prev = t - dt;
         let now = (t_prev * 1e3).round() as u32;
         if t_prev + 1e-12 >= next_frame {
-            if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc, goal_separation_m: gs, sectors_m: sec }) = source.frame(scene, setup, t_prev, p)? {
+            if let Some(Frame { field: f, separation_m: sep, nearest_m: near, capture_s: tc, goal_separation_m: gs, sectors_m: sec, fixture_sectors_m: fix }) = source.frame(scene, setup, t_prev, p)? {
                 // The separation was measured from the tool where it is now (`p`), so the monitor's
                 // correction for the tool's motion since counts from `p` too; counting from the tool
                 // at a recorded frame's (earlier) capture would be optimistic by up to v (t - tc)
                 // when the tool turned back in between (review finding).
-                in_flight.push_back((tc + delay, tc, f, sep, p, near, gs, sec));
+                in_flight.push_back((tc + delay, tc, f, sep, p, near, gs, sec, fix));
                 frames += 1;
             }
             next_frame += scene.frame_period_s;
         }
         let mut no_room = false;
         while in_flight.front().is_some_and(|f| f.0 <= t_prev + 1e-12) {
-            let Some((_, tc, f, sep, at, near, gs, sec)) = in_flight.pop_front() else { break };
+            let Some((_, tc, f, sep, at, near, gs, sec, fix)) = in_flight.pop_front() else { break };
             if sensed.is_none() {
                 if let Some(m) = &monitor {
                     // At rest and with a fresh frame the protective separation is `S_p(0)`: with
@@ -175,7 +188,7 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
                     no_room = pfl.is_none() && gs.is_some_and(|g| m.speed_limit(g) <= 0.0);
                 }
             }
-            let s = Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1], sectors_m: sec };
+            let s = Sensed { separation_m: sep, tool_x_m: at[0], tool_y_m: at[1], age_s: 0.0, nearest_x_m: near[0], nearest_y_m: near[1], sectors_m: sec, fixture_sectors_m: fix };
             engine.capture(&s, tc);
             engine.new_field(&f, seq, now)?;
             seq = seq.wrapping_add(1);
@@ -199,16 +212,21 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
             break;
         }
         let [vx, vy] = cmd.v;
-        let speed = (vx * vx + vy * vy).sqrt();
-        // Eq 79.
-        let q = [p[0] + vx * dt, p[1] + vy * dt];
-        path_len += speed * dt;
-        p = q;
+        // Eq 79, through the drive: the command is followed `T_r - dt` later, a slowing down at
+        // no more than `cap / T_s` (`drive.rs`).
+        drive.command(t_prev, [vx, vy]);
+        let m = drive.advance(p, t_prev, t);
+        let speed = m.max_speed_mps;
+        path_len += m.length_m;
+        p = m.end_m;
+        t_end = t;
         let hand = scene.hand_at(t);
         let sd = scene.signed_distance_m(t, p);
         let s_start = *signed.last().unwrap_or(&sd);
         let v_obstacle = obstacle_speed_mps(scene, t_prev, t);
-        let swept = swept_min_m(scene, v_obstacle, (t_prev, points[points.len() - 1]), (t, p));
+        let swept = swept_min_along(scene, v_obstacle, t_prev, t, &|tt| m.at(tt), m.max_speed_mps);
+        let fix_swept = if fixtures { swept_min_by(&|_, q| scene.fixture_signed_distance_m(q), 0.0, t_prev, t, &|tt| m.at(tt), m.max_speed_mps) } else { f64::INFINITY };
+        fix_min = fix_min.min(fix_swept);
         vmax = vmax.max(speed);
         if swept < NEAR_OPERATOR_M {
             vmax_near = vmax_near.max(speed);
@@ -218,11 +236,27 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         }
         // The verdict on the command: the SSM bound at the true separation when it was given.
         // ISO/TS 15066 5.5.4.2.3: the speed towards the person; moving away is not limited.
-        let bound = verdict.bound_at_mps(s_start, v_obstacle);
-        let towards = approach_speed_mps(scene, t_prev, points[points.len() - 1], [vx, vy]);
+        let p_prev = points[points.len() - 1];
+        // The people's bound (with K) at their true separation; the fixtures' (the robot's own
+        // stop, no K) at theirs (issue 29 item 2). Without fixtures the first is the old one.
+        let (s_person, towards) = if fixtures { (scene.person_signed_distance_m(t_prev, p_prev), person_approach_speed_mps(scene, t_prev, p_prev, [vx, vy])) } else { (s_start, approach_speed_mps(scene, t_prev, p_prev, [vx, vy])) };
+        let bound = verdict.bound_at_mps(s_person, v_obstacle);
+        let over_fixture = if fixtures {
+            let s_fix = scene.fixture_signed_distance_m(p_prev);
+            let towards_fix = fixture_approach_speed_mps(scene, p_prev, [vx, vy]);
+            let b = verdict.fixture_bound_mps(s_fix);
+            (towards_fix > b + SSM_TOL_MPS).then_some(towards_fix - b)
+        } else {
+            None
+        };
         let in_pfl = pfl.as_ref().is_some_and(|p| within_pfl(p, [vx, vy]));
-        let beyond_ssm = (towards > bound + SSM_TOL_MPS).then_some(in_pfl);
-        if towards > bound + SSM_TOL_MPS {
+        let beyond_ssm = if over_fixture.is_some() { Some(false) } else { (towards > bound + SSM_TOL_MPS).then_some(in_pfl) };
+        if let Some(over) = over_fixture {
+            // PFL permits no contact with a fixture: beyond its bound is a violation.
+            ssm_violations += 1;
+            over_max = over_max.max(over);
+            first_violation.get_or_insert(t);
+        } else if towards > bound + SSM_TOL_MPS {
             if in_pfl {
                 steps_in_pfl += 1;
                 max_in_pfl = max_in_pfl.max(speed);
@@ -235,19 +269,21 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         // The link between the step's ends: each of its points moves no more than the tool, the
         // obstacles no more than `v_obstacle`: the swept bound of one part.
         let link_now = scene.link_signed_distance_m(t, p);
-        let l_step = (p[0] - points[points.len() - 1][0]).hypot(p[1] - points[points.len() - 1][1]) + v_obstacle * dt;
+        let l_step = (m.max_speed_mps + v_obstacle) * dt;
         if link_now.is_finite() || link_prev.is_finite() {
             link_min = link_min.min(0.5 * (link_prev + link_now - l_step)).min(link_prev).min(link_now);
         }
         link_prev = link_now;
-        if swept < 0.0 && in_pfl && min_s >= 0.0 {
+        // The contact's velocity is the drive's (it may still be braking from a faster command).
+        let moved_in_pfl = pfl.as_ref().is_some_and(|p| m.velocities_mps.iter().all(|v| within_pfl(p, *v)));
+        if swept < 0.0 && moved_in_pfl && min_s >= 0.0 && fix_swept >= 0.0 {
             // The first contact, within the PFL speeds: the module yields, its switch fires, the
             // robot stops (the firmware's latch); the run ends here, a stop.
             contacts_within_pfl += 1;
             contact_speed = speed;
             pfl_contact = true;
         }
-        if speed > 1e-3 {
+        if norm(cmd.v) > 1e-3 {
             if let Some(l) = last_v {
                 if l[0] * vx + l[1] * vy < 0.0 {
                     reversals += 1;
@@ -291,6 +327,56 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
             }
         }
     }
+    // After any end while moving: the drive brakes to rest (the commands already on their way
+    // first), and the path, the distances and the contact checks include it.
+    let main_rows = rows.len();
+    let tail_steps = ((drive.delay_s + scene.safety.stopping_time_s) / dt).ceil() as usize + 2;
+    for k in 1..=tail_steps {
+        if !drive.moving() || pfl_contact {
+            break;
+        }
+        let (t_prev, t) = (t_end + (k - 1) as f64 * dt, t_end + k as f64 * dt);
+        drive.command(t_prev, [0.0, 0.0]);
+        let m = drive.advance(p, t_prev, t);
+        path_len += m.length_m;
+        p = m.end_m;
+        let v_obstacle = obstacle_speed_mps(scene, t_prev, t);
+        let swept = swept_min_along(scene, v_obstacle, t_prev, t, &|tt| m.at(tt), m.max_speed_mps);
+        let fix_swept = if fixtures { swept_min_by(&|_, q| scene.fixture_signed_distance_m(q), 0.0, t_prev, t, &|tt| m.at(tt), m.max_speed_mps) } else { f64::INFINITY };
+        fix_min = fix_min.min(fix_swept);
+        let sd = scene.signed_distance_m(t, p);
+        let s_start = *signed.last().unwrap_or(&sd);
+        vmax = vmax.max(m.max_speed_mps);
+        if swept < NEAR_OPERATOR_M {
+            vmax_near = vmax_near.max(m.max_speed_mps);
+        }
+        if swept < 0.0 {
+            time_inside += dt;
+        }
+        let link_now = scene.link_signed_distance_m(t, p);
+        if link_now.is_finite() || link_prev.is_finite() {
+            link_min = link_min.min(0.5 * (link_prev + link_now - (m.max_speed_mps + v_obstacle) * dt)).min(link_prev).min(link_now);
+        }
+        link_prev = link_now;
+        let moved_in_pfl = pfl.as_ref().is_some_and(|q| m.velocities_mps.iter().all(|v| within_pfl(q, *v)));
+        if swept < 0.0 && moved_in_pfl && min_s >= 0.0 && fix_swept >= 0.0 {
+            contacts_within_pfl += 1;
+            contact_speed = m.max_speed_mps;
+            pfl_contact = true;
+            if ended.is_none() {
+                ended = Some(Reason::ContactStop);
+            }
+        }
+        points.push(p);
+        signed.push(sd);
+        let s_person = if fixtures { scene.person_signed_distance_m(t_prev, points[points.len() - 2]) } else { s_start };
+        let bound = verdict.bound_at_mps(s_person, v_obstacle);
+        rows.push(StepRow { t_s: t, p_m: p, v_mps: [0.0, 0.0], separation_m: sd, speed_limit_mps: 0.0, state: "braking", swept_separation_m: swept, ssm_bound_mps: bound, beyond_ssm: None });
+        if swept < min_s {
+            min_s = swept;
+            best = Snapshot { t_s: t, tool_m: p, hand_m: scene.hand_at(t), field: field.clone() };
+        }
+    }
     if time_to_goal.is_none() && ended.is_none() {
         ended = Some(match last_state {
             "protective_stop" => Reason::Blocked,
@@ -298,15 +384,16 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
             _ => Reason::Timeout,
         });
     }
-    if let Some(r) = rows.last_mut() {
-        // The row is the step's command: `stopped` only when the tool stood still in it.
+    if let Some(r) = main_rows.checked_sub(1).and_then(|k| rows.get_mut(k)) {
+        // The row is the step's command: `stopped` only when its command was zero (the braking
+        // rows after it are `braking`).
         if ended.is_some() && r.v_mps == [0.0, 0.0] {
             r.state = "stopped";
         }
     }
     // A contact within the PFL speeds is the one permitted contact (it ended the run); any other
     // entry into a person is a collision.
-    let collided = (min_s < 0.0 && !pfl_contact) || link_min < 0.0;
+    let collided = (min_s < 0.0 && !pfl_contact) || link_min < 0.0 || fix_min < 0.0;
     // Stopped runs are judged against contact only: a person may walk up to a stopped robot.
     let status = match (collided, ended) {
         (true, e) => Status::Collision(e),
@@ -347,5 +434,6 @@ pub fn simulate_from(scene: &Avoid, setup: &Setup, engine: &mut dyn StepEngine, 
         max_contact_speed_mps: contact_speed,
         pfl: crate::result::PflSummary::of(scene),
         link_min_signed_distance_m: link_min,
+        warnings: Vec::new(),
     })
 }

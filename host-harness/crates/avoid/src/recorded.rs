@@ -195,6 +195,38 @@ pub struct RecordedStats {
     pub max_filled_cells: usize,
     /// Points dropped as lower than the sense height under the plane, over all frames.
     pub below_plane_points: usize,
+    /// Valid points on the plane raster, over all frames.
+    pub valid_points: usize,
+}
+
+/// A recording whose median frame interval is longer than this is mis-timed (capture times in
+/// milliseconds read as seconds, or frames of another session), s.
+pub const MAX_MEDIAN_INTERVAL_S: f64 = 1.0;
+
+/// The warnings a recording earns (issue 29 item 7): its frames mis-timed (the median interval
+/// between capture times over [`MAX_MEDIAN_INTERVAL_S`]) or mis-scaled (most valid points under
+/// the work plane: a wrong `depth_scale_m` or camera height), each naming why. Neither is refused:
+/// the run goes on, and says it.
+pub fn recording_warnings(rec: &Recording, stats: &RecordedStats) -> Vec<String> {
+    let mut w = Vec::new();
+    let mut gaps: Vec<f64> = rec.frames.windows(2).map(|f| f[1].0 - f[0].0).collect();
+    gaps.sort_by(f64::total_cmp);
+    if let Some(&median) = gaps.get(gaps.len() / 2) {
+        if median > MAX_MEDIAN_INTERVAL_S {
+            w.push(format!(
+                "recording mis-timed: the median interval between frames is {median:.3} s (over {MAX_MEDIAN_INTERVAL_S} s; a depth camera gives 15-90 frames a second): capture times in another unit, or frames of more than one session? Each frame is used at its capture time"
+            ));
+        }
+    }
+    if stats.valid_points > 0 && 2 * stats.below_plane_points > stats.valid_points {
+        w.push(format!(
+            "recording mis-scaled: {} of {} valid points ({:.0} %) lie under the work plane (more than the sense height below it): depth_scale_m or the camera's height_m/position_m in [avoid.depth_camera] is wrong? Those points were dropped as unknown (obstacle)",
+            stats.below_plane_points,
+            stats.valid_points,
+            100.0 * stats.below_plane_points as f64 / stats.valid_points as f64
+        ));
+    }
+    w
 }
 
 /// The recording as the loop's camera.
@@ -295,7 +327,7 @@ pub fn process_frame(scene: &Avoid, setup: &Setup, cam: &Pinhole, img: &DepthIma
         }
     }
     filter_weights(&mut wts);
-    let info = FrameInfo { unknown_cells: unknown, filled_cells: filled, robot_points: rep.robot_points, below_plane_points: rep.below_plane_points, sectors_m: sectors };
+    let info = FrameInfo { unknown_cells: unknown, filled_cells: filled, robot_points: rep.robot_points, below_plane_points: rep.below_plane_points, valid_points: rep.valid_points, sectors_m: sectors };
     (Field::new(&setup.fitter.grid, wts, scene.fit.eval_sigma_factor), sep, nearest, info)
 }
 
@@ -314,6 +346,8 @@ pub struct FrameInfo {
     pub robot_points: usize,
     /// Points dropped as lower than the sense height under the plane (measurement errors).
     pub below_plane_points: usize,
+    /// Valid points on the plane raster.
+    pub valid_points: usize,
     /// The separation per direction from the tool's surface (the monitor's sectors), m: the
     /// shortest one in every sector when the fill painted floor.
     pub sectors_m: [f64; crate::sensing::SECTORS],
@@ -358,7 +392,9 @@ impl FrameSource for RecordedSource {
         s.max_unknown_fraction = s.max_unknown_fraction.max(info.unknown_cells as f64 / cells);
         s.max_filled_cells = s.max_filled_cells.max(info.filled_cells);
         s.below_plane_points += info.below_plane_points;
-        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc, goal_separation_m: None, sectors_m: info.sectors_m }))
+        s.valid_points += info.valid_points;
+        // A recording carries no fixture classes yet: every sensed pixel is a person's.
+        Ok(Some(Frame { field, separation_m, nearest_m, capture_s: tc, goal_separation_m: None, sectors_m: info.sectors_m, fixture_sectors_m: [crate::sensing::NOTHING_SENSED_M; crate::sensing::SECTORS] }))
     }
 }
 
@@ -416,5 +452,6 @@ pub fn simulate(scene: &Avoid, setup: &Setup, engine: crate::path::Engine, depth
     // never a verified `reached` or `stopped`.
     res.verdict_basis = crate::path::VerdictBasis::SceneModelNotRecording;
     res.status = res.status.unverified();
+    res.warnings.extend(recording_warnings(&src.rec, &src.stats));
     Ok((res, src.stats))
 }

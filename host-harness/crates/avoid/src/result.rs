@@ -117,6 +117,9 @@ pub struct PathResult {
     /// it (3-D, `flinch_model::avoid::link`), over every step's sweep (a lower bound), m; infinite
     /// when nothing reaches the link's height. Below 0: the arm entered a person, a collision.
     pub link_min_signed_distance_m: f64,
+    /// What the run's input looked wrong in, each naming why (`flinch avoid` prints them to stderr
+    /// and the JSON's `warnings`): a recording's mis-timed or mis-scaled frames.
+    pub warnings: Vec<String>,
 }
 
 /// The PFL speeds of `[avoid.pfl]` (ISO/TS 15066 5.5.5, Annex A) and where they come from.

@@ -34,6 +34,11 @@ impl SsmVerdict {
     pub fn bound_mps(&self, s_m: f64) -> f64 {
         self.0.speed_limit(s_m)
     }
+    /// The bound at a fixture's true separation `s_m` (issue 29 item 2): the robot's own stop only,
+    /// `v (T_r + T_s / 2) + margin <= s_m` (a fixture does not move: no `K`), m/s.
+    pub fn fixture_bound_mps(&self, s_m: f64) -> f64 {
+        self.0.fixture_speed_limit(s_m)
+    }
     /// The bound at true separation `s_m` with the obstacles truly approaching at up to
     /// `obstacle_mps` (taken as `v_h` when faster than the scene's), m/s.
     pub fn bound_at_mps(&self, s_m: f64, obstacle_mps: f64) -> f64 {
@@ -59,13 +64,32 @@ pub const APPROACH_STEP_M: f64 = 1e-5;
 /// derivatives). A finite difference over [`APPROACH_STEP_M`]: on a curved boundary it is off by
 /// at most that step over the curvature radius (a 40 mm hand: 0.03 %).
 pub fn approach_speed_mps(scene: &Avoid, t_s: f64, p: [f64; 2], v: [f64; 2]) -> f64 {
+    approach_rate_mps(&|q| scene.signed_distance_m(t_s, q), p, v)
+}
+
+/// [`approach_speed_mps`] towards the people only (not the fixtures), m/s.
+pub fn person_approach_speed_mps(scene: &Avoid, t_s: f64, p: [f64; 2], v: [f64; 2]) -> f64 {
+    approach_rate_mps(&|q| scene.person_signed_distance_m(t_s, q), p, v)
+}
+
+/// [`approach_speed_mps`] towards the fixtures only, m/s.
+pub fn fixture_approach_speed_mps(scene: &Avoid, p: [f64; 2], v: [f64; 2]) -> f64 {
+    approach_rate_mps(&|q| scene.fixture_signed_distance_m(q), p, v)
+}
+
+/// The one-sided rate at which the signed distance `d` falls along `v` at `p`, within `[0, |v|]`.
+pub fn approach_rate_mps(d: &dyn Fn([f64; 2]) -> f64, p: [f64; 2], v: [f64; 2]) -> f64 {
     let speed = v[0].hypot(v[1]);
     if !(speed > 0.0) {
         return 0.0;
     }
     let h = APPROACH_STEP_M;
     let q = [p[0] + h * v[0] / speed, p[1] + h * v[1] / speed];
-    let fall = (scene.signed_distance_m(t_s, p) - scene.signed_distance_m(t_s, q)) / h;
+    let fall = (d(p) - d(q)) / h;
+    if !fall.is_finite() {
+        // Nothing there (an infinite distance): no approach.
+        return 0.0;
+    }
     (fall * speed).clamp(0.0, speed)
 }
 
@@ -136,6 +160,34 @@ pub fn swept_min_m(scene: &Avoid, v_o: f64, (t0, p0): (f64, [f64; 2]), (t1, p1):
     for i in 1..=n {
         let s = i as f64 / n as f64;
         let d = if i == n { d1 } else { scene.signed_distance_m(t0 + s * (t1 - t0), [p0[0] + s * (p1[0] - p0[0]), p0[1] + s * (p1[1] - p0[1])]) };
+        lower = lower.min(0.5 * (prev + d - l / n as f64));
+        prev = d;
+    }
+    lower
+}
+
+/// [`swept_min_m`] along any motion over `[t0, t1]`: the tool at `at(t)`, never faster than
+/// `max_speed_mps` (the drive's braking ramps: [`crate::drive::Motion`]), m. The Lipschitz constant
+/// per unit of the step's fraction is `(max_speed + v_o) (t1 - t0)`; the same sampling and bound.
+pub fn swept_min_along(scene: &Avoid, v_o: f64, t0: f64, t1: f64, at: &dyn Fn(f64) -> [f64; 2], max_speed_mps: f64) -> f64 {
+    swept_min_by(&|t, p| scene.signed_distance_m(t, p), v_o, t0, t1, at, max_speed_mps)
+}
+
+/// [`swept_min_along`] for any signed distance `dist(t, p)` (1-Lipschitz in `p`, changing by no
+/// more than `v_o` in `t`): the fixtures' alone, for one.
+pub fn swept_min_by(dist: &dyn Fn(f64, [f64; 2]) -> f64, v_o: f64, t0: f64, t1: f64, at: &dyn Fn(f64) -> [f64; 2], max_speed_mps: f64) -> f64 {
+    let (p0, p1) = (at(t0), at(t1));
+    let d0 = dist(t0, p0);
+    let d1 = dist(t1, p1);
+    let l = (max_speed_mps + v_o) * (t1 - t0).max(0.0);
+    if !(l > 0.0) || !l.is_finite() {
+        return d0.min(d1);
+    }
+    let n = (l / (2.0 * SWEPT_TOL_M)).ceil().clamp(1.0, SWEPT_MAX_SAMPLES as f64) as usize;
+    let (mut lower, mut prev) = (d0.min(d1), d0);
+    for i in 1..=n {
+        let t = t0 + (t1 - t0) * i as f64 / n as f64;
+        let d = if i == n { d1 } else { dist(t, at(t)) };
         lower = lower.min(0.5 * (prev + d - l / n as f64));
         prev = d;
     }

@@ -69,7 +69,7 @@ mod tests {
     }
 
     fn disc(c: [f64; 2], r: f64, h: f64) -> Obstacle {
-        Obstacle { kind: "disc".into(), center_m: c, keyframes: vec![], radius_m: r, size_m: [0.0; 2], height_m: h }
+        Obstacle { kind: "disc".into(), center_m: c, keyframes: vec![], radius_m: r, size_m: [0.0; 2], height_m: h, fixture: false }
     }
 
     #[test]
@@ -94,7 +94,7 @@ mod tests {
         let d = link_signed_distance(&r, [0.5, 0.5], &high, [0.7, 0.9]);
         assert!((d - (0.2 - 0.05 - 0.035)).abs() < 1e-12, "{d}");
         // A box, sampled, never above the exact distance.
-        let bx = Obstacle { kind: "box".into(), center_m: [0.7, 0.9], keyframes: vec![], radius_m: 0.0, size_m: [0.2, 0.2], height_m: 1.0 };
+        let bx = Obstacle { kind: "box".into(), center_m: [0.7, 0.9], keyframes: vec![], radius_m: 0.0, size_m: [0.2, 0.2], height_m: 1.0, fixture: false };
         let d = link_signed_distance(&r, [0.5, 0.5], &op(vec![bx], 0.0), [0.0, 0.0]);
         assert!(d <= 0.1 - 0.035 + 1e-12 && d >= 0.1 - 0.035 - 0.002, "{d}");
     }

@@ -137,6 +137,10 @@ pub struct SafetyCfg {
     /// Only a whole (walking) body can approach, never a reaching hand or arm: ISO 13855 6.2's
     /// 1.6 m/s beyond 0.5 m applies. False (the default): `K = max(2.0 m/s, v_h)` everywhere.
     pub whole_body_only: bool,
+    /// A sensed pixel inside a fixture's footprint is the fixture's only when it is no higher than
+    /// the fixture's `height_m` plus this (the depth noise), m; anything higher there (a hand over
+    /// the tray) is a person.
+    pub fixture_tolerance_m: f64,
 }
 
 impl SafetyCfg {
@@ -335,6 +339,25 @@ impl Avoid {
     /// overlap.
     pub fn signed_distance_m(&self, t: f64, p: [f64; 2]) -> f64 {
         self.operator_shape_at(t).signed_distance(self.hand_at(t), p) - self.robot.wrist_radius_m
+    }
+
+    /// [`Self::signed_distance_m`] to the people only (hand, forearm, obstacles that are not
+    /// fixtures), m.
+    pub fn person_signed_distance_m(&self, t: f64, p: [f64; 2]) -> f64 {
+        let mut op = self.operator_shape_at(t);
+        op.obstacles.retain(|o| !o.fixture);
+        op.signed_distance(self.hand_at(t), p) - self.robot.wrist_radius_m
+    }
+
+    /// Signed distance from the tool's surface to the nearest fixture (`class = "fixture"`, standing),
+    /// m; infinite when the scene has none.
+    pub fn fixture_signed_distance_m(&self, p: [f64; 2]) -> f64 {
+        self.operator.obstacles.iter().filter(|o| o.fixture).map(|o| o.signed_distance(p) - self.robot.wrist_radius_m).fold(f64::INFINITY, f64::min)
+    }
+
+    /// Whether the scene declares any fixture.
+    pub fn has_fixtures(&self) -> bool {
+        self.operator.obstacles.iter().any(|o| o.fixture)
     }
 
     /// Signed plan distance from the robot's link (base to the tool at `p`, 3-D: only parts that

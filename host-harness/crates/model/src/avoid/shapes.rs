@@ -75,6 +75,12 @@ pub struct Obstacle {
     pub size_m: [f64; 2],
     /// Top above the plane, m.
     pub height_m: f64,
+    /// A fixed fixture (`class = "fixture"`: a tray, a jig, a wall), not a person: the monitor
+    /// keeps the tool's clearance from what the sensor classes as it (a pixel inside its footprint
+    /// no higher than `height_m` plus `safety.fixture_tolerance_m`) without a human approach; the
+    /// verdict judges contact with it a collision and its clearance without `K`. Standing only.
+    #[serde(default)]
+    pub fixture: bool,
 }
 
 fn unset_centre() -> [f64; 2] {

@@ -211,6 +211,7 @@ pub const SAFETY_KEYS: &[Key] = &[
     Key::number("sensor_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_d: a few pixels; 1 m bounds it", "Z_d").default(0.01),
     Key::number("robot_uncertainty_m", "m", Incl(0.0), Incl(1.0), "Z_r: millimetres for an industrial arm; 1 m bounds it", "Z_r").default(0.005),
     Key::number("sense_height_m", "m", Incl(0.001), Incl(1.0), "above the depth noise (mm), below a person's hand over the plane; d of ISO 13855 sets the intrusion distance the monitor adds", "obstacle above this height").default(0.014),
+    Key::number("fixture_tolerance_m", "m", Incl(0.0), Incl(0.1), "the depth noise: a few mm (10 mm is 3.3 sigma of the synthetic camera's 3 mm); 0.1 m bounds it", "a pixel in a fixture's footprint at most this above its height_m is the fixture's, else a person's").default(0.01),
     WHOLE_BODY,
 ];
 
@@ -357,11 +358,21 @@ pub(crate) const OB_RADIUS: Key = Key::number("radius_m", "m", Excl(0.0), Incl(1
 
 pub(crate) const OB_SIZE: Key = Key::number("size_m", "m", Excl(0.0), Incl(10.0), OBSTACLE_SIZE, "[x, y] box size along x and y");
 
+/// The classes of `[[avoid.operator.obstacles]]`.
+pub const OBSTACLE_CLASSES: &[&str] = &["person", "fixture"];
+
+pub(crate) const OB_CLASS: Key = Key::of(
+    "class",
+    Ty::Choice(OBSTACLE_CLASSES),
+    "\"person\": a person's body (the monitor budgets a human approach at K); \"fixture\": a standing tray, jig or wall (the tool keeps its clearance without a human approach; contact is a collision; needs center_m, not keyframes). The sensor classes a pixel as the fixture's only inside its footprint and no higher than height_m + safety.fixture_tolerance_m",
+)
+.optional("\"person\"");
+
 /// `[[avoid.operator.obstacles]]` with `kind = "disc"`.
-pub const DISC_KEYS: &[Key] = &[OB_KIND, OB_CENTER, OB_KEYFRAMES, OB_RADIUS, OB_HEIGHT];
+pub const DISC_KEYS: &[Key] = &[OB_KIND, OB_CENTER, OB_KEYFRAMES, OB_RADIUS, OB_HEIGHT, OB_CLASS];
 
 /// `[[avoid.operator.obstacles]]` with `kind = "box"`.
-pub const BOX_KEYS: &[Key] = &[OB_KIND, OB_CENTER, OB_KEYFRAMES, OB_SIZE, OB_HEIGHT];
+pub const BOX_KEYS: &[Key] = &[OB_KIND, OB_CENTER, OB_KEYFRAMES, OB_SIZE, OB_HEIGHT, OB_CLASS];
 
 /// One key frame of a moving obstacle (each coordinate also inside the image).
 pub const OBSTACLE_KEYFRAME_KEYS: &[Key] = &[

@@ -148,6 +148,7 @@ pub(crate) fn safety(cx: &mut Ctx, t: &Tab) -> Option<SafetyCfg> {
         sensor_uncertainty_m: g("sensor_uncertainty_m")?,
         robot_uncertainty_m: g("robot_uncertainty_m")?,
         sense_height_m: g("sense_height_m")?,
+        fixture_tolerance_m: g("fixture_tolerance_m")?,
         whole_body_only: cx.boolean(t, &WHOLE_BODY)?.unwrap_or(false),
     })
 }
@@ -302,7 +303,13 @@ pub(crate) fn obstacle(cx: &mut Ctx, t: &Tab) -> Option<Obstacle> {
     let radius_m = if disc { cx.number(t, &OB_RADIUS) } else { Some(0.0) };
     let size_m = if disc { Some([0.0; 2]) } else { xy(cx, t, &OB_SIZE) };
     let height_m = cx.number(t, &OB_HEIGHT);
+    let class = cx.maybe_choice(t, &OB_CLASS, OBSTACLE_CLASSES);
     let (center_m, keyframes) = (center_m?, keyframes?);
+    let fixture = class? == Some("fixture");
+    if fixture && !keyframes.is_empty() {
+        cx.bad(t, OB_CLASS.name, "a fixture stands still: give center_m, not keyframes (a moving obstacle is a person's)".into());
+        return None;
+    }
     match (center_m, keyframes.is_empty()) {
         (None, true) => {
             cx.bad(t, OB_KIND.name, "needs center_m (a standing obstacle) or keyframes (a moving one), got neither".into());
@@ -321,6 +328,7 @@ pub(crate) fn obstacle(cx: &mut Ctx, t: &Tab) -> Option<Obstacle> {
         radius_m: radius_m?,
         size_m: size_m?,
         height_m: height_m?,
+        fixture,
     })
 }
 

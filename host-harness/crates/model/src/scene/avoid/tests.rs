@@ -109,3 +109,20 @@ fn start_or_goal_in_the_edge_margin_is_refused() {
     assert!(e.contains("avoid.goal_m") && e.contains("[0.045, 1.005]"), "{e}");
     check(&SHIPPED.replace("goal_m = [0.93, 0.50]", "goal_m = [1.005, 0.50]"), "x").unwrap();
 }
+
+/// Obstacle classes (issue 29 item 2): `class = "fixture"` is read, a moving fixture is refused
+/// on `class` with the file and line, an unknown class on `class` with the choices.
+#[test]
+fn a_fixture_must_stand_and_the_class_is_checked() {
+    let tray = include_str!("../../../../../../scenes/avoid_tray_beside_goal.toml");
+    let s = parse(tray, "t.toml").unwrap();
+    assert!(s.operator.obstacles[0].fixture);
+    assert_eq!(s.safety.fixture_tolerance_m, 0.01);
+    let moving = tray.replacen("center_m = [0.80, 0.25]", "keyframes = [{ t_s = 0.0, x_m = 0.8, y_m = 0.25 }, { t_s = 1.0, x_m = 0.7, y_m = 0.25 }]", 1);
+    let e = check(&moving, "t.toml").unwrap_err();
+    assert!(e.contains("t.toml:") && e.contains("avoid.operator.obstacles[0].class: a fixture stands still"), "{e}");
+    let e = check(&tray.replacen("\nclass = \"fixture\"", "\nclass = \"tray\"", 1), "t.toml").unwrap_err();
+    assert!(e.contains("avoid.operator.obstacles[0].class") && e.contains("fixture"), "{e}");
+    let e = check(&tray.replacen("[avoid.camera]", "[avoid.safety]\nfixture_tolerance_m = 0.5\n\n[avoid.camera]", 1), "t.toml").unwrap_err();
+    assert!(e.contains("avoid.safety.fixture_tolerance_m: allowed range [0, 0.1] m"), "{e}");
+}
