@@ -100,8 +100,8 @@ fn the_board_constant_is_what_the_host_makes_of_the_cell_scene() {
 }
 
 /// The `--mcu` engine (the board's `Link` in its shipped configuration) on the board's cell: it
-/// reaches the goal, never over the verdict's SSM bound outside PFL, every frame applied but
-/// possibly the last.
+/// reaches the goal, never over the verdict's SSM bound outside PFL, never inside the operator,
+/// no frame refused.
 #[test]
 fn the_mcu_engine_is_the_board_step() {
     let s = board_scene();
@@ -111,7 +111,10 @@ fn the_mcu_engine_is_the_board_step() {
     assert!(r.time_to_goal_s.is_some(), "the board's cell reaches its goal under --mcu: {:?}", r.status);
     assert!(r.min_signed_distance_m >= 0.0, "never inside the operator: {}", r.min_signed_distance_m);
     let rx = r.rx.expect("the board engine has a receiver");
-    assert!(rx.good as usize + 1 >= r.frames, "{} of {} frames applied", rx.good, r.frames);
+    // Every frame applied but the last one still being parsed and those captured while the drive
+    // brakes to rest after the end (never sent: the run has ended).
+    let slack = 2 + (s.safety.stopping_time_s / s.frame_period_s).ceil() as usize;
+    assert!(rx.good as usize + slack >= r.frames && rx.good as usize <= r.frames, "{} of {} frames applied", rx.good, r.frames);
     assert_eq!((rx.bad_crc, rx.stale, rx.backlog, rx.overrun), (0, 0, 0, 0));
 }
 

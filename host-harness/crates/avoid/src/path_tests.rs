@@ -65,11 +65,14 @@ mod tests {
         let dev = res.points.iter().zip(&fw.points).map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()).fold(0.0, f64::max);
         assert!(dev < 0.01, "{} path within 10 mm of f64: {dev}", board_real_name());
         // The board's step itself (`--mcu`: its cap, its frame parsing budget a step) reaches the
-        // goal too, every frame but possibly the last (still being parsed at the end) applied.
+        // goal too.
         let mcu = simulate(&scene, &setup, Engine::Mcu).unwrap();
         assert!(mcu.time_to_goal_s.is_some(), "{:?}", mcu.status);
         let good = mcu.rx.map_or(0, |s| s.good) as usize;
-        assert!(good + 1 >= mcu.frames && good <= mcu.frames, "{good} of {} frames", mcu.frames);
+        // The last frame may still be in parsing, and frames captured while the drive brakes after
+        // the end are never sent.
+        let slack = 2 + (scene.safety.stopping_time_s / scene.frame_period_s).ceil() as usize;
+        assert!(good + slack >= mcu.frames && good <= mcu.frames, "{good} of {} frames", mcu.frames);
         assert_eq!(mcu.rx.map(|s| s.bad_crc + s.stale + s.backlog + s.overrun), Some(0));
     }
 
