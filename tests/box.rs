@@ -421,8 +421,12 @@ fn measure_settling() -> Vec<Settling> {
                         Ok((s, _)) => {
                             let wall = t0.elapsed().as_secs_f64();
                             // Where the steps go: up to the robot's stop (the tool being pressed
-                            // in) and after it (settling until the rest check holds).
-                            if let (Some(tc), Some(ts)) = (s.t_contact, s.t_stop) {
+                            // in) and after it (settling until the rest check holds). A second run
+                            // of the corner up to the stop, made for a corner over its estimate (the
+                            // one to explain) or with FLINCH_BOX_PHASES set: it asserts nothing, and
+                            // made for every corner it was up to half of this test's time (issue 28).
+                            let over = s.steps as f64 > est || std::env::var_os("FLINCH_BOX_PHASES").is_some();
+                            if let (true, Some(tc), Some(ts)) = (over, s.t_contact, s.t_stop) {
                                 let cut = text.replacen(&format!("duration = {} ", sc.duration_s), &format!("duration = {ts} "), 1);
                                 let before = scene::parse(&cut, "cut.toml").ok().and_then(|c| sim::run(&c, false).ok()).map(|(c, _)| c.steps);
                                 if let Some(b) = before {

@@ -1,17 +1,26 @@
 //! docs/validation.md is generated (`flinch validate --out docs/`): recompute every number in it
 //! from the simulator and fail if the committed document differs, so it cannot drift from the code.
 
-use flinch_harness::validate::{markdown, plots, tables, Verdict};
+use flinch_harness::validate::{markdown, plots, tables, Section, Verdict};
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// The validation tables of the shipped scenes, computed once for this binary: the two tests below
+/// read the same tables (`tables` is deterministic), and computing them was most of this binary's
+/// CPU time, twice (issue 28: `every_difference_is_explained` alone took 213 s on one thread).
+fn sections() -> &'static [Section] {
+    static SECTIONS: OnceLock<Result<Vec<Section>, String>> = OnceLock::new();
+    SECTIONS.get_or_init(|| tables(&root().join("scenes"))).as_ref().unwrap_or_else(|e| panic!("{e}"))
+}
+
 #[test]
 fn validation_doc_is_up_to_date() {
-    let sections = tables(&root().join("scenes")).unwrap_or_else(|e| panic!("{e}"));
-    let fresh = markdown(&sections);
+    let sections = sections();
+    let fresh = markdown(sections);
     let path = root().join("docs/validation.md");
     let committed = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}; run `flinch validate --out docs/`", path.display()));
     if fresh != committed {
@@ -21,15 +30,14 @@ fn validation_doc_is_up_to_date() {
             None => panic!("docs/validation.md is out of date: {} lines now, {} committed; run `flinch validate --out docs/`", fresh.lines().count(), committed.lines().count()),
         }
     }
-    for p in plots(&sections) {
+    for p in plots(sections) {
         assert!(root().join("docs").join(&p).is_file(), "docs/{p} is referenced but missing; run `flinch validate --out docs/`");
     }
 }
 
 #[test]
 fn every_difference_is_explained() {
-    let sections = tables(&root().join("scenes")).unwrap_or_else(|e| panic!("{e}"));
-    for s in &sections {
+    for s in sections() {
         assert!(!s.rows.is_empty() && !s.commands.is_empty() && !s.plots.is_empty(), "{}", s.title);
         if s.rows.iter().any(|r| r.verdict == Verdict::Differs) {
             assert!(!s.notes.is_empty(), "{}: a row differs and no note says why", s.title);

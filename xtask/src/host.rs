@@ -1,7 +1,7 @@
 //! The stages that run on the host: the workspace tests, the loader fuzz, the plots without fontconfig.
 
 use crate::common::{cargo, host_flinch, repo_root, run_captured};
-use crate::testpool;
+use crate::testpool::{self, TestBinary};
 use crate::Outcome;
 use std::env;
 use std::fs;
@@ -11,16 +11,17 @@ use std::time::{Duration, Instant};
 /// `cargo test --workspace`: its binaries built by `cargo test --workspace --no-run`, run side by
 /// side ([`testpool`]: one per core, the slowest first, every one to its end), then its doc tests
 /// (`cargo test --workspace --doc`). The same tests as `cargo test --workspace`, in less wall time.
-pub fn host_tests() -> Outcome {
+/// Also returns the binaries built (empty if the build failed): the fuzz stages run two of them.
+pub fn host_tests() -> (Outcome, Vec<TestBinary>) {
     let bins = match testpool::build() {
         Ok(b) => b,
-        Err(e) => return Outcome::Fail(e),
+        Err(e) => return (Outcome::Fail(e), Vec::new()),
     };
     let jobs = std::thread::available_parallelism().map_or(2, |n| n.get());
     let n = bins.len();
-    let failed = match testpool::run(bins, jobs) {
+    let failed = match testpool::run(bins.clone(), jobs) {
         Ok(f) => f,
-        Err(e) => return Outcome::Fail(e),
+        Err(e) => return (Outcome::Fail(e), bins),
     };
     let doc = cargo().args(["test", "--workspace", "--doc"]).current_dir(repo_root()).status();
     let doc = match doc {
@@ -28,25 +29,36 @@ pub fn host_tests() -> Outcome {
         Ok(s) => Some(format!("cargo test --workspace --doc exited with {s}")),
         Err(e) => Some(format!("could not run cargo: {e}")),
     };
-    if failed.is_empty() && doc.is_none() {
+    let outcome = if failed.is_empty() && doc.is_none() {
         Outcome::Pass(format!("cargo test --workspace: {n} test binaries ({jobs} at a time) and the doc tests"))
     } else {
         Outcome::Fail(failed.into_iter().chain(doc).collect::<Vec<_>>().join("; "))
-    }
+    };
+    (outcome, bins)
 }
 
-/// The loader fuzzed for a bounded time (tests/fuzz.rs, issue 18): `FLINCH_FUZZ_SECS` seconds
-/// (default 60) of mutated and random scenes; prints the cases run. Killed after twice that plus
-/// ten minutes of build.
-pub fn loader_fuzz() -> Outcome {
-    let secs: u64 = env::var("FLINCH_FUZZ_SECS").ok().and_then(|s| s.parse().ok()).unwrap_or(60);
-    let mut cmd = cargo();
-    cmd.args(["test", "-p", "flinch-tests", "--test", "fuzz", "--", "--ignored", "--nocapture"])
-        .env("FLINCH_FUZZ_SECS", secs.to_string())
-        .current_dir(repo_root());
-    match run_captured(cmd, "the loader fuzz", Duration::from_secs(2 * secs + 600)) {
+/// `FLINCH_FUZZ_SECS` (default 60): how long each fuzz stage runs.
+pub fn fuzz_secs() -> u64 {
+    env::var("FLINCH_FUZZ_SECS").ok().and_then(|s| s.parse().ok()).unwrap_or(60)
+}
+
+/// Runs the ignored (time-bounded) tests of the host tests' binary `name`, as
+/// `cargo test --test NAME -- --ignored --nocapture` would run them, without cargo: the binary is
+/// the host tests' own, so nothing is built again. (`cargo test -p flinch-tests --test fuzz`
+/// resolved the features for that one package, unlike `--workspace`, and rebuilt about 75 s of
+/// the workspace before fuzzing: /work/ci/run8.log, issue 28.) `summary` starts the line the test
+/// prints; the outcome quotes it. Killed after twice `FLINCH_FUZZ_SECS` plus a minute.
+pub fn run_ignored(bins: &[TestBinary], name: &str, what: &str, summary: &str) -> Outcome {
+    let Some(bin) = bins.iter().find(|b| b.name == name && b.kind == "test") else {
+        return Outcome::Fail(format!("no `{name}` test binary: the host tests' build (cargo test --workspace --no-run) did not make it"));
+    };
+    let secs = fuzz_secs();
+    let mut cmd = Command::new(&bin.path);
+    cmd.args(["--ignored", "--nocapture"]).current_dir(&bin.dir).env("CARGO_MANIFEST_DIR", &bin.dir).env("FLINCH_FUZZ_SECS", secs.to_string());
+    println!("xtask: {what}: {} --ignored --nocapture (FLINCH_FUZZ_SECS={secs})", bin.path.display());
+    match run_captured(cmd, what, Duration::from_secs(2 * secs + 60)) {
         Ok((out, status)) => {
-            let line = out.lines().find(|l| l.starts_with("fuzz: ")).unwrap_or("no summary line").to_string();
+            let line = out.lines().find(|l| l.starts_with(summary)).unwrap_or("no summary line").to_string();
             print!("{out}");
             if status.success() {
                 Outcome::Pass(line)
@@ -56,6 +68,13 @@ pub fn loader_fuzz() -> Outcome {
         }
         Err(e) => Outcome::Fail(e),
     }
+}
+
+/// The loader fuzzed for a bounded time (tests/fuzz.rs, issue 18): `FLINCH_FUZZ_SECS` seconds
+/// (default 60) of mutated and random scenes; prints the cases run. The host tests' `fuzz` binary
+/// ([`run_ignored`]).
+pub fn loader_fuzz(bins: &[TestBinary]) -> Outcome {
+    run_ignored(bins, "fuzz", "the loader fuzz", "fuzz: ")
 }
 
 /// The plots need no system font and the binary no font library: build `flinch` with pkg-config
