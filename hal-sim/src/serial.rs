@@ -299,13 +299,13 @@ mod tests {
     }
 
     /// The line takes its time: 10 bits a byte at the baud rate, one byte after another, in both
-    /// directions; the receiver sees a 15 x 15 frame (932 bytes) whole only after 932 x 10 / 115200
-    /// s = 80.9 ms, and the weights' age counts from its first byte.
+    /// directions; the receiver sees a 15 x 15 frame (988 bytes, protocol v3) whole only after
+    /// 988 x 10 / 115200 s = 85.8 ms, and the weights' age counts from its first byte.
     #[test]
     fn bytes_take_their_time_at_the_baud_rate() {
         let (mut host, mcu) = SimSerial::pair_at(115_200);
         let f = frame(1, 13107);
-        assert_eq!(f.len(), 932);
+        assert_eq!(f.len(), 988);
         host.write_all(&f).unwrap();
         assert_eq!(mcu.available(), 0);
         host.set_time_us(10_000);
@@ -313,17 +313,18 @@ mod tests {
         assert_eq!(mcu.available(), 115);
         host.set_time_us(80_000);
         assert_eq!(mcu.available(), 921);
-        host.set_time_us(80_903);
-        assert_eq!(mcu.available(), 931);
-        host.set_time_us(80_904);
-        assert_eq!(mcu.available(), 932);
+        // 86,806 ns a byte: the 988th is in at 85,764,328 ns.
+        host.set_time_us(85_764);
+        assert_eq!(mcu.available(), 987);
+        host.set_time_us(85_765);
+        assert_eq!(mcu.available(), 988);
         // Written while the line is busy: queued behind, not sent at once.
         host.write_all(&[0x55]).unwrap();
-        assert_eq!(mcu.available(), 932);
-        host.set_time_us(80_991);
-        assert_eq!(mcu.available(), 933);
+        assert_eq!(mcu.available(), 988);
+        host.set_time_us(85_852);
+        assert_eq!(mcu.available(), 989);
 
-        // Through the receiver, polled every 10 ms step: applied at the first step after 80.9 ms.
+        // Through the receiver, polled every 10 ms step: applied at the first step after 85.8 ms.
         let (mut host, mut mcu) = SimSerial::pair_at(115_200);
         let mut rx = Box::new(fw::Receiver::<I16F16>::new(100, 20));
         host.write_all(&f).unwrap();
