@@ -56,6 +56,10 @@ fn literal(c: &LinkConfig<f64>, p: &(String, String, String, String, u32, String
             s.barrier_m, s.band_m, s.view_m[0], s.view_m[1], s.view_m[2], s.view_m[3], s.edge_margin_m
         ),
     };
+    let fb = match c.fixture_barrier_m {
+        None => "None".to_string(),
+        Some(b) => format!("Some({b:?})"),
+    };
     format!(
         "// BLESSED-BEGIN (tests/avoid_board.rs writes what is between these lines)\n\
 /// The board's cell settings, in `f64` (converted once at start-up).\n\
@@ -63,7 +67,7 @@ pub const BOARD_CELL: LinkConfig<f64> = LinkConfig {{\n    \
 gains: Gains {{ repulsion: {rep}, k_att: {:?}, k_rep: {:?}, capture_radius_m: {:?}, latch_height_m: {:?}, slow_height_m: {:?}, stop_height_m: {:?}, bounded: {} }},\n    \
 watchdog: Watchdog {{ slow_after_ms: {}, stop_after_ms: {} }},\n    \
 start_m: [{:?}, {:?}],\n    goal_m: [{:?}, {:?}],\n    speed_cap_mps: {:?},\n    period_ms: {},\n    max_age_ms: {},\n    byte_timeout_ms: {},\n    budget_bytes: {},\n    \
-ssm: {ssm},\n    steer: {steer},\n}};\n\n\
+ssm: {ssm},\n    steer: {steer},\n    fixture_barrier_m: {fb},\n}};\n\n\
 /// The provenance of [`BOARD_CELL`]'s PFL speeds.\n\
 pub const BOARD_PFL: PflProvenance = PflProvenance {{\n    module: {:?},\n    module_sha256: {:?},\n    body_regions: {:?},\n    along_region: {:?},\n    along_force_limit_n: {},\n    across_region: {:?},\n    contact: {:?},\n}};\n\
 // BLESSED-END",

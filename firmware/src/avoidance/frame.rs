@@ -89,15 +89,17 @@ pub struct FrameHeader {
 }
 
 impl Default for FrameHeader {
-    /// A 1 x 1 grid at the origin with nothing sensed (a test and encoding convenience: the host sets
-    /// every field it knows).
+    /// A 1 x 1 grid at the origin, fail-safe: a person touching the tool in every sector (a host
+    /// that forgets to fill in its sensing stops a monitored board instead of clearing it; review
+    /// finding), no fixture, the clock echo 0 of boot 0. An encoding and test convenience: the host
+    /// sets every field it knows.
     fn default() -> Self {
         FrameHeader {
             echo_ms: 0,
             echo_boot: 0,
             tool_q16: [0; 2],
             nearest_q16: [0; 2],
-            person_mm: [NOTHING_MM; FRAME_SECTORS],
+            person_mm: [0; FRAME_SECTORS],
             fixture_mm: [NOTHING_MM; FRAME_SECTORS],
             session: 0,
             nx: 1,

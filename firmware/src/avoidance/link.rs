@@ -90,6 +90,9 @@ pub struct LinkConfig<R> {
     pub ssm: Option<SsmParams<R>>,
     /// The steering barrier before the monitor (`None`: none).
     pub steer: Option<Steer<R>>,
+    /// The separation the steering holds from fixtures, m (`SafeController::with_fixture_barrier`;
+    /// `None`: none).
+    pub fixture_barrier_m: Option<R>,
 }
 
 impl LinkConfig<f64> {
@@ -126,6 +129,7 @@ impl LinkConfig<f64> {
                 pfl: p.pfl.map(|f| super::safe::Pfl { axis: f.axis.map(q), along_mps: q(f.along_mps), across_mps: q(f.across_mps) }),
             }),
             steer: self.steer.map(|s| Steer { barrier_m: q(s.barrier_m), band_m: q(s.band_m), view_m: s.view_m.map(q), edge_margin_m: q(s.edge_margin_m) }),
+            fixture_barrier_m: self.fixture_barrier_m.map(q),
         }
     }
 }
@@ -172,6 +176,10 @@ impl<R: Real> Link<R> {
         let dt_s = R::from_int(cfg.period_ms.min(60_000) as i32).mul(milli);
         let safe = cfg.ssm.map(|p| {
             let c = SafeController::new(p);
+            let c = match cfg.fixture_barrier_m {
+                Some(b) => c.with_fixture_barrier(b),
+                None => c,
+            };
             match cfg.steer {
                 Some(s) => c.with_steer(s),
                 None => c,
@@ -466,6 +474,7 @@ mod tests {
             budget_bytes: 256,
             ssm: None,
             steer: None,
+            fixture_barrier_m: None,
         }
     }
 

@@ -222,3 +222,20 @@ fn the_age_is_never_below_the_arrival_bound() {
     // Older than the watchdog's slowing age: slowed, not ok at the cap.
     assert_eq!(v.status, Status::Slowed, "{v:?}");
 }
+
+/// A host that forgets its sensing (the header's defaults) stops a monitored board; it does not
+/// clear it.
+#[test]
+fn a_frame_without_sensing_stops() {
+    let q = |v: f64| (v * 65536.0) as i32;
+    let h = FrameHeader { session: 1, nx: 5, ny: 5, seq: 1, x0_q16: q(0.105), y0_q16: q(0.105), spacing_q16: q(0.21), sigma_q16: q(0.105), echo_ms: 5, ..FrameHeader::default() };
+    let mut out = std::vec![0u8; MAX_FRAME];
+    let n = encode_frame(&h, &[0; 25], &mut out).unwrap();
+    let mut cfg = board_config();
+    if let Some(p) = cfg.ssm.as_mut() {
+        p.pfl = None;
+    }
+    let mut l = Link::new(cfg);
+    let v = step_after(&mut l, &out[..n], 10);
+    assert_eq!((v.status, v.vx, v.vy), (Status::StoppedProtective, 0.0, 0.0), "{v:?}");
+}

@@ -87,6 +87,8 @@ pub fn link_config(scene: &Avoid) -> Result<LinkConfig<f64>, String> {
         max_age_ms: max_age_ms(scene)?,
         byte_timeout_ms: BYTE_TIMEOUT_MS,
         budget_bytes: budget_bytes(scene),
+        // As the reference engine's monitor: the steering also round the fixtures.
+        fixture_barrier_m: params.map(|_| crate::engine::fixture_barrier_m(scene)),
         ssm: params,
         steer,
     })

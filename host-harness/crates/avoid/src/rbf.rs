@@ -244,8 +244,9 @@ impl Field {
     }
 
     /// The frame that carries this field to the MCU (`flinch_firmware::avoidance::frame`), in this
-    /// host start's session ([`host_session`]), with nothing sensed and a zero clock echo (see
-    /// [`Field::to_frame_with`]).
+    /// host start's session ([`host_session`]), with the default monitor part (a person touching
+    /// the tool in every sector: a monitored board stops; a zero clock echo; see
+    /// [`Field::to_frame_with`]). For the receiver's and the number types' tests.
     pub fn to_frame(&self, seq: u32, age_ms: u16) -> Result<Vec<u8>, String> {
         self.to_frame_with(seq, age_ms, &fw::FrameHeader::default())
     }
