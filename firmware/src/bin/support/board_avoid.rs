@@ -117,9 +117,10 @@ pub fn init(nvic: &mut NVIC) {
     // queue is split once, and its `&'static mut` is the only reference ever made to it.
     unsafe {
         let mut link = Link::new(board_config());
-        // This boot's byte (the backup SRAM's boot count, stored by `main` before this runs): a
-        // weights frame echoing an earlier boot's clock is not used.
-        link.set_boot(crate::backup::stored_boots() as u8);
+        // This boot's byte (the boot count `main` stored in the backup SRAM before this runs, as it
+        // keeps it: no second read of the SRAM, the boot's register trace unchanged): a weights frame
+        // echoing an earlier boot's clock is not used.
+        link.set_boot(crate::backup::STORED_BOOTS.load(Relaxed) as u8);
         LINK.init(link);
         let (p, c) = (*core::ptr::addr_of_mut!(RX_QUEUE)).split();
         RX_PROD.init(p);
