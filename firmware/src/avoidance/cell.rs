@@ -58,7 +58,7 @@ pub const BOARD_CELL: LinkConfig<f64> = LinkConfig {
         pfl: Some(Pfl { axis: [1.0, 0.0], along_mps: 0.2870589814356875, across_mps: 0.06344319576379467 }),
     }),
     steer: Some(Steer { barrier_m: 0.02, band_m: 0.05, view_m: [0.0, 0.0, 1.05, 1.05], edge_margin_m: 0.045 }),
-    fixture_barrier_m: Some(0.0625),
+    fixture_barrier_m: None,
 };
 
 /// The provenance of [`BOARD_CELL`]'s PFL speeds.
